@@ -1,0 +1,31 @@
+"""Dispatch ``python -m compare.bench NAME [options]``."""
+
+from __future__ import annotations
+
+import importlib
+import sys
+
+SUITES = {
+    "reduced": "compare.bench.reduced",
+    "fem-blastula": "compare.bench.fem_blastula",
+    "fem-spheroid": "compare.bench.fem_spheroid",
+}
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if not argv or argv[0] in ("-h", "--help"):
+        print("usage: python -m compare.bench {" + ",".join(SUITES) + ",all} [options]")
+        return 0
+    name, rest = argv[0], argv[1:]
+    names = list(SUITES) if name == "all" else [name]
+    for n in names:
+        if n not in SUITES:
+            print(f"error: unknown benchmark {n!r}; choose from {', '.join(SUITES)} or all")
+            return 2
+        importlib.import_module(SUITES[n]).main(rest)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,18 @@
+"""tissuemech.reduced: the fast half (JAX + diffrax, float64, SI units at the API).
+
+Importing this package switches JAX to 64-bit floats; every model here is a pure function
+that works under ``jax.jit``, ``jax.vmap`` and ``jax.grad``.
+
+Modules
+-------
+material   Fung energy and its scalar derivatives, parameter validation (shared with ``fem``)
+blastula   exact thick incompressible shell: p(lambda_a), inverse, limit point, profiles
+viscoshell the shell with generalized-Maxwell branches: inflation history under p(t)
+spheroid   lumped generalized-Maxwell plate force of a compressed ball
+"""
+
+import jax
+
+jax.config.update("jax_enable_x64", True)
+
+__all__ = ["material"]

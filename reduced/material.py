@@ -1,0 +1,208 @@
+r"""Fung hyperelastic law: the one constitutive source of tissuemech (``fem`` imports it too).
+
+Isochoric energy per reference volume (Pa)::
+
+    W(Ibar1) = C / alpha * (exp(alpha * (Ibar1 - 3)) - 1)
+
+with ``C`` in Pa (shear modulus mu = 2 C, Young's modulus E = 6 C) and the dimensionless
+stiffening exponent ``alpha >= 0``. For ``alpha -> 0`` it is neo-Hookean, ``W = C (Ibar1 - 3)``;
+it is evaluated through ``expm1(alpha x) / alpha`` (and a Taylor series for tiny ``alpha x``), so
+``alpha = 0`` is exact, ``alpha = 1e-5`` loses no digits and the derivative in ``alpha`` is smooth.
+
+Volumetric energy (Pa): ``U(J) = kappa / 2 (J - 1)^2`` (``kappa`` the bulk modulus).
+
+All functions are array-generic: they use NumPy for NumPy input (the FE assembles with it)
+and ``jax.numpy`` for JAX arrays and tracers (jit/vmap/grad work).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Iterable, Sequence
+
+import numpy as np
+
+try:  # jax is a core dependency; keep this module importable for pure-NumPy callers anyway
+    import jax
+    import jax.numpy as jnp
+except ImportError:  # pragma: no cover
+    jax = None
+    jnp = None
+
+__all__ = [
+    "fung_energy",
+    "dW_dI1",
+    "d2W_dI1",
+    "volumetric_energy",
+    "dU_dJ",
+    "principal_cauchy_stress",
+    "incompressible_stress_difference",
+    "validate_material",
+    "validate_positive",
+    "validate_nonnegative",
+    "validate_radii",
+    "validate_branches",
+    "is_traced",
+]
+
+_SERIES_CUTOFF = 1e-3  # |alpha x| below this uses the 4-term Taylor series (error < 1e-14 rel.)
+
+
+def _xp(*args: Any):
+    """NumPy for NumPy/Python input, jax.numpy if any argument is a JAX array or tracer."""
+    if jax is not None and any(isinstance(a, jax.Array) for a in args):
+        return jnp
+    return np
+
+
+def _expm1_over(alpha, x):
+    """(exp(alpha x) - 1) / alpha, exact and smooth through alpha = 0 (value x)."""
+    xp = _xp(alpha, x)
+    ax = alpha * x
+    small = xp.abs(ax) < _SERIES_CUTOFF
+    series = x * (1.0 + ax / 2.0 * (1.0 + ax / 3.0 * (1.0 + ax / 4.0)))
+    safe_alpha = xp.where(small, 1.0, alpha)
+    safe_ax = xp.where(small, 0.0, ax)
+    return xp.where(small, series, xp.expm1(safe_ax) / safe_alpha)
+
+
+def fung_energy(I1bar, C, alpha):
+    """Isochoric Fung energy W = C/alpha (exp(alpha (I1bar - 3)) - 1) in Pa (J/m^3).
+
+    ``I1bar`` (dimensionless) is the first isochoric invariant J^(-2/3) tr(F^T F);
+    ``C`` in Pa; ``alpha`` >= 0 dimensionless. Exact at alpha = 0 (neo-Hookean C (I1bar - 3)).
+    """
+    return C * _expm1_over(alpha, I1bar - 3.0)
+
+
+def dW_dI1(I1bar, C, alpha):
+    """dW/dI1bar = C exp(alpha (I1bar - 3)) in Pa."""
+    xp = _xp(I1bar, C, alpha)
+    return C * xp.exp(alpha * (I1bar - 3.0))
+
+
+def d2W_dI1(I1bar, C, alpha):
+    """d^2W/dI1bar^2 = C alpha exp(alpha (I1bar - 3)) in Pa (zero for neo-Hookean)."""
+    xp = _xp(I1bar, C, alpha)
+    return C * alpha * xp.exp(alpha * (I1bar - 3.0))
+
+
+def volumetric_energy(J, kappa):
+    """U(J) = kappa/2 (J - 1)^2 in Pa; ``kappa`` the bulk modulus in Pa."""
+    return 0.5 * kappa * (J - 1.0) ** 2
+
+
+def dU_dJ(J, kappa):
+    """U'(J) = kappa (J - 1) in Pa (the hydrostatic pressure is -U'(J))."""
+    return kappa * (J - 1.0)
+
+
+def principal_cauchy_stress(l1, l2, l3, *, C, alpha, kappa):
+    """Principal Cauchy stresses (Pa) of the nearly incompressible Fung law.
+
+    sigma_i = (2/J) W'(Ibar1) (lbar_i^2 - Ibar1/3) + kappa (J - 1),
+    with J = l1 l2 l3 and lbar_i = J^(-1/3) l_i. Returns a tuple (s1, s2, s3).
+    """
+    J = l1 * l2 * l3
+    Jm23 = J ** (-2.0 / 3.0)
+    b = [Jm23 * l1**2, Jm23 * l2**2, Jm23 * l3**2]
+    I1bar = b[0] + b[1] + b[2]
+    w1 = dW_dI1(I1bar, C, alpha)
+    pvol = dU_dJ(J, kappa)
+    return tuple(2.0 / J * w1 * (bi - I1bar / 3.0) + pvol for bi in b)
+
+
+def incompressible_stress_difference(li, lj, I1, C, alpha):
+    """sigma_i - sigma_j = 2 W'(I1) (li^2 - lj^2) (Pa) for the incompressible Fung law."""
+    return 2.0 * dW_dI1(I1, C, alpha) * (li**2 - lj**2)
+
+
+# ---------------------------------------------------------------------------------------------
+# Validation: plain messages a biologist understands. Skipped for traced values (inside jit).
+# ---------------------------------------------------------------------------------------------
+
+
+def is_traced(*values: Any) -> bool:
+    """True if any value is a JAX tracer (inside jit/vmap/grad): checks are then skipped."""
+    if jax is None:
+        return False
+    return any(isinstance(v, jax.core.Tracer) for v in values)
+
+
+def _concrete(value: Any) -> np.ndarray | None:
+    if is_traced(value):
+        return None
+    return np.asarray(value, dtype=float)
+
+
+def validate_positive(name: str, value: Any, unit: str = "") -> None:
+    """Raise ValueError unless every entry of ``value`` is finite and > 0."""
+    v = _concrete(value)
+    if v is None:
+        return
+    u = f" {unit}" if unit else ""
+    if not np.all(np.isfinite(v)):
+        raise ValueError(f"{name} must be a finite number{u}; got {value!r}")
+    if np.any(v <= 0):
+        raise ValueError(f"{name} must be positive{u}; got {np.min(v):g}")
+
+
+def validate_nonnegative(name: str, value: Any, unit: str = "") -> None:
+    """Raise ValueError unless every entry of ``value`` is finite and >= 0."""
+    v = _concrete(value)
+    if v is None:
+        return
+    u = f" {unit}" if unit else ""
+    if not np.all(np.isfinite(v)):
+        raise ValueError(f"{name} must be a finite number{u}; got {value!r}")
+    if np.any(v < 0):
+        raise ValueError(f"{name} must not be negative{u}; got {np.min(v):g}")
+
+
+def validate_material(C: Any, alpha: Any, kappa: Any = None) -> None:
+    """Check the Fung parameters: C > 0 (Pa), alpha >= 0, optional kappa > 0 (Pa)."""
+    validate_positive("C (the Fung stiffness, shear modulus / 2)", C, "Pa")
+    v = _concrete(alpha)
+    if v is not None:
+        if not np.all(np.isfinite(v)):
+            raise ValueError(f"alpha (the Fung stiffening exponent) must be finite; got {alpha!r}")
+        if np.any(v < 0):
+            raise ValueError(
+                "alpha (the Fung stiffening exponent) must be >= 0 "
+                f"(0 is neo-Hookean); got {np.min(v):g}"
+            )
+    if kappa is not None:
+        validate_positive("kappa (the bulk modulus)", kappa, "Pa")
+
+
+def validate_radii(inner_radius: Any, outer_radius: Any) -> None:
+    """Check a hollow sphere: 0 < inner_radius < outer_radius (both in m)."""
+    validate_positive("inner_radius", inner_radius, "m")
+    validate_positive("outer_radius", outer_radius, "m")
+    a, b = _concrete(inner_radius), _concrete(outer_radius)
+    if a is not None and b is not None and np.any(np.asarray(a) >= np.asarray(b)):
+        raise ValueError(
+            "inner_radius must be smaller than outer_radius (the wall needs a positive "
+            f"thickness); got inner {np.max(a):g} m >= outer {np.min(b):g} m"
+        )
+
+
+def validate_branches(branches: Iterable[Sequence[float]] | None) -> tuple[tuple[Any, Any], ...]:
+    """Normalise generalized-Maxwell branches to a tuple of (beta, tau) and check them.
+
+    ``beta`` (dimensionless energy factor) must be >= 0 and ``tau`` (relaxation time, s) > 0.
+    ``None`` or an empty sequence means purely elastic.
+    """
+    if branches is None:
+        return ()
+    out = []
+    for k, br in enumerate(branches):
+        try:
+            beta, tau = br
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"branch {k}: each viscoelastic branch is a pair (beta, tau); got {br!r}"
+            ) from None
+        validate_nonnegative(f"beta (energy factor of branch {k})", beta)
+        validate_positive(f"tau (relaxation time of branch {k})", tau, "s")
+        out.append((beta, tau))
+    return tuple(out)
