@@ -64,7 +64,6 @@ __all__ = [
     "profiles",
     "Profiles",
     "LimitPoint",
-    "NoLimitPoint",
 ]
 
 Array = Any
@@ -232,3 +231,276 @@ def outer_stretch(inner_stretch: Array, *, inner_radius: Array, outer_radius: Ar
     k, omk = _geometry(inner_radius, outer_radius)
     sb, _ = _log_stretches(la, k, omk)
     return jnp.exp(sb)
+
+
+# ---------------------------------------------------------------------------------------------
+# Limit point (maximum of p(lambda_a)): closed-form dp/dlambda_a, grid scan + bisection
+# ---------------------------------------------------------------------------------------------
+
+LIMIT_SEARCH_MAX_STRETCH = 10.0  # a maximum is searched for on 1 < lambda_a <= 10
+_LIMIT_GRID = np.geomspace(1.0, LIMIT_SEARCH_MAX_STRETCH, 257)[1:]
+_BISECTIONS = 60
+
+
+class LimitPoint(NamedTuple):
+    """Maximum of the pressure-stretch curve: ``pressure`` (Pa) at ``inner_stretch`` (a/A).
+
+    Beyond it the shell inflates without bound under a prescribed pressure ("bursts").
+    NaN entries (array or traced calls) mean: no maximum for 1 < lambda_a <= 10.
+    """
+
+    pressure: Array
+    inner_stretch: Array
+
+
+def _limit_stretch(k, alpha):
+    """First root of dp/dla on (1, 10] (NaN if dp/dla > 0 on the whole search grid)."""
+    k, alpha = jnp.broadcast_arrays(jnp.asarray(k, dtype=jnp.float64), jnp.asarray(alpha, dtype=jnp.float64))
+    grid = jnp.asarray(_LIMIT_GRID)
+    d = _dp_over_C(grid, k[..., None], alpha[..., None])
+    falling = d <= 0.0
+    exists = jnp.any(falling, axis=-1)
+    i = jnp.argmax(falling, axis=-1)  # first grid node past the maximum
+    hi = jnp.take(grid, i)
+    lo = jnp.where(i > 0, jnp.take(grid, jnp.maximum(i - 1, 0)), 1.0)
+
+    def bisect(_, bounds):
+        lo, hi = bounds
+        mid = 0.5 * (lo + hi)
+        down = _dp_over_C(mid, k, alpha) <= 0.0
+        return jnp.where(down, lo, mid), jnp.where(down, mid, hi)
+
+    lo, hi = jax.lax.fori_loop(0, _BISECTIONS, bisect, (lo, hi))
+    la = jax.lax.stop_gradient(0.5 * (lo + hi))
+    # one Newton step with a frozen curvature: same value, exact implicit derivative in (k, alpha)
+    h = 1e-6 * la
+    curv = jax.lax.stop_gradient((_dp_over_C(la + h, k, alpha) - _dp_over_C(la - h, k, alpha)) / (2 * h))
+    la = la - _dp_over_C(la, k, alpha) / curv
+    return jnp.where(exists, la, jnp.nan)
+
+
+def limit_point(
+    *, inner_radius: Array, outer_radius: Array, C: Array, alpha: Array
+) -> LimitPoint | None:
+    r"""Limit point of the inflation curve: ``(p_max [Pa], lambda_a at the maximum)``, or ``None``.
+
+    The maximum is the first root of the closed-form slope (Leibniz rule)
+    dp/dlambda_a = g(lambda_a) - g(lambda_b) (A/B)^3 lambda_a^2/lambda_b^2 on 1 < lambda_a <= 10
+    (scan on a 256-node geometric grid, then 60 bisections; the stretch is exact to ~1e-15).
+    Returns ``None`` for scalar eager inputs without a maximum up to lambda_a = 10 (e.g. Fung with
+    alpha >= ~0.06 for A/B = 2/3 stiffens before it can go unstable). For array or traced
+    (jit/vmap/grad) inputs it returns a ``LimitPoint`` with NaN where there is no maximum.
+    Gradients are exact (envelope theorem for p_max; implicit function theorem for the stretch).
+    """
+    _validate(inner_radius, outer_radius, C, alpha)
+    k, omk = _geometry(inner_radius, outer_radius)
+    alpha = jnp.asarray(alpha, dtype=jnp.float64)
+    C = jnp.asarray(C, dtype=jnp.float64)
+    la = _limit_stretch(k, alpha)
+    la_b, k_b, omk_b, alpha_b = jnp.broadcast_arrays(la, k, omk, alpha)
+    pmax = C * _p_over_C_quad(jnp.where(jnp.isnan(la_b), 2.0, la_b), k_b, omk_b, alpha_b)
+    pmax = jnp.where(jnp.isnan(la_b), jnp.nan, pmax)
+    if not is_traced(inner_radius, outer_radius, C, alpha) and np.ndim(pmax) == 0 and np.isnan(pmax):
+        return None
+    return LimitPoint(pmax, la_b)
+
+
+# ---------------------------------------------------------------------------------------------
+# Inverse: safeguarded Newton in x = log lambda_a
+# ---------------------------------------------------------------------------------------------
+
+INVERSE_STRETCH_RANGE = (0.1, LIMIT_SEARCH_MAX_STRETCH)
+_MAX_ITER = 100
+
+
+def _solve_stretch(p_over_C, k, omk, alpha):
+    """Newton-bisection for p/C(lambda_a) = p_over_C on the rising branch. Returns (la, converged)."""
+    pt, k, omk, alpha = jnp.broadcast_arrays(p_over_C, k, omk, alpha)
+    pt, k, omk, alpha = (jax.lax.stop_gradient(v) for v in (pt, k, omk, alpha))
+    xmin, xmax = np.log(INVERSE_STRETCH_RANGE[0]), np.log(INVERSE_STRETCH_RANGE[1])
+    lo = jnp.where(pt >= 0.0, 0.0, xmin)
+    hi = jnp.where(pt >= 0.0, xmax, 0.0)
+    # small-strain guess p/C ~ 8 (1 - k)(lambda_a - 1): from below on the concave rising branch
+    guess = jnp.log(jnp.maximum(1.0 + pt / (8.0 * omk), 1e-300))
+    x0 = jnp.where((guess >= lo) & (guess <= hi), guess, 0.5 * (lo + hi))
+
+    def residual(x):
+        la = jnp.exp(x)
+        return _p_over_C_quad(la, k, omk, alpha) - pt, la * _dp_over_C(la, k, alpha)
+
+    def cond(state):
+        x, lo, hi, it, done = state
+        return (it < _MAX_ITER) & ~jnp.all(done)
+
+    def body(state):
+        x, lo, hi, it, done = state
+        r, d = residual(x)
+        past = (d <= 0.0) | (r > 0.0)
+        lo_n = jnp.where(past, lo, x)
+        hi_n = jnp.where(past, x, hi)
+        newton = x - r / jnp.where(d > 0.0, d, 1.0)
+        ok = (d > 0.0) & (newton > lo_n) & (newton < hi_n)
+        x_n = jnp.where(ok, newton, 0.5 * (lo_n + hi_n))
+        x_n = jnp.where(r == 0.0, x, x_n)
+        small = jnp.abs(x_n - x) <= 1e-15 * jnp.maximum(1.0, jnp.abs(x))
+        done_n = done | (small & ok) | (r == 0.0) | (hi_n - lo_n <= 1e-15)
+        keep = done
+        return (
+            jnp.where(keep, x, x_n),
+            jnp.where(keep, lo, lo_n),
+            jnp.where(keep, hi, hi_n),
+            it + 1,
+            done_n,
+        )
+
+    state = (x0, lo, hi, jnp.asarray(0), jnp.zeros(pt.shape, dtype=bool))
+    x, *_ = jax.lax.while_loop(cond, body, state)
+    r, d = residual(x)
+    # residual tolerance: 1e-11 relative, plus the rounding of x itself (lambda_a near 1 has
+    # only ~1e-16 absolute resolution, i.e. |dp/dx| * 4 eps in p/C)
+    converged = (d > 0.0) & (jnp.abs(r) <= 1e-11 * jnp.abs(pt) + 1e-15 * jnp.abs(d))
+    converged = converged | (pt == 0.0)
+    return jnp.exp(x), converged
+
+
+def inner_stretch_solve(
+    pressure: Array, *, inner_radius: Array, outer_radius: Array, C: Array, alpha: Array
+) -> tuple[Array, Array]:
+    r"""Inverse of :func:`pressure` for jit/vmap use: ``(lambda_a, converged)``.
+
+    Solves p(lambda_a) = pressure (Pa) on the stable (rising) branch by safeguarded Newton in
+    x = log lambda_a (closed-form slope; bisection whenever a Newton step leaves the bracket or the
+    slope is not positive), searching 0.1 <= lambda_a <= 10. ``converged`` is False where no stable
+    state exists: pressure above the limit point (the shell bursts), or outside that stretch range;
+    ``lambda_a`` is NaN there. ``pressure = 0`` gives exactly 1. Negative pressures deflate
+    (lambda_a < 1). No input validation (use :func:`inner_stretch` for checked eager calls).
+    Derivatives (jax.grad) follow the implicit function theorem: d lambda_a/dp = 1/(dp/dlambda_a).
+    """
+    k, omk = _geometry(inner_radius, outer_radius)
+    C = jnp.asarray(C, dtype=jnp.float64)
+    alpha = jnp.asarray(alpha, dtype=jnp.float64)
+    pt = jnp.asarray(pressure, dtype=jnp.float64) / C
+    la, conv = _solve_stretch(pt, k, omk, alpha)
+    la_s = jax.lax.stop_gradient(la)
+    pt_b, k_b, omk_b, alpha_b = jnp.broadcast_arrays(pt, k, omk, alpha)
+    slope = jax.lax.stop_gradient(_dp_over_C(la_s, k_b, alpha_b))
+    # one frozen-slope Newton step: the value is unchanged, the derivatives are the implicit ones
+    la = la_s - (_p_over_C_quad(la_s, k_b, omk_b, alpha_b) - pt_b) / jnp.where(conv, slope, 1.0)
+    return jnp.where(conv, la, jnp.nan), conv
+
+
+def inner_stretch(
+    pressure: Array, *, inner_radius: Array, outer_radius: Array, C: Array, alpha: Array
+) -> Array:
+    r"""Inner stretch lambda_a = a/A at internal pressure ``pressure`` (Pa): the inverse of :func:`pressure`.
+
+    The stable (rising) branch of p(lambda_a) is returned, found by safeguarded Newton (see
+    :func:`inner_stretch_solve`). ``pressure = 0`` -> 1 exactly; negative pressure deflates the
+    shell (lambda_a < 1, down to 0.1).
+
+    Eager calls raise ``ValueError`` where no stable state exists: the pressure exceeds the limit
+    point (the message gives the limit pressure), or the stretch would leave 0.1 <= lambda_a <= 10.
+    Inside ``jit``/``vmap`` no exception can be raised: those entries are NaN (NaN convention; use
+    :func:`inner_stretch_solve` for the explicit ``converged`` flag).
+    """
+    if not is_traced(pressure):
+        p = np.asarray(pressure, dtype=float)
+        if not np.all(np.isfinite(p)):
+            raise ValueError(f"pressure must be a finite number in Pa; got {pressure!r}")
+    _validate(inner_radius, outer_radius, C, alpha)
+    la, conv = inner_stretch_solve(pressure, inner_radius=inner_radius, outer_radius=outer_radius, C=C, alpha=alpha)
+    traced = is_traced(pressure, inner_radius, outer_radius, C, alpha)
+    if not traced and not bool(np.all(np.asarray(conv))):
+        _raise_no_solution(pressure, conv, inner_radius, outer_radius, C, alpha)
+    return la
+
+
+def _raise_no_solution(pressure, conv, inner_radius, outer_radius, C, alpha) -> None:
+    p, A, B, C_, al, cv = np.broadcast_arrays(
+        np.asarray(pressure, float), np.asarray(inner_radius, float), np.asarray(outer_radius, float),
+        np.asarray(C, float), np.asarray(alpha, float), np.asarray(conv),
+    )
+    i = np.unravel_index(np.argmin(cv), cv.shape)
+    pi, Ai, Bi, Ci, ai = (float(v[i]) for v in (p, A, B, C_, al))
+    geo = f"(inner radius {Ai:g} m, outer radius {Bi:g} m, C = {Ci:g} Pa, alpha = {ai:g})"
+    if pi < 0:
+        pmin = float(Ci * _p_over_C_quad(*jnp.broadcast_arrays(INVERSE_STRETCH_RANGE[0], *_geometry(Ai, Bi), ai)))
+        raise ValueError(
+            f"pressure {pi:g} Pa deflates the shell {geo} below the smallest inner stretch this model "
+            f"covers ({INVERSE_STRETCH_RANGE[0]:g}, reached at {pmin:g} Pa)"
+        )
+    lim = limit_point(inner_radius=Ai, outer_radius=Bi, C=Ci, alpha=ai)
+    if lim is not None and pi > float(lim.pressure):
+        raise ValueError(
+            f"pressure {pi:g} Pa exceeds the limit pressure {float(lim.pressure):g} Pa of this shell {geo} "
+            f"(reached at inner stretch {float(lim.inner_stretch):.6g}): above it there is no "
+            "equilibrium and the shell inflates without bound (bursts)"
+        )
+    pmax = float(Ci * _p_over_C_quad(*jnp.broadcast_arrays(INVERSE_STRETCH_RANGE[1], *_geometry(Ai, Bi), ai)))
+    raise ValueError(
+        f"pressure {pi:g} Pa would inflate the shell {geo} beyond the largest inner stretch this model "
+        f"covers ({INVERSE_STRETCH_RANGE[1]:g}, reached at {pmax:g} Pa)"
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# Through-wall profiles
+# ---------------------------------------------------------------------------------------------
+
+
+class Profiles(NamedTuple):
+    """Through-wall fields of the inflated shell (last axis: ``n`` points from inner to outer wall).
+
+    R            reference radius (m)
+    r            deformed radius (m)
+    stretch      hoop stretch r/R (radial stretch is stretch^-2)
+    sigma_r      radial Cauchy stress (Pa), = -p at the inner wall and 0 at the outer wall
+    sigma_theta  hoop Cauchy stress (Pa)
+    von_mises    |sigma_theta - sigma_r| (Pa)
+    """
+
+    R: Array
+    r: Array
+    stretch: Array
+    sigma_r: Array
+    sigma_theta: Array
+    von_mises: Array
+
+
+def profiles(
+    inner_stretch: Array,
+    *,
+    inner_radius: Array,
+    outer_radius: Array,
+    C: Array,
+    alpha: Array,
+    n: int = 50,
+) -> Profiles:
+    r"""Radial profiles through the wall at inner stretch lambda_a (all SI).
+
+    Point at reference radius R (A <= R <= B, ``n`` equally spaced): hoop stretch l with
+    l^3 = 1 + (lambda_a^3 - 1)(A/R)^3, r = l R;
+    sigma_r(R) = -int_{lambda_b}^{l} g(s) ds (the pressure integral of a shell with inner radius R),
+    sigma_theta = sigma_r + 2 W'(I1)(l^2 - l^-4), I1 = 2 l^2 + l^-4; von Mises |sigma_theta - sigma_r|.
+    Inputs broadcast; the profile axis is appended last.
+    """
+    _check_stretch("inner_stretch", inner_stretch)
+    _validate(inner_radius, outer_radius, C, alpha)
+    if int(n) < 2:
+        raise ValueError(f"n (number of points through the wall) must be at least 2; got {n}")
+    A = jnp.asarray(inner_radius, dtype=jnp.float64)[..., None]
+    B = jnp.asarray(outer_radius, dtype=jnp.float64)[..., None]
+    la = jnp.asarray(inner_stretch, dtype=jnp.float64)[..., None]
+    C = jnp.asarray(C, dtype=jnp.float64)[..., None]
+    alpha = jnp.asarray(alpha, dtype=jnp.float64)[..., None]
+    t = jnp.linspace(0.0, 1.0, int(n))
+    R = A + (B - A) * t
+    e = jnp.expm1(3.0 * jnp.log(la))
+    lam = jnp.exp(jnp.log1p(e * (A / R) ** 3) / 3.0)
+    kR = (R / B) ** 3
+    omkR = (B - R) * (B * B + R * B + R * R) / B**3
+    lam_b, kR_b, omkR_b, alpha_b, C_b, R_b = jnp.broadcast_arrays(lam, kR, omkR, alpha, C, R)
+    sigma_r = -C_b * _p_over_C_quad(lam_b, kR_b, omkR_b, alpha_b)
+    I1 = 2.0 * lam_b**2 + lam_b**-4
+    diff = 2.0 * dW_dI1(I1, C_b, alpha_b) * (lam_b**2 - lam_b**-4)
+    return Profiles(R_b, lam_b * R_b, lam_b, sigma_r, sigma_r + diff, jnp.abs(diff))
