@@ -1,0 +1,294 @@
+"""Physics tests of reduced.blastula: the exact thick incompressible Fung shell."""
+
+from decimal import Decimal, getcontext
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from scipy.integrate import quad
+from scipy.optimize import brentq
+
+import reduced  # noqa: F401  (x64)
+from reduced import blastula as bl
+
+A = 50e-6
+C = 200.0
+GEO = dict(inner_radius=A, outer_radius=75e-6)
+
+
+def nh_closed(la, A, B, C):
+    """Neo-Hookean closed form p = 4C[1/lb + 1/(4 lb^4) - 1/la - 1/(4 la^4)] (float)."""
+    lb = (1.0 + (la**3 - 1.0) * (A / B) ** 3) ** (1.0 / 3.0)
+    return 4 * C * (1 / lb + 1 / (4 * lb**4) - 1 / la - 1 / (4 * la**4))
+
+
+def nh_closed_decimal(la: float, A: float, B: float, C: float) -> float:
+    """The same closed form in 50-digit decimal arithmetic (reference free of cancellation)."""
+    getcontext().prec = 50
+    la, A, B, C = (Decimal(float(v)) for v in (la, A, B, C))
+    lb = (1 + (la**3 - 1) * (A / B) ** 3) ** (Decimal(1) / 3)
+    f = lambda l: 1 / l + 1 / (4 * l**4)  # noqa: E731
+    return float(4 * C * (f(lb) - f(la)))
+
+
+def fung_quad(la, A, B, C, alpha):
+    k = (A / B) ** 3
+    lb = (1.0 + (la**3 - 1.0) * k) ** (1.0 / 3.0)
+    g = lambda l: 4 * C * np.exp(alpha * (2 * l * l + l**-4 - 3)) * (l**3 + 1) / l**5  # noqa: E731
+    return quad(g, lb, la, epsabs=0.0, epsrel=1e-13, limit=200)[0]
+
+
+# ------------------------------------------------------------------ forward pressure
+
+
+def test_neo_hookean_closed_form():
+    rng = np.random.default_rng(1)
+    la = rng.uniform(0.5, 4.0, 400)
+    la = la[np.abs(la - 1) > 0.05]
+    B = rng.uniform(51e-6, 500e-6, la.size)
+    p = np.asarray(bl.pressure(la, inner_radius=A, outer_radius=B, C=C, alpha=0.0))
+    ref = np.array([nh_closed_decimal(x, A, b, C) for x, b in zip(la, B)])
+    np.testing.assert_allclose(p, ref, rtol=1e-12, atol=0)
+    np.testing.assert_allclose(p, nh_closed(la, A, B, C), rtol=1e-11, atol=0)
+
+
+def test_fung_against_scipy_quad():
+    rng = np.random.default_rng(2)
+    n = 150
+    la = rng.uniform(0.5, 4.0, n)
+    B = rng.uniform(52e-6, 500e-6, n)
+    alpha = rng.uniform(0.0, 0.3, n)
+    p = np.asarray(bl.pressure(la, inner_radius=A, outer_radius=B, C=C, alpha=alpha))
+    ref = np.array([fung_quad(x, A, b, C, al) for x, b, al in zip(la, B, alpha)])
+    np.testing.assert_allclose(p, ref, rtol=1e-11, atol=0)
+
+
+@pytest.mark.parametrize("alpha", [0.0, 1e-5, 0.1, 0.3])
+def test_ode_path_matches_quadrature(alpha):
+    la = jnp.linspace(0.6, 4.0, 23)
+    for B in (52e-6, 75e-6):
+        q = bl.pressure(la, inner_radius=A, outer_radius=B, C=C, alpha=alpha)
+        o = bl.pressure(la, inner_radius=A, outer_radius=B, C=C, alpha=alpha, method="ode")
+        np.testing.assert_allclose(np.asarray(o), np.asarray(q), rtol=1e-10, atol=0)
+
+
+def test_near_one_no_cancellation():
+    """p ~ 8 C (1 - (A/B)^3)(lambda_a - 1) for small strain, for every alpha (W'(3) = C)."""
+    B = 75e-6
+    k = (A / B) ** 3
+    for eps in (1e-9, 1e-8, 1e-6):
+        la = 1.0 + eps
+        eps_exact = la - 1.0  # the float's own distance to 1
+        for alpha in (0.0, 0.2):
+            p = float(bl.pressure(la, inner_radius=A, outer_radius=B, C=C, alpha=alpha))
+            lin = 8 * C * (1 - k) * eps_exact
+            assert abs(p / lin - 1) < 10 * eps  # next term is O(eps)
+        p0 = float(bl.pressure(la, inner_radius=A, outer_radius=B, C=C, alpha=0.0))
+        assert p0 == pytest.approx(nh_closed_decimal(la, A, B, C), rel=1e-12, abs=0)
+    assert float(bl.pressure(1.0, **GEO, C=C, alpha=0.3)) == 0.0
+
+
+def test_deflation_is_negative_pressure_and_monotone():
+    la = jnp.linspace(0.5, 1.0, 41)
+    for alpha in (0.0, 0.3):
+        p = np.asarray(bl.pressure(la, **GEO, C=C, alpha=alpha))
+        assert np.all(p[:-1] < 0) and p[-1] == 0.0
+        assert np.all(np.diff(p) > 0)
+
+
+def test_outer_stretch_incompressibility():
+    la = np.array([0.7, 1.0, 1.3, 3.0])
+    lb = np.asarray(bl.outer_stretch(la, **GEO))
+    B = GEO["outer_radius"]
+    # the wall volume is conserved: b^3 - a^3 = B^3 - A^3
+    np.testing.assert_allclose((lb * B) ** 3 - (la * A) ** 3, B**3 - A**3, rtol=1e-13)
+
+
+def test_pressure_derivative_closed_form():
+    la = np.linspace(0.6, 3.5, 30)
+    for alpha in (0.0, 0.2):
+        d = np.asarray(bl.pressure_derivative(la, **GEO, C=C, alpha=alpha))
+        h = 1e-6
+        fd = (np.asarray(bl.pressure(la + h, **GEO, C=C, alpha=alpha))
+              - np.asarray(bl.pressure(la - h, **GEO, C=C, alpha=alpha))) / (2 * h)
+        np.testing.assert_allclose(d, fd, rtol=1e-7)
+
+
+# ------------------------------------------------------------------ limit point
+
+
+def nh_slope(la, A, B):
+    k = (A / B) ** 3
+    lb = (1.0 + (la**3 - 1.0) * k) ** (1.0 / 3.0)
+    dlb = k * la**2 / lb**2
+    return (-1 / lb**2 - 1 / lb**5) * dlb + 1 / la**2 + 1 / la**5
+
+
+@pytest.mark.parametrize("B", [52e-6, 60e-6, 75e-6])
+def test_limit_point_neo_hookean(B):
+    lim = bl.limit_point(inner_radius=A, outer_radius=B, C=C, alpha=0.0)
+    la_ref = brentq(nh_slope, 1.01, 5.0, args=(A, B), xtol=1e-15, rtol=1e-15)
+    assert float(lim.inner_stretch) == pytest.approx(la_ref, rel=1e-10)
+    assert float(lim.pressure) == pytest.approx(nh_closed_decimal(la_ref, A, B, C), rel=1e-12)
+    # it is a maximum
+    pm = float(lim.pressure)
+    for d in (-1e-3, 1e-3):
+        assert float(bl.pressure(la_ref + d, inner_radius=A, outer_radius=B, C=C, alpha=0.0)) < pm
+
+
+def test_limit_point_seed_values():
+    lim = bl.limit_point(**GEO, C=C, alpha=0.0)
+    # A = 50 um, B = 75 um, C = 200 Pa: the shell bursts near 197 Pa (seed: "p > 0.1 kPa")
+    assert 190 < float(lim.pressure) < 200
+    lim5 = bl.limit_point(**GEO, C=C, alpha=1e-5)
+    assert lim5 is not None and float(lim5.pressure) > float(lim.pressure)
+    for alpha in (0.1, 0.2, 0.3):
+        assert bl.limit_point(**GEO, C=C, alpha=alpha) is None
+    # arrays: NaN where none
+    arr = bl.limit_point(**GEO, C=C, alpha=jnp.array([0.0, 0.2]))
+    assert np.isfinite(arr.pressure[0]) and np.isnan(arr.pressure[1])
+
+
+# ------------------------------------------------------------------ inverse
+
+
+def test_inverse_of_forward():
+    rng = np.random.default_rng(3)
+    lim = bl.limit_point(**GEO, C=C, alpha=0.0)
+    la = rng.uniform(0.5, float(lim.inner_stretch) - 1e-3, 300)
+    p = bl.pressure(la, **GEO, C=C, alpha=0.0)
+    np.testing.assert_allclose(np.asarray(bl.inner_stretch(p, **GEO, C=C, alpha=0.0)), la, rtol=1e-11)
+    la = rng.uniform(0.5, 4.0, 300)
+    alpha = rng.uniform(0.1, 0.3, 300)
+    p = bl.pressure(la, **GEO, C=C, alpha=alpha)
+    np.testing.assert_allclose(np.asarray(bl.inner_stretch(p, **GEO, C=C, alpha=alpha)), la, rtol=1e-12)
+
+
+def test_inverse_zero_and_tiny_pressure():
+    assert float(bl.inner_stretch(0.0, **GEO, C=C, alpha=0.2)) == 1.0
+    la = float(bl.inner_stretch(1e-6, **GEO, C=C, alpha=0.0))
+    k = (2 / 3) ** 3
+    assert (la - 1) == pytest.approx(1e-6 / (8 * C * (1 - k)), rel=1e-6)
+
+
+def test_inverse_above_limit_point():
+    lim = bl.limit_point(**GEO, C=C, alpha=0.0)
+    with pytest.raises(ValueError, match="limit pressure 197"):
+        bl.inner_stretch(200.0, **GEO, C=C, alpha=0.0)
+    # just below the limit: the rising branch, not the falling one
+    la = float(bl.inner_stretch(float(lim.pressure) * (1 - 1e-6), **GEO, C=C, alpha=0.0))
+    assert la < float(lim.inner_stretch)
+    f = jax.jit(lambda p: bl.inner_stretch(p, **GEO, C=C, alpha=0.0))
+    out = np.asarray(f(jnp.array([100.0, 250.0])))
+    assert np.isfinite(out[0]) and np.isnan(out[1])
+    la, ok = bl.inner_stretch_solve(jnp.array([100.0, 250.0]), **GEO, C=C, alpha=0.0)
+    assert bool(ok[0]) and not bool(ok[1])
+
+
+def test_inverse_vmap_over_parameters():
+    alphas = jnp.array([0.0, 0.1, 0.2, 0.3])
+    f = jax.vmap(lambda a: bl.inner_stretch(150.0, **GEO, C=C, alpha=a))
+    la = f(alphas)
+    np.testing.assert_allclose(np.asarray(bl.pressure(la, **GEO, C=C, alpha=alphas)), 150.0, rtol=1e-12)
+    assert np.all(np.diff(np.asarray(la)) < 0)  # stiffer (larger alpha) inflates less
+
+
+# ------------------------------------------------------------------ derivatives
+
+
+def _fd_check(f, args, rel=1e-6, rtol=1e-6, alpha_index=2):
+    g = jax.grad(f, argnums=tuple(range(len(args))))(*args)
+    for i, x in enumerate(args):
+        h = rel * abs(x) if i != alpha_index else rel * max(abs(x), 0.1)  # absolute step for tiny alpha
+        up = list(args)
+        dn = list(args)
+        up[i] += h
+        dn[i] -= h
+        fd = (float(f(*up)) - float(f(*dn))) / (2 * h)
+        assert float(g[i]) == pytest.approx(fd, rel=rtol, abs=1e-9 * abs(fd) + 1e-300), i
+
+
+def test_grad_pressure():
+    f = lambda la, C_, al, A_, B_: bl.pressure(la, inner_radius=A_, outer_radius=B_, C=C_, alpha=al)  # noqa: E731
+    _fd_check(f, (1.7, 200.0, 0.2, 50e-6, 75e-6))
+    _fd_check(f, (1.2, 150.0, 1e-5, 50e-6, 60e-6))
+
+
+def test_grad_inverse():
+    f = lambda p, C_, al, A_, B_: bl.inner_stretch(p, inner_radius=A_, outer_radius=B_, C=C_, alpha=al)  # noqa: E731
+    _fd_check(f, (150.0, 200.0, 0.05, 50e-6, 75e-6))
+    _fd_check(f, (800.0, 200.0, 0.2, 50e-6, 75e-6))
+
+
+def test_grad_limit_point():
+    for j in (0, 1):
+        f = lambda C_, al, A_, B_: bl.limit_point(inner_radius=A_, outer_radius=B_, C=C_, alpha=al)[j]  # noqa: E731
+        _fd_check(f, (200.0, 0.01, 50e-6, 75e-6), rel=1e-5, rtol=1e-5, alpha_index=1)
+
+
+# ------------------------------------------------------------------ profiles
+
+
+def test_profiles_boundary_conditions_and_equilibrium():
+    la, alpha = 1.8, 0.2
+    pr = bl.profiles(la, **GEO, C=C, alpha=alpha, n=401)
+    p = float(bl.pressure(la, **GEO, C=C, alpha=alpha))
+    assert float(pr.sigma_r[0]) == pytest.approx(-p, rel=1e-13)
+    assert abs(float(pr.sigma_r[-1])) < 1e-12 * p
+    r, sr, st = (np.asarray(v) for v in (pr.r, pr.sigma_r, pr.sigma_theta))
+    # incompressibility: r^3 - R^3 constant
+    R = np.asarray(pr.R)
+    np.testing.assert_allclose(r**3 - R**3, (la * A) ** 3 - A**3, rtol=1e-12)
+    # radial equilibrium d sigma_r/dr = 2 (sigma_theta - sigma_r)/r (second-order FD on the grid)
+    dsr = np.gradient(sr, r, edge_order=2)
+    rhs = 2 * (st - sr) / r
+    np.testing.assert_allclose(dsr[1:-1], rhs[1:-1], rtol=2e-4)
+    np.testing.assert_allclose(np.asarray(pr.von_mises), np.abs(st - sr), rtol=1e-14)
+
+
+# ------------------------------------------------------------------ validation
+
+
+@pytest.mark.parametrize(
+    "kw",
+    [
+        dict(inner_radius=-1e-6, outer_radius=75e-6, C=C, alpha=0.0),
+        dict(inner_radius=75e-6, outer_radius=75e-6, C=C, alpha=0.0),
+        dict(inner_radius=80e-6, outer_radius=75e-6, C=C, alpha=0.0),
+        dict(inner_radius=A, outer_radius=75e-6, C=0.0, alpha=0.0),
+        dict(inner_radius=A, outer_radius=75e-6, C=-5.0, alpha=0.0),
+        dict(inner_radius=A, outer_radius=75e-6, C=C, alpha=-0.1),
+        dict(inner_radius=A, outer_radius=75e-6, C=C, alpha=float("nan")),
+    ],
+)
+def test_bad_parameters_raise(kw):
+    with pytest.raises(ValueError):
+        bl.pressure(1.5, **kw)
+    with pytest.raises(ValueError):
+        bl.inner_stretch(10.0, **kw)
+    with pytest.raises(ValueError):
+        bl.limit_point(**kw)
+    with pytest.raises(ValueError):
+        bl.profiles(1.5, **kw)
+
+
+@pytest.mark.parametrize("la", [0.0, -1.0, float("nan"), float("inf")])
+def test_bad_stretch_raises(la):
+    with pytest.raises(ValueError, match="inner_stretch"):
+        bl.pressure(la, **GEO, C=C, alpha=0.1)
+    with pytest.raises(ValueError, match="inner_stretch"):
+        bl.outer_stretch(la, **GEO)
+
+
+def test_other_bad_inputs_raise():
+    with pytest.raises(ValueError, match="method"):
+        bl.pressure(1.5, **GEO, C=C, alpha=0.1, method="simpson")
+    with pytest.raises(ValueError, match="pressure"):
+        bl.inner_stretch(float("nan"), **GEO, C=C, alpha=0.1)
+    with pytest.raises(ValueError, match="smallest inner stretch"):
+        bl.inner_stretch(-1e6, **GEO, C=C, alpha=0.1)
+    with pytest.raises(ValueError, match="largest inner stretch"):
+        bl.inner_stretch(1e30, **GEO, C=C, alpha=0.1)
+    with pytest.raises(ValueError, match="at least 2"):
+        bl.profiles(1.5, **GEO, C=C, alpha=0.1, n=1)
