@@ -1,0 +1,202 @@
+r"""Vectorised assembly of the axisymmetric weak forms (no Python loop over elements or points).
+
+Internal virtual work (reference configuration, dV = 2 pi R dR dZ):
+
+    r_int = int B^T P dV,   K = int B^T A B dV (+ condensed mixed term)
+
+Formulations (``Assembler(mesh, formulation=...)``):
+* ``"mixed"`` (default): Q2 displacement / P1-discontinuous pressure-like field q (basis 1, X, Z per
+  element), perturbed Lagrangian Pi = int W_iso + q (J - 1) - q^2/(2 kappa) dV. q is condensed per
+  element: q_e = kappa M_e^-1 g_e, g_e = int psi (J - 1) dV, adding kappa G_e^T M_e^-1 G_e to K.
+* ``"displacement"``: W_iso + U(J) at the quadrature points (locks for kappa >> C; for comparison).
+
+Extra stress hook (viscoelasticity): ``internal(u, mat, extra_S=S0, iso_scale=s)`` uses the total
+2nd Piola stress S = S_vol + s S_iso + S0, S0 (n_el, n_qp, 5) fixed during the step, so the
+tangent is s A_iso + d(F S0)/dF + volumetric part. ``iso_S(u, mat)`` returns S_iso at the points.
+
+Follower pressure p (scaled by C) on a boundary curve (``follower_pressure(u, p, edges)``): the load
+on the deformed surface, f_a = p int N_a (z', -r') 2 pi r dxi (normal pointing away from the
+cavity for a curve ordered counterclockwise about the origin), and its exact linearisation.
+
+API: ``Material(C, alpha, kappa)`` NamedTuple (scaled), ``Assembler`` with ``.internal``,
+``.iso_S``, ``.fields`` (f, q, R at the points), ``.follower_pressure``, ``.surface_mean_stretch``,
+``.volume``; ``Assembler.ndof``. Dofs interleaved (u_r, u_z) per node.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+import scipy.sparse as sp
+
+from fem import constitutive as cm
+from fem.kinematics import IDENTITY5, b_matrix, dJ, first_from_second, dfirst_from_second, invariants
+from fem.mesh import AxiMesh
+
+__all__ = ["Material", "Assembler", "line_shape"]
+
+
+class Material(NamedTuple):
+    """Fung parameters in the units the engine uses (C = 1 after scaling by C)."""
+
+    C: float
+    alpha: float
+    kappa: float
+
+
+def line_shape(nn: int, xi: np.ndarray):
+    """1D Lagrange shape functions and derivatives on [-1, 1] for 2 or 3 nodes (ends, [mid])."""
+    if nn == 2:
+        return np.array([(1 - xi) / 2, (1 + xi) / 2]), np.array([-0.5 + 0 * xi, 0.5 + 0 * xi])
+    return (np.array([xi * (xi - 1) / 2, 1 - xi**2, xi * (xi + 1) / 2]),
+            np.array([xi - 0.5, -2 * xi, xi + 0.5]))
+
+
+class _Pattern:
+    """COO -> CSR map built once: K.data = bincount(perm, values) is the whole global assembly."""
+
+    def __init__(self, rows: np.ndarray, cols: np.ndarray, n: int):
+        coo = sp.coo_matrix((np.arange(rows.size, dtype=float) + 1, (rows.ravel(), cols.ravel())), shape=(n, n))
+        key = rows.ravel().astype(np.int64) * n + cols.ravel()
+        uniq, self.inv = np.unique(key, return_inverse=True)
+        self.indptr = np.searchsorted(uniq // n, np.arange(n + 1)).astype(np.int32)
+        self.indices = (uniq % n).astype(np.int32)
+        self.n, self.nnz = n, uniq.size
+        del coo
+
+    def matrix(self, values: np.ndarray) -> sp.csr_matrix:
+        data = np.bincount(self.inv, weights=values.ravel(), minlength=self.nnz)
+        return sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
+
+
+class Assembler:
+    """Precomputed B matrices, weights and sparsity for one mesh (dimensionless)."""
+
+    def __init__(self, mesh: AxiMesh, formulation: str = "mixed"):
+        if formulation not in ("mixed", "displacement"):
+            raise ValueError(f"formulation must be 'mixed' or 'displacement', got {formulation!r}")
+        self.mesh, self.formulation = mesh, formulation
+        b = mesh.basis
+        nb = b.Nbfun
+        N = np.array([b.basis[i][0].value for i in range(nb)])  # (nb, ne, nq)
+        dN = np.array([b.basis[i][0].grad for i in range(nb)])  # (nb, 2, ne, nq)
+        xq = b.global_coordinates().value  # (2, ne, nq)
+        self.R = xq[0]
+        self.w = 2 * np.pi * self.R * b.dx  # (ne, nq)
+        self.B = b_matrix(N, dN, self.R)  # (ne, nq, 5, 2nb)
+        ed = b.element_dofs  # (nb, ne)
+        self.edofs = np.stack([2 * ed, 2 * ed + 1], axis=-1).reshape(nb, -1, 2).transpose(1, 0, 2).reshape(-1, 2 * nb)
+        self.ndof = 2 * b.N
+        ne, nd = self.edofs.shape
+        rows = np.repeat(self.edofs[:, :, None], nd, axis=2)
+        cols = np.repeat(self.edofs[:, None, :], nd, axis=1)
+        self._pattern = _Pattern(rows, cols, self.ndof)
+        if formulation == "mixed":
+            xc = np.sum(xq * self.w, axis=2) / self.w.sum(axis=1)
+            self.psi = np.stack([np.ones_like(self.R), xq[0] - xc[0][:, None], xq[1] - xc[1][:, None]], -1)
+            M = np.einsum("eqa,eqb,eq->eab", self.psi, self.psi, self.w)
+            self.Minv = np.linalg.inv(M)
+        self._edge_cache: dict = {}
+
+    # ---- kinematics at quadrature points ------------------------------------------------
+    def f_at(self, u: np.ndarray) -> np.ndarray:
+        """5-comp deformation gradient (ne, nq, 5) for the global displacement u."""
+        return IDENTITY5 + np.einsum("eqij,ej->eqi", self.B, u[self.edofs])
+
+    def q_at(self, f: np.ndarray, kappa: float) -> np.ndarray:
+        """Condensed pressure-like field q (mean Cauchy stress, scaled) at the points (mixed only)."""
+        _, J = invariants(f)
+        g = np.einsum("eqa,eq->ea", self.psi, (J - 1.0) * self.w)
+        qe = kappa * np.einsum("eab,eb->ea", self.Minv, g)
+        return np.einsum("eqa,ea->eq", self.psi, qe)
+
+    def iso_S(self, u: np.ndarray, mat: Material) -> np.ndarray:
+        """Isochoric 2nd Piola-Kirchhoff stress at the points (ne, nq, 5) (for viscoelastic updates)."""
+        return cm.iso_second_piola(self.f_at(u), mat.C, mat.alpha)
+
+    def stress(self, u: np.ndarray, mat: Material, extra_S=None, iso_scale: float = 1.0):
+        """(f, P, A, q): total first Piola stress and tangent at the points, q the volumetric field."""
+        f = self.f_at(u)
+        P, A = cm.iso_stress(f, mat.C, mat.alpha)
+        if iso_scale != 1.0:
+            P, A = iso_scale * P, iso_scale * A
+        if self.formulation == "mixed":
+            q = self.q_at(f, mat.kappa)
+            Pv, Av = cm.vol_q(f, q)
+        else:
+            _, J = invariants(f)
+            q = mat.kappa * (J - 1.0)
+            Pv, Av = cm.vol_penalty(f, mat.kappa)
+        P, A = P + Pv, A + Av
+        if extra_S is not None:
+            P = P + first_from_second(f, extra_S)
+            A = A + dfirst_from_second(extra_S)
+        return f, P, A, q
+
+    def internal(self, u: np.ndarray, mat: Material, extra_S=None, iso_scale: float = 1.0, tangent: bool = True):
+        """Internal force vector (ndof,) and tangent (CSR) of the elastic (+ extra) stress."""
+        f, P, A, _ = self.stress(u, mat, extra_S, iso_scale)
+        r = np.bincount(self.edofs.ravel(), weights=np.einsum("eqij,eqi,eq->ej", self.B, P, self.w).ravel(),
+                        minlength=self.ndof)
+        if not tangent:
+            return r, None
+        BA = np.einsum("eqij,eqik,eq->eqjk", self.B, A, self.w)
+        Ke = np.einsum("eqjk,eqkl->ejl", BA, self.B)
+        if self.formulation == "mixed":
+            G = np.einsum("eqa,eqi,eqij,eq->eaj", self.psi, dJ(f), self.B, self.w)
+            Ke = Ke + mat.kappa * np.einsum("eaj,eab,ebl->ejl", G, self.Minv, G)
+        return r, self._pattern.matrix(Ke)
+
+    # ---- boundary curves --------------------------------------------------------------
+    def _edge(self, edges: np.ndarray, nq: int = 4):
+        key = (edges.ctypes.data, edges.shape, nq)
+        if key not in self._edge_cache:
+            xi, wq = np.polynomial.legendre.leggauss(nq)
+            Nl, dNl = line_shape(edges.shape[1], xi)
+            dofs = np.stack([2 * edges, 2 * edges + 1], -1)  # (ned, nn, 2)
+            self._edge_cache[key] = (Nl, dNl, wq, dofs)
+        return self._edge_cache[key]
+
+    def follower_pressure(self, u: np.ndarray, p: float, edges: np.ndarray, tangent: bool = True):
+        """Equivalent nodal force of pressure p on the deformed curve and d(force)/du (CSR)."""
+        Nl, dNl, wq, dofs = self._edge(edges)
+        X = self.mesh.X
+        x = X[:, edges] + np.stack([u[dofs[..., 0]], u[dofs[..., 1]]])  # (2, ned, nn)
+        r, z = np.einsum("aq,ea->eq", Nl, x[0]), np.einsum("aq,ea->eq", Nl, x[1])
+        rp, zp = np.einsum("aq,ea->eq", dNl, x[0]), np.einsum("aq,ea->eq", dNl, x[1])
+        c = 2 * np.pi * p * wq
+        fr = np.einsum("aq,eq->ea", Nl, c * r * zp)
+        fz = -np.einsum("aq,eq->ea", Nl, c * r * rp)
+        fe = np.stack([fr, fz], -1)  # (ned, nn, 2)
+        F = np.bincount(dofs.ravel(), weights=fe.ravel(), minlength=self.ndof)
+        if not tangent:
+            return F, None
+        ned, nn = edges.shape
+        K = np.zeros((ned, nn, 2, nn, 2))
+        K[:, :, 0, :, 0] = np.einsum("aq,bq,eq->eab", Nl, Nl, c * zp)
+        K[:, :, 0, :, 1] = np.einsum("aq,bq,eq->eab", Nl, dNl, c * r)
+        K[:, :, 1, :, 0] = -np.einsum("aq,bq,eq->eab", Nl, Nl, c * rp) - np.einsum("aq,bq,eq->eab", Nl, dNl, c * r)
+        d = dofs.reshape(ned, -1)
+        rows = np.repeat(d[:, :, None], 2 * nn, 2)
+        cols = np.repeat(d[:, None, :], 2 * nn, 1)
+        Kg = sp.csr_matrix((K.reshape(ned, 2 * nn, 2 * nn).ravel(), (rows.ravel(), cols.ravel())),
+                           shape=(self.ndof, self.ndof))
+        return F, Kg
+
+    def surface_mean_stretch(self, u: np.ndarray, edges: np.ndarray) -> float:
+        """Mean of |x|/|X| over a reference surface (area weights 2 pi R ds): a spherical stretch."""
+        Nl, dNl, wq, dofs = self._edge(edges)
+        X = self.mesh.X[:, edges]
+        x = X + np.stack([u[dofs[..., 0]], u[dofs[..., 1]]])
+        Xq, xq = np.einsum("aq,iea->ieq", Nl, X), np.einsum("aq,iea->ieq", Nl, x)
+        ds = np.hypot(*np.einsum("aq,iea->ieq", dNl, X))
+        w = Xq[0] * ds * wq
+        lam = np.hypot(*xq) / np.hypot(*Xq)
+        return float(np.sum(lam * w) / np.sum(w))
+
+    def volume(self, u: np.ndarray | None = None) -> float:
+        """Reference (u None) or deformed volume of the section's solid of revolution."""
+        if u is None:
+            return float(self.w.sum())
+        return float(np.sum(invariants(self.f_at(u))[1] * self.w))

@@ -1,0 +1,199 @@
+r"""Structured (mapped) axisymmetric meshes of a hollow-sphere wall and a solid ball.
+
+API
+---
+``AxiMesh``                 dataclass: skfem mesh + scalar ``skfem.CellBasis`` (Q2 isoparametric or Q1),
+                            nodal coordinates ``X`` (2, N) in units of ``length_scale`` (dimensionless),
+                            ``nodes[name]`` (scalar dof indices on a boundary) and ``edges[name]``
+                            ((n_edges, 2 or 3) dof indices ordered along each boundary edge).
+``shell_section(A, B, n_radial, n_circ, *, grading=1.0, order=2, half=False)``
+                            quarter (0 <= theta <= 90 deg from the equator) or half wall section of a
+                            hollow sphere, lengths scaled by A; tags "inner", "outer", "symmetry" (Z = 0),
+                            "axis" (R = 0; for ``half`` the two axis segments). ``grading`` > 1 refines
+                            toward the inner surface (geometric ratio of the outermost to innermost layer).
+``ball_section(a0, n_core, n_radial, *, grading=1.0, pole_grading=1.0, order=2)``
+                            quarter disk (R >= 0, Z >= 0) of a solid ball as an O-grid (core square + two
+                            curved blocks), lengths scaled by a0, refined toward the surface (``grading``)
+                            and toward the top pole R = 0, Z = a0 (``pole_grading``); tags "axis" (R = 0),
+                            "symmetry" (Z = 0), "outer" (surface).
+Coordinates: (R, Z) = (radial, axial); the axis of symmetry is R = 0.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import skfem
+
+__all__ = ["AxiMesh", "shell_section", "ball_section", "graded_points"]
+
+
+@dataclass
+class AxiMesh:
+    """A meshed axisymmetric section (dimensionless coordinates; multiply by ``length_scale`` for m)."""
+
+    mesh: skfem.Mesh
+    basis: skfem.CellBasis
+    order: int
+    length_scale: float
+    nodes: dict = field(default_factory=dict)
+    edges: dict = field(default_factory=dict)
+
+    @property
+    def X(self) -> np.ndarray:
+        """Nodal (dof) coordinates (2, N), dimensionless."""
+        return self.basis.doflocs
+
+    @property
+    def n_nodes(self) -> int:
+        return self.basis.N
+
+    @property
+    def n_dofs(self) -> int:
+        """Displacement dofs, interleaved (u_r, u_z) per node: dof 2 i is u_r, 2 i + 1 is u_z."""
+        return 2 * self.basis.N
+
+
+def graded_points(n: int, ratio: float = 1.0) -> np.ndarray:
+    """n + 1 points on [0, 1]; consecutive intervals grow geometrically so last/first = ratio."""
+    if n < 1:
+        raise ValueError(f"a mesh needs at least one division, got {n}")
+    if ratio <= 0 or not np.isfinite(ratio):
+        raise ValueError(f"mesh grading must be a positive finite ratio, got {ratio}")
+    if n == 1 or abs(ratio - 1.0) < 1e-14:
+        return np.linspace(0.0, 1.0, n + 1)
+    q = ratio ** (1.0 / (n - 1))
+    h = q ** np.arange(n)
+    return np.concatenate([[0.0], np.cumsum(h) / h.sum()])
+
+
+def _finish(mesh1: skfem.Mesh, order: int, mapper, scale: float, tagger) -> AxiMesh:
+    """Make the Q1 mesh quadratic (if order 2), map all geometry nodes, build basis and tags."""
+    if order == 2:
+        m = skfem.MeshQuad2.from_mesh(mesh1)
+        m = skfem.MeshQuad2(mapper(m.doflocs), m.t)
+        elem = skfem.ElementQuad2()
+    elif order == 1:
+        m = skfem.MeshQuad(mapper(mesh1.p), mesh1.t)
+        elem = skfem.ElementQuad1()
+    else:
+        raise ValueError(f"element order must be 1 or 2, got {order}")
+    basis = skfem.CellBasis(m, elem, intorder=2 * order + 2)
+    X = basis.doflocs
+    bf = m.boundary_facets()
+    v = m.facets[:, bf]  # (2, nbf) vertex (= nodal dof) indices
+    if order == 2:
+        mid = basis.facet_dofs[0, bf]
+        ed = np.stack([v[0], mid, v[1]], axis=1)
+    else:
+        ed = v.T.copy()
+    nodes, edges = {}, {}
+    for name, test in tagger.items():
+        on = np.all(test(X[:, ed]), axis=1)
+        edges[name] = ed[on]
+        nodes[name] = np.unique(ed[on])
+    return AxiMesh(m, basis, order, float(scale), nodes, edges)
+
+
+def shell_section(inner_radius: float, outer_radius: float, n_radial: int, n_circ: int, *,
+                  grading: float = 1.0, order: int = 2, half: bool = False) -> AxiMesh:
+    """Mapped mesh of the hollow-sphere wall A <= rho <= B (lengths scaled by A).
+
+    theta (from the equator Z = 0) spans [0, 90] deg (quarter, with Z-symmetry) or [-90, 90] deg
+    (``half``, the seed's section). Isoparametric Q2 elements represent the circles exactly up to
+    the quadratic interpolation of the polar map.
+    """
+    if not (0 < inner_radius < outer_radius):
+        raise ValueError(f"need 0 < inner_radius < outer_radius, got {inner_radius}, {outer_radius}")
+    b = outer_radius / inner_radius
+    s = graded_points(n_radial, grading)  # fine near s = 0 (inner) when grading > 1
+    t = np.linspace(0.0, 1.0, n_circ + 1)
+    m1 = skfem.MeshQuad.init_tensor(s, t)
+    th0, th1 = (-0.5 * np.pi if half else 0.0), 0.5 * np.pi
+
+    def mapper(p):
+        rho = 1.0 + (b - 1.0) * p[0]
+        th = th0 + (th1 - th0) * p[1]
+        return np.array([rho * np.cos(th), rho * np.sin(th)])
+
+    tol = 1e-9
+    rad = lambda P: np.hypot(P[0], P[1])
+    tags = {"inner": lambda P: np.abs(rad(P) - 1.0) < tol,
+            "outer": lambda P: np.abs(rad(P) - b) < tol,
+            "axis": lambda P: np.abs(P[0]) < tol}
+    if not half:
+        tags["symmetry"] = lambda P: np.abs(P[1]) < tol
+    return _finish(m1, order, mapper, inner_radius, tags)
+
+
+def ball_section(radius: float, n_core: int, n_radial: int, *, grading: float = 1.0,
+                 pole_grading: float = 1.0, order: int = 2) -> AxiMesh:
+    """O-grid quarter disk of a solid ball (lengths scaled by ``radius``).
+
+    Core square [0, c]^2 (c = 0.55) with ``n_core`` divisions per side, two curved blocks between the
+    square and the arc with ``n_radial`` layers. ``grading`` > 1 refines toward the surface,
+    ``pole_grading`` > 1 refines toward the top pole (R = 0, Z = 1), the plate contact zone.
+    """
+    if not (radius > 0 and np.isfinite(radius)):
+        raise ValueError(f"ball radius must be positive, got {radius}")
+    c = 0.55
+    u_pole = graded_points(n_core, pole_grading)  # 0 at the axis, fine there if pole_grading > 1
+    u_eq = np.linspace(0.0, 1.0, n_core + 1)
+    v = graded_points(n_radial, 1.0 / grading)  # 0 at the core, 1 at the surface (fine there)
+
+    pts, quads = [], []
+
+    def block(P):  # P: (n1+1, n2+1, 2) structured block -> quads (counterclockwise checked later)
+        n1, n2 = P.shape[0] - 1, P.shape[1] - 1
+        off = sum(len(q) for q in pts)
+        pts.append(P.reshape(-1, 2))
+        idx = off + np.arange((n1 + 1) * (n2 + 1)).reshape(n1 + 1, n2 + 1)
+        quads.append(np.stack([idx[:-1, :-1], idx[1:, :-1], idx[1:, 1:], idx[:-1, 1:]], -1).reshape(-1, 4))
+
+    # core: R = c u_pole (graded toward the axis), Z = c u_eq
+    block(np.stack(np.meshgrid(c * u_pole, c * u_eq, indexing="ij"), -1))
+    # equator block: inner edge (c, c u), outer arc angle pi/4 u
+    inner = np.stack([np.full_like(u_eq, c), c * u_eq], -1)
+    outer = np.stack([np.cos(0.25 * np.pi * u_eq), np.sin(0.25 * np.pi * u_eq)], -1)
+    block((1 - v)[:, None, None] * inner[None] + v[:, None, None] * outer[None])
+    # pole block: inner edge (c u, c), outer arc (sin(pi/4 u), cos(pi/4 u))
+    inner = np.stack([c * u_pole, np.full_like(u_pole, c)], -1)
+    outer = np.stack([np.sin(0.25 * np.pi * u_pole), np.cos(0.25 * np.pi * u_pole)], -1)
+    block((1 - v)[None, :, None] * inner[:, None] + v[None, :, None] * outer[:, None])
+
+    P = np.concatenate(pts)
+    Q = np.concatenate(quads)
+    key = np.round(P, 12)
+    _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    inv = inv.ravel()
+    P, Q = P[first], inv[Q]
+    # counterclockwise orientation
+    x, y = P[Q, 0], P[Q, 1]
+    area = 0.5 * np.sum(x * np.roll(y, -1, 1) - np.roll(x, -1, 1) * y, axis=1)
+    Q[area < 0] = Q[area < 0][:, ::-1]
+    m1 = skfem.MeshQuad(P.T.copy(), Q.T.copy())
+
+    if order == 2:
+        m2 = skfem.MeshQuad2.from_mesh(m1)
+        dl = m2.doflocs.copy()
+        nv, nf = m1.nvertices, m1.facets.shape[1]
+        # surface facet midpoints onto the arc
+        bf = m1.boundary_facets()
+        fv = m1.p[:, m1.facets[:, bf]]
+        onarc = np.all(np.abs(np.hypot(fv[0], fv[1]) - 1.0) < 1e-12, axis=0)
+        mids = nv + bf[onarc]
+        dl[:, mids] /= np.hypot(dl[0, mids], dl[1, mids])
+        # element centres: transfinite (serendipity) blend of the edge midpoints
+        t2f = m1.t2f
+        cen = nv + nf + np.arange(m1.nelements)
+        dl[:, cen] = 0.5 * dl[:, nv + t2f].sum(axis=1) - 0.25 * m1.p[:, m1.t].sum(axis=1)
+        mapper = lambda p, dl=dl: dl  # noqa: E731
+    else:
+        mapper = lambda p: p  # noqa: E731
+
+    tol = 1e-9
+    tags = {"axis": lambda P: np.abs(P[0]) < tol,
+            "symmetry": lambda P: np.abs(P[1]) < tol,
+            "outer": lambda P: np.abs(np.hypot(P[0], P[1]) - 1.0) < 1e-9}
+    return _finish(m1, order, mapper, radius, tags)
