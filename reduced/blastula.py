@@ -329,6 +329,8 @@ def _newton(pt, k, omk, alpha, x0, lo, hi, rule, max_iter, tol):
     stiffening Fung branch, so that few steps are needed from far away. The bracket is kept by
     the rule "x is past the root if p(x) > pt or dp/dx <= 0 (beyond the limit point)"; a step that
     leaves the bracket, or a non-positive slope, is replaced by bisection.
+    Returns (x, r, d): the final x and the residual p/C - pt and slope dP/dx at the last point
+    evaluated (the one before the final, sub-``tol`` Newton step), for the convergence check.
     """
     target = jnp.arcsinh(pt)
 
@@ -352,7 +354,7 @@ def _newton(pt, k, omk, alpha, x0, lo, hi, rule, max_iter, tol):
         return (state[3] < max_iter) & ~jnp.all(state[4])
 
     def body(state):
-        x, lo, hi, it, done = state
+        x, lo, hi, it, done, r_old, d_old = state
         r, d, P = residual(x)
         past = (d <= 0.0) | (r > 0.0)
         lo_n = jnp.where(past, lo, x)
@@ -372,11 +374,17 @@ def _newton(pt, k, omk, alpha, x0, lo, hi, rule, max_iter, tol):
             jnp.where(keep, hi, hi_n),
             it + 1,
             done_n,
+            jnp.where(keep, r_old, r),
+            jnp.where(keep, d_old, d),
         )
 
-    state = (x0, lo, hi, jnp.asarray(0), jnp.zeros(pt.shape, dtype=bool))
-    out = jax.lax.while_loop(cond, body, state)
-    return out[0]
+    nan = jnp.full(pt.shape, jnp.nan)
+    state = (x0, lo, hi, jnp.asarray(0), jnp.zeros(pt.shape, dtype=bool), nan, nan)
+    x, _, _, _, _, r, d = jax.lax.while_loop(cond, body, state)
+    return x, r, d
+
+
+_CHUNK = 8192  # large inputs are solved chunk by chunk: each chunk stops when its own lanes converge
 
 
 @jax.jit
@@ -384,6 +392,23 @@ def _solve_stretch(p_over_C, k, omk, alpha):
     """Inverse of p/C(lambda_a) on the rising branch. Returns (lambda_a, converged)."""
     pt, k, omk, alpha = jnp.broadcast_arrays(p_over_C, k, omk, alpha)
     pt, k, omk, alpha = (jax.lax.stop_gradient(v) for v in (pt, k, omk, alpha))
+    if pt.size <= 2 * _CHUNK:
+        return _solve_block(pt, k, omk, alpha)
+    n = pt.size
+    m = -(-n // _CHUNK)
+    pad = m * _CHUNK - n
+    # padding lanes: p = 0 in a valid shell (converge at once)
+    fills = (0.0, 0.5, 0.5, 0.0)
+    blocks = tuple(
+        jnp.concatenate([v.ravel(), jnp.full((pad,), f, dtype=v.dtype)]).reshape(m, _CHUNK)
+        for v, f in zip((pt, k, omk, alpha), fills)
+    )
+    la, conv = jax.lax.map(lambda b: _solve_block(*b), blocks)
+    return la.ravel()[:n].reshape(pt.shape), conv.ravel()[:n].reshape(pt.shape)
+
+
+def _solve_block(pt, k, omk, alpha):
+    """Two-stage safeguarded Newton on one block of lanes (arrays of equal shape)."""
     xmin, xmax = np.log(INVERSE_STRETCH_RANGE[0]), np.log(INVERSE_STRETCH_RANGE[1])
     lo = jnp.where(pt >= 0.0, 0.0, xmin)
     hi = jnp.where(pt >= 0.0, xmax, 0.0)
@@ -391,14 +416,12 @@ def _solve_stretch(p_over_C, k, omk, alpha):
     guess = jnp.log(jnp.maximum(1.0 + pt / (8.0 * omk), 1e-300))
     x0 = jnp.where((guess >= lo) & (guess <= hi), guess, 0.5 * (lo + hi))
     coarse = np.polynomial.legendre.leggauss(_COARSE_NODES)
-    x1 = _newton(pt, k, omk, alpha, x0, lo, hi, coarse, _COARSE_ITER, 1e-7)
-    x = _newton(pt, k, omk, alpha, x1, lo, hi, (_X, _W), _FINE_ITER, 1e-13)
+    x1 = _newton(pt, k, omk, alpha, x0, lo, hi, coarse, _COARSE_ITER, 1e-7)[0]
+    x, r, d = _newton(pt, k, omk, alpha, x1, lo, hi, (_X, _W), _FINE_ITER, 1e-13)
     la = jnp.exp(x)
-    r = _p_over_C_quad(la, k, omk, alpha) - pt
-    d = la * _dp_over_C(la, k, alpha)
-    # residual tolerance: 1e-11 relative, plus the rounding of x itself (lambda_a near 1 has
-    # only ~1e-16 absolute resolution, i.e. |dp/dx| * 4 eps in p/C)
-    converged = (d > 0.0) & (jnp.abs(r) <= 1e-11 * jnp.abs(pt) + 1e-15 * jnp.abs(d))
+    # r, d are taken one (sub-1e-13) Newton step before the returned x. Tolerance: 1e-11 relative,
+    # or what a 2e-13 change of log(lambda_a) makes (near lambda_a = 1 only absolute resolution exists)
+    converged = (d > 0.0) & (jnp.abs(r) <= 1e-11 * jnp.abs(pt) + 2e-13 * jnp.abs(d))
     converged = converged | (pt == 0.0)
     return la, converged
 
@@ -420,13 +443,26 @@ def inner_stretch_solve(
     C = jnp.asarray(C, dtype=jnp.float64)
     alpha = jnp.asarray(alpha, dtype=jnp.float64)
     pt = jnp.asarray(pressure, dtype=jnp.float64) / C
+    la = _inverse(pt, k, omk, alpha)
+    return la, ~jnp.isnan(la)
+
+
+@jax.custom_jvp
+def _inverse(pt, k, omk, alpha):
+    """lambda_a(p/C; k, alpha) on the rising branch, NaN where there is none."""
     la, conv = _solve_stretch(pt, k, omk, alpha)
-    la_s = jax.lax.stop_gradient(la)
-    pt_b, k_b, omk_b, alpha_b = jnp.broadcast_arrays(pt, k, omk, alpha)
-    slope = jax.lax.stop_gradient(_dp_over_C(la_s, k_b, alpha_b))
-    # one frozen-slope Newton step: the value is unchanged, the derivatives are the implicit ones
-    la = la_s - (_p_over_C_quad(la_s, k_b, omk_b, alpha_b) - pt_b) / jnp.where(conv, slope, 1.0)
-    return jnp.where(conv, la, jnp.nan), conv
+    return jnp.where(conv, la, jnp.nan)
+
+
+@_inverse.defjvp
+def _inverse_jvp(primals, tangents):
+    """Implicit function theorem: d lambda_a = (d(p/C) - dP/d(k, 1-k, alpha) . d(k, 1-k, alpha)) / dP/dlambda_a."""
+    pt, k, omk, alpha = primals
+    dpt, dk, domk, dalpha = tangents
+    la = _inverse(pt, k, omk, alpha)
+    f = lambda k_, o_, a_: _p_over_C_quad(*jnp.broadcast_arrays(la, k_, o_, a_))  # noqa: E731
+    _, dP = jax.jvp(f, (k, omk, alpha), (dk, domk, dalpha))
+    return la, (dpt - dP) / _dp_over_C(la, k, alpha)
 
 
 def inner_stretch(
