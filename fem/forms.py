@@ -5,12 +5,15 @@ Internal virtual work (reference configuration, dV = 2 pi R dR dZ):
     r_int = int B^T P dV,   K = int B^T A B dV (+ condensed mixed term)
 
 Formulations (``Assembler(mesh, formulation=...)``):
-* ``"mixed"`` (default): Q2 displacement / P1-discontinuous pressure-like field q (basis 1, X, Z per
-  element), perturbed Lagrangian Pi = int W_iso + q (J - 1) - q^2/(2 kappa) dV. q is condensed per
-  element: q_e = kappa M_e^-1 g_e, g_e = int psi (J - 1) dV, adding kappa G_e^T M_e^-1 G_e to K.
+* ``"mixed"`` (default): Q2 displacement / P1-discontinuous field q (basis psi = 1, X - Xc, Z - Zc per
+  element; q is the mean Cauchy stress, the hydrostatic pressure is -q), perturbed Lagrangian
+  Pi = int W_iso + q (J - 1) - q^2/(2 kappa) dV. The unknown vector x = (u, q): the 3 q-dofs of element
+  e are ``n_u + 3 e + (0, 1, 2)``. Residual (r_u, r_q) = (int B^T (P_iso + q dJ) dV, int psi (J - 1) dV
+  - M q / kappa) and the symmetric tangent [[K_uu, G^T], [G, -M/kappa]] (Newton in (u, q) converges
+  for kappa/C = 1e7, unlike a condensed q(u)).
 * ``"displacement"``: W_iso + U(J) at the quadrature points (locks for kappa >> C; for comparison).
 
-Extra stress hook (viscoelasticity): ``internal(u, mat, extra_S=S0, iso_scale=s)`` uses the total
+Extra stress hook (viscoelasticity): ``internal(x, mat, extra_S=S0, iso_scale=s)`` uses the total
 2nd Piola stress S = S_vol + s S_iso + S0, S0 (n_el, n_qp, 5) fixed during the step, so the
 tangent is s A_iso + d(F S0)/dF + volumetric part. ``iso_S(u, mat)`` returns S_iso at the points.
 
@@ -19,8 +22,9 @@ on the deformed surface, f_a = p int N_a (z', -r') 2 pi r dxi (normal pointing a
 cavity for a curve ordered counterclockwise about the origin), and its exact linearisation.
 
 API: ``Material(C, alpha, kappa)`` NamedTuple (scaled), ``Assembler`` with ``.internal``,
-``.iso_S``, ``.fields`` (f, q, R at the points), ``.follower_pressure``, ``.surface_mean_stretch``,
-``.volume``; ``Assembler.ndof``. Dofs interleaved (u_r, u_z) per node.
+``.iso_S``, ``.stress`` (f, P, A, q at the points), ``.f_at``, ``.follower_pressure``,
+``.surface_mean_stretch``, ``.volume``; sizes ``n_u`` (displacement dofs, interleaved (u_r, u_z) per
+node: 2 i, 2 i + 1), ``ndof`` (= n_u + 3 n_elements for "mixed"). All methods take the full x.
 """
 
 from __future__ import annotations
@@ -87,16 +91,22 @@ class Assembler:
         self.B = b_matrix(N, dN, self.R)  # (ne, nq, 5, 2nb)
         ed = b.element_dofs  # (nb, ne)
         self.edofs = np.stack([2 * ed, 2 * ed + 1], axis=-1).reshape(nb, -1, 2).transpose(1, 0, 2).reshape(-1, 2 * nb)
-        self.ndof = 2 * b.N
-        ne, nd = self.edofs.shape
-        rows = np.repeat(self.edofs[:, :, None], nd, axis=2)
-        cols = np.repeat(self.edofs[:, None, :], nd, axis=1)
-        self._pattern = _Pattern(rows, cols, self.ndof)
+        self.n_u = 2 * b.N
+        ne = self.edofs.shape[0]
+        self.n_el = ne
+        alld = self.edofs
         if formulation == "mixed":
             xc = np.sum(xq * self.w, axis=2) / self.w.sum(axis=1)
             self.psi = np.stack([np.ones_like(self.R), xq[0] - xc[0][:, None], xq[1] - xc[1][:, None]], -1)
-            M = np.einsum("eqa,eqb,eq->eab", self.psi, self.psi, self.w)
-            self.Minv = np.linalg.inv(M)
+            self.M = np.einsum("eqa,eqb,eq->eab", self.psi, self.psi, self.w)
+            self.qdofs = self.n_u + np.arange(3 * ne).reshape(ne, 3)
+            alld = np.concatenate([self.edofs, self.qdofs], axis=1)
+        self.ndof = self.n_u + (3 * ne if formulation == "mixed" else 0)
+        self.alldofs = alld
+        nd = alld.shape[1]
+        rows = np.repeat(alld[:, :, None], nd, axis=2)
+        cols = np.repeat(alld[:, None, :], nd, axis=1)
+        self._pattern = _Pattern(rows, cols, self.ndof)
         self._edge_cache: dict = {}
 
     # ---- kinematics at quadrature points ------------------------------------------------
@@ -104,12 +114,9 @@ class Assembler:
         """5-comp deformation gradient (ne, nq, 5) for the global displacement u."""
         return IDENTITY5 + np.einsum("eqij,ej->eqi", self.B, u[self.edofs])
 
-    def q_at(self, f: np.ndarray, kappa: float) -> np.ndarray:
-        """Condensed pressure-like field q (mean Cauchy stress, scaled) at the points (mixed only)."""
-        _, J = invariants(f)
-        g = np.einsum("eqa,eq->ea", self.psi, (J - 1.0) * self.w)
-        qe = kappa * np.einsum("eab,eb->ea", self.Minv, g)
-        return np.einsum("eqa,ea->eq", self.psi, qe)
+    def q_at(self, x: np.ndarray) -> np.ndarray:
+        """The mixed field q (mean Cauchy stress, scaled) at the points (ne, nq)."""
+        return np.einsum("eqa,ea->eq", self.psi, x[self.qdofs])
 
     def iso_S(self, u: np.ndarray, mat: Material) -> np.ndarray:
         """Isochoric 2nd Piola-Kirchhoff stress at the points (ne, nq, 5) (for viscoelastic updates)."""
@@ -122,7 +129,7 @@ class Assembler:
         if iso_scale != 1.0:
             P, A = iso_scale * P, iso_scale * A
         if self.formulation == "mixed":
-            q = self.q_at(f, mat.kappa)
+            q = self.q_at(u)
             Pv, Av = cm.vol_q(f, q)
         else:
             _, J = invariants(f)
@@ -135,17 +142,21 @@ class Assembler:
         return f, P, A, q
 
     def internal(self, u: np.ndarray, mat: Material, extra_S=None, iso_scale: float = 1.0, tangent: bool = True):
-        """Internal force vector (ndof,) and tangent (CSR) of the elastic (+ extra) stress."""
+        """Internal residual (ndof,) and tangent (CSR) of the elastic (+ extra) stress at x = (u, q)."""
         f, P, A, _ = self.stress(u, mat, extra_S, iso_scale)
-        r = np.bincount(self.edofs.ravel(), weights=np.einsum("eqij,eqi,eq->ej", self.B, P, self.w).ravel(),
-                        minlength=self.ndof)
+        re = np.einsum("eqij,eqi,eq->ej", self.B, P, self.w)
+        if self.formulation == "mixed":
+            _, J = invariants(f)
+            rq = np.einsum("eqa,eq->ea", self.psi, (J - 1.0) * self.w) - np.einsum("eab,eb->ea", self.M, u[self.qdofs]) / mat.kappa
+            re = np.concatenate([re, rq], axis=1)
+        r = np.bincount(self.alldofs.ravel(), weights=re.ravel(), minlength=self.ndof)
         if not tangent:
             return r, None
         BA = np.einsum("eqij,eqik,eq->eqjk", self.B, A, self.w)
         Ke = np.einsum("eqjk,eqkl->ejl", BA, self.B)
         if self.formulation == "mixed":
             G = np.einsum("eqa,eqi,eqij,eq->eaj", self.psi, dJ(f), self.B, self.w)
-            Ke = Ke + mat.kappa * np.einsum("eaj,eab,ebl->ejl", G, self.Minv, G)
+            Ke = np.block([[Ke, np.swapaxes(G, 1, 2)], [G, -self.M / mat.kappa]])
         return r, self._pattern.matrix(Ke)
 
     # ---- boundary curves --------------------------------------------------------------

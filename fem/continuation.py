@@ -1,0 +1,141 @@
+r"""Path following: adaptive load control and Riks arc-length (through limit points).
+
+``load_control(solve, loads, x0, *, lam0=0.0, monitor=None, max_cuts=12)``
+    ``solve(lam, x_guess) -> NewtonResult`` (raises ``NewtonError``). Reaches every requested
+    load; a failed step is halved (up to ``max_cuts`` times), the predictor is the secant of the
+    last two converged states. Returns a list of ``(lam, NewtonResult, wall_s)``, one per
+    requested load. If it fails where the load-response curve flattens (monitor slope below 2 % of the
+    initial one or falling), raises ``LimitPointError`` naming the last converged load.
+
+``arc_length(fun, x0, lam0, ds, *, stop, ...)``
+    Riks: unknowns (x, lam), ``fun(x, lam) -> (r, K, r_lam)`` with r_lam = dr/dlam; hyperplane
+    constraint t . (x - x_pred, lam - lam_pred) = 0 in the metric |x|^2 / c^2 + lam^2 (c from the
+    first tangent), bordered sparse system solved directly (regular at limit points). Step length
+    adapted to the Newton iteration count; ``stop(x, lam)`` ends the trace. Returns lists.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Callable, Optional, Sequence
+
+import numpy as np
+import scipy.sparse as sp
+
+from fem.newton import NewtonError, NewtonResult, sparse_solve
+
+__all__ = ["LimitPointError", "load_control", "arc_length"]
+
+
+class LimitPointError(NewtonError):
+    """Load control cannot pass a maximum of the load (limit point): use method='arclength'."""
+
+
+def load_control(solve: Callable, loads: Sequence[float], x0: np.ndarray, *, lam0: float = 0.0,
+                 monitor: Optional[Callable] = None, max_cuts: int = 12, unit: str = "") -> list:
+    out = []
+    x_prev, lam_prev = np.array(x0, float), float(lam0)
+    x_old, lam_old = None, None
+    slope0 = None
+    for target in loads:
+        lam_c, x_c = lam_prev, x_prev
+        t0 = time.perf_counter()
+        iters, dlam = 0, float(target) - lam_prev
+        cuts = 0
+        while lam_c < target - 1e-14 * max(1.0, abs(target)):
+            lam_t = min(target, lam_c + dlam)
+            if x_old is not None and lam_c != lam_old:
+                guess = x_c + (x_c - x_old) * (lam_t - lam_c) / (lam_c - lam_old)
+            else:
+                guess = x_c
+            try:
+                res = solve(lam_t, guess)
+            except NewtonError as err:
+                cuts += 1
+                if cuts > max_cuts:
+                    s = None
+                    if monitor is not None and x_old is not None and lam_c != lam_old:
+                        dm = monitor(x_c) - monitor(x_old)
+                        s = (lam_c - lam_old) / dm if dm != 0 else np.inf
+                    if s is not None and slope0 is not None and s < 0.02 * slope0:
+                        raise LimitPointError(
+                            f"load control reached a limit point: no equilibrium just above "
+                            f"{lam_c:.6g}{unit}, the curve is flat there", load=lam_t,
+                            residuals=err.residuals,
+                            hint=f"the last converged load {lam_c:.6g}{unit} is (close to) the maximum; "
+                                 "use method='arclength' to pass it") from None
+                    raise NewtonError(f"load step failed after {max_cuts} cuts", load=lam_t,
+                                      residuals=err.residuals, hint=err.hint) from None
+                dlam *= 0.5
+                continue
+            x_old, lam_old = x_c, lam_c
+            x_c, lam_c = res.x, lam_t
+            iters += res.iterations
+            if monitor is not None and lam_c != lam_old:
+                dm = monitor(x_c) - monitor(x_old)
+                s = (lam_c - lam_old) / dm if dm != 0 else np.inf
+                slope0 = s if slope0 is None else slope0
+            if res.iterations <= 4:
+                dlam *= 1.5
+        if not out and target == lam_prev:  # a zero first load: solve it once
+            res = solve(target, x_c)
+            x_c, iters = res.x, res.iterations
+        out.append((float(target), NewtonResult(x_c, iters, []), time.perf_counter() - t0))
+        x_prev, lam_prev = x_c, lam_c
+    return out
+
+
+def arc_length(fun: Callable, x0: np.ndarray, lam0: float, ds: float, *, stop: Callable,
+               admissible: Optional[Callable] = None, max_steps: int = 500, rtol: float = 1e-9,
+               ref_norm: float = 1.0, atol: float = 0.0, max_iter: int = 20, target_iter: int = 5, ds_max: float | None = None,
+               ds_min: float | None = None) -> list:
+    """Riks arc-length; returns a list of (lam, x, iterations, wall_s) from the start (excluded)."""
+    x, lam = np.array(x0, float), float(lam0)
+    r, K, rl = fun(x, lam)
+    tx = sparse_solve(K, -rl)
+    c = max(np.linalg.norm(tx), 1e-12)
+    nrm = lambda a, b: np.sqrt(a @ a / c**2 + b * b)  # noqa: E731
+    n0 = nrm(tx, 1.0)
+    tx, tl = tx / n0, 1.0 / n0
+    ds_max = 8 * ds if ds_max is None else ds_max
+    ds_min = ds * 1e-4 if ds_min is None else ds_min
+    out = []
+    for step in range(max_steps):
+        t0 = time.perf_counter()
+        while True:
+            xp, lp = x + ds * tx, lam + ds * tl
+            xi, li = xp.copy(), lp
+            ok, hist = False, []
+            for it in range(1, max_iter + 1):
+                r, K, rl = fun(xi, li)
+                g = (tx @ (xi - xp)) / c**2 + tl * (li - lp)
+                rn = float(np.linalg.norm(r))
+                hist.append(rn)
+                if not np.isfinite(rn):
+                    break
+                if rn <= rtol * ref_norm * max(1.0, abs(li)) + atol and abs(g) < 1e-12 and it > 1:
+                    ok = True
+                    break
+                Ka = sp.bmat([[K, rl[:, None]], [(tx / c**2)[None, :], np.array([[tl]])]], format="csc")
+                try:
+                    d = sparse_solve(Ka, -np.concatenate([r, [g]]))
+                except np.linalg.LinAlgError:
+                    break
+                xi, li = xi + d[:-1], li + d[-1]
+                if admissible is not None and admissible(xi) is not None:
+                    break
+            if ok:
+                break
+            ds *= 0.5
+            if ds < ds_min:
+                raise NewtonError("arc-length step failed at the minimum step length", load=lam,
+                                  residuals=hist, hint="refine the mesh or start with a smaller step")
+        dxs, dls = xi - x, li - lam
+        n = nrm(dxs, dls)
+        tx, tl = dxs / n, dls / n
+        x, lam = xi, li
+        out.append((lam, x, it, time.perf_counter() - t0))
+        ds = min(ds_max, ds * np.clip(np.sqrt(target_iter / it), 0.5, 2.0))
+        if stop(x, lam):
+            break
+    return out

@@ -1,0 +1,95 @@
+r"""One Newton-Raphson solver for every FE scene.
+
+``newton(fun, x0, *, free=None, ref_norm=1.0, rtol=1e-9, xtol=1e-9, max_iter=30, admissible=None,
+load=None, max_backtracks=8, growth=1e3, atol=0.0)`` solves r(x) = 0 with ``fun(x) -> (r, K)`` (r ndarray, K scipy
+sparse). Hooks:
+
+* ``free``: indices of the unknowns (condensation of Dirichlet dofs: the others keep x0's values).
+  Contact with Lagrange multipliers or any constraint is added by the caller by returning an
+  augmented (r, K) from ``fun`` (x then holds the multipliers too).
+* ``admissible(x) -> None | str``: a reason string rejects the state (J <= 0, inside-out...);
+  the step is cut back (halved) like a step whose residual is not finite or grows > ``growth``-fold.
+* Convergence needs BOTH |r_free| <= rtol * ref_norm + atol AND |dx| <= xtol * (1 + |x|)
+  (``atol``: the round-off floor of the residual, e.g. ~10 eps kappa/C for nearly incompressible).
+
+Sparse direct solves (SuperLU via ``scipy.sparse.linalg.splu``). On failure ``NewtonError`` carries
+``load`` (the load level being solved), ``residuals`` (history) and a ``hint``; no NaN is returned.
+Returns ``NewtonResult(x, iterations, residuals)``.
+"""
+
+from __future__ import annotations
+
+from typing import Callable, NamedTuple, Optional, Sequence
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+__all__ = ["NewtonError", "NewtonResult", "newton", "sparse_solve"]
+
+
+class NewtonError(RuntimeError):
+    """Newton failed: ``load`` (load level), ``residuals`` (history), ``hint`` (what to try)."""
+
+    def __init__(self, message: str, *, load=None, residuals: Sequence[float] = (), hint: str = ""):
+        self.load, self.residuals, self.hint = load, list(residuals), hint
+        hist = ", ".join(f"{r:.3e}" for r in self.residuals[-8:])
+        super().__init__(f"{message} (load level {load}; residual history [{hist}]). Hint: {hint}")
+
+
+class NewtonResult(NamedTuple):
+    x: np.ndarray
+    iterations: int
+    residuals: list
+
+
+def sparse_solve(K: sp.spmatrix, b: np.ndarray) -> np.ndarray:
+    """Direct sparse solve; raises np.linalg.LinAlgError on a singular matrix."""
+    try:
+        x = spla.splu(sp.csc_matrix(K)).solve(b)
+    except RuntimeError as e:  # SuperLU: "Factor is exactly singular"
+        raise np.linalg.LinAlgError(str(e)) from e
+    return x
+
+
+def newton(fun: Callable, x0: np.ndarray, *, free: Optional[np.ndarray] = None, ref_norm: float = 1.0,
+           rtol: float = 1e-9, xtol: float = 1e-9, max_iter: int = 30,
+           admissible: Optional[Callable] = None, load=None, max_backtracks: int = 8,
+           growth: float = 1e3, atol: float = 0.0) -> NewtonResult:
+    """Solve fun(x)[0] = 0 from x0 (see the module docstring)."""
+    x = np.array(x0, dtype=float)
+    free = np.arange(x.size) if free is None else np.asarray(free)
+    ref = max(float(ref_norm), 1e-300)
+    r, K = fun(x)
+    res = [float(np.linalg.norm(r[free]))]
+    if not np.isfinite(res[0]):
+        raise NewtonError("the residual of the initial guess is not finite", load=load, residuals=res,
+                          hint="check the inputs and the initial state")
+    for it in range(1, max_iter + 1):
+        try:
+            dx = sparse_solve(K[free][:, free], -r[free])
+        except np.linalg.LinAlgError:
+            raise NewtonError("singular tangent matrix", load=load, residuals=res,
+                              hint="a limit point or a missing constraint (rigid-body motion); "
+                                   "use arc-length continuation or smaller load steps") from None
+        step, why = 1.0, None
+        for _ in range(max_backtracks + 1):
+            xt = x.copy()
+            xt[free] += step * dx
+            why = admissible(xt) if admissible is not None else None
+            if why is None:
+                rt, Kt = fun(xt)
+                rn = float(np.linalg.norm(rt[free]))
+                if np.isfinite(rn) and rn <= growth * max(res[-1], rtol * ref):
+                    break
+                why = "non-finite or exploding residual"
+            step *= 0.5
+        else:
+            raise NewtonError(f"line search failed ({why})", load=load, residuals=res,
+                              hint="reduce the load step; the state may be beyond a limit point")
+        x, r, K = xt, rt, Kt
+        res.append(rn)
+        if rn <= rtol * ref + atol and step * np.linalg.norm(dx) <= xtol * (1.0 + np.linalg.norm(x[free])):
+            return NewtonResult(x, it, res)
+    raise NewtonError(f"no convergence in {max_iter} iterations", load=load, residuals=res,
+                      hint="reduce the load step or loosen rtol/xtol")
