@@ -125,7 +125,7 @@ def inflate(*, inner_radius: float, outer_radius: float, C: float, alpha: float,
                       xtol=1e-9, atol=floor * (1 + lam), admissible=prob.admissible, load=f"p = {lam * C:.6g} Pa")
 
     if method == "load":
-        steps = load_control(solve, p / C, u0, monitor=lambda x: prob.stretches(x)[0], unit=" (x C)")
+        steps = load_control(solve, p / C, u0, monitor=lambda x: prob.stretches(x)[0], unit=" Pa", scale=C)
         lam = np.array([s[0] for s in steps])
         xs = [s[1].x for s in steps]
         its = np.array([s[1].iterations for s in steps])

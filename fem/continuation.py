@@ -3,7 +3,7 @@ r"""Path following: adaptive load control and Riks arc-length (through limit poi
 ``load_control(solve, loads, x0, *, lam0=0.0, monitor=None, max_cuts=12)``
     ``solve(lam, x_guess) -> NewtonResult`` (raises ``NewtonError``). Reaches every requested
     load; a failed step is halved (up to ``max_cuts`` times), the predictor is the secant of the
-    last two converged states. Returns a list of ``(lam, NewtonResult, wall_s)``, one per
+    last two converged states (``scale``/``unit`` only format messages). Returns a list of ``(lam, NewtonResult, wall_s)``, one per
     requested load. If it fails where the load-response curve flattens (monitor slope below 2 % of the
     initial one or falling), raises ``LimitPointError`` naming the last converged load.
 
@@ -32,7 +32,7 @@ class LimitPointError(NewtonError):
 
 
 def load_control(solve: Callable, loads: Sequence[float], x0: np.ndarray, *, lam0: float = 0.0,
-                 monitor: Optional[Callable] = None, max_cuts: int = 12, unit: str = "") -> list:
+                 monitor: Optional[Callable] = None, max_cuts: int = 12, unit: str = "", scale: float = 1.0) -> list:
     out = []
     x_prev, lam_prev = np.array(x0, float), float(lam0)
     x_old, lam_old = None, None
@@ -60,11 +60,11 @@ def load_control(solve: Callable, loads: Sequence[float], x0: np.ndarray, *, lam
                     if s is not None and slope0 is not None and s < 0.02 * slope0:
                         raise LimitPointError(
                             f"load control reached a limit point: no equilibrium just above "
-                            f"{lam_c:.6g}{unit}, the curve is flat there", load=lam_t,
+                            f"{lam_c * scale:.6g}{unit}, the curve is flat there", load=lam_t * scale,
                             residuals=err.residuals,
-                            hint=f"the last converged load {lam_c:.6g}{unit} is (close to) the maximum; "
+                            hint=f"the last converged load {lam_c * scale:.6g}{unit} is (close to) the maximum; "
                                  "use method='arclength' to pass it") from None
-                    raise NewtonError(f"load step failed after {max_cuts} cuts", load=lam_t,
+                    raise NewtonError(f"load step failed after {max_cuts} cuts", load=lam_t * scale,
                                       residuals=err.residuals, hint=err.hint) from None
                 dlam *= 0.5
                 continue

@@ -1,0 +1,138 @@
+"""FE engine physics/consistency checks: meshes, kinematics, Fung tangent, assembly, Newton."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from fem import constitutive as cm
+from fem.forms import Assembler, Material
+from fem.kinematics import IDENTITY5, invariants, second_from_first, first_from_second
+from fem.mesh import ball_section, graded_points, shell_section
+from fem.newton import NewtonError, newton
+from reduced.material import fung_energy
+
+RNG = np.random.default_rng(7)
+
+
+def _fd(fun, x, dx, h=1e-6):
+    return (fun(x + h * dx) - fun(x - h * dx)) / (2 * h)
+
+
+def test_shell_section_volume_and_tags():
+    m = shell_section(50e-6, 75e-6, 4, 8)
+    a = Assembler(m)
+    exact = 2 * np.pi / 3 * (1.5**3 - 1)  # half of the hollow ball, scaled by A
+    err8 = abs(a.volume() / exact - 1)
+    err16 = abs(Assembler(shell_section(50e-6, 75e-6, 4, 16)).volume() / exact - 1)
+    assert err8 < 1e-5 and err16 < err8 / 12  # quadratic geometry: O(h^4) volume error
+    X = m.X
+    assert np.allclose(np.hypot(*X[:, m.nodes["inner"]]), 1.0)
+    assert np.allclose(np.hypot(*X[:, m.nodes["outer"]]), 1.5)
+    assert np.allclose(X[0, m.nodes["axis"]], 0.0) and np.allclose(X[1, m.nodes["symmetry"]], 0.0)
+    assert m.edges["inner"].shape == (8, 3)
+
+
+def test_ball_section_volume_tags_grading():
+    m = ball_section(500e-6, 6, 4, grading=3.0, pole_grading=3.0)
+    a = Assembler(m)
+    assert np.all(m.basis.dx > 0)
+    assert abs(a.volume() / (2 * np.pi / 3) - 1) < 1e-5
+    X = m.X
+    assert np.allclose(X[0, m.nodes["axis"]], 0) and np.allclose(X[1, m.nodes["symmetry"]], 0)
+    assert np.allclose(np.hypot(*X[:, m.nodes["outer"]]), 1.0)
+    # surface tag covers the whole quarter arc: its edges' chord lengths add up to ~ pi/2
+    e = m.edges["outer"]
+    assert abs(np.sum(np.hypot(*(X[:, e[:, 2]] - X[:, e[:, 0]]))) - np.pi / 2) < 1e-2
+    # graded toward the pole: the outer edge at the axis is shorter than at the equator
+    L = np.hypot(*(X[:, e[:, 2]] - X[:, e[:, 0]]))
+    top = np.argmax(np.max(X[1, e], axis=1))
+    bottom = np.argmin(np.max(X[1, e], axis=1))
+    assert L[top] < 0.7 * L[bottom]
+
+
+def test_graded_points_ratio():
+    p = graded_points(5, 4.0)
+    h = np.diff(p)
+    assert p[0] == 0 and abs(p[-1] - 1) < 1e-15 and abs(h[-1] / h[0] - 4) < 1e-12
+    with pytest.raises(ValueError):
+        graded_points(0)
+
+
+@pytest.mark.parametrize("alpha", [0.0, 0.3])
+def test_fung_stress_and_tangent_finite_differences(alpha):
+    f = IDENTITY5 + 0.2 * RNG.standard_normal((6, 5))
+    P, A = cm.iso_stress(f, 1.3, alpha)
+    for k in range(5):
+        e = np.eye(5)[k]
+        Pn = _fd(lambda g: cm.iso_energy(g, 1.3, alpha), f, e)
+        An = _fd(lambda g: cm.iso_stress(g, 1.3, alpha)[0], f, e)
+        assert np.abs(P[:, k] - Pn).max() < 1e-7
+        assert np.abs(A[:, :, k] - An).max() < 1e-6
+
+
+def test_neo_hookean_exact_and_stress_free_reference():
+    f = IDENTITY5 + 0.1 * RNG.standard_normal((3, 5))
+    I1, J = invariants(f)
+    assert np.allclose(cm.iso_energy(f, 2.0, 0.0), 2.0 * (J ** (-2 / 3) * I1 - 3), rtol=0, atol=1e-14)
+    assert np.allclose(cm.iso_energy(f, 2.0, 0.2), fung_energy(J ** (-2 / 3) * I1, 2.0, 0.2))
+    P, _ = cm.iso_stress(IDENTITY5[None], 1.0, 0.3)
+    assert np.abs(P).max() < 1e-15
+    # S = F^-1 P is symmetric; F S returns P
+    S = second_from_first(f, cm.iso_stress(f, 1.0, 0.3)[0])
+    assert np.allclose(S[:, 1], S[:, 2])
+    assert np.allclose(first_from_second(f, S), cm.iso_stress(f, 1.0, 0.3)[0])
+
+
+def test_simple_shear_cauchy_matches_closed_form():
+    # simple shear gamma in (r, z): incompressible, sigma_rz = 2 W'(I1) gamma with I1 = 3 + gamma^2
+    g, C, alpha = 0.4, 1.0, 0.25
+    f = np.array([[1.0, g, 0.0, 1.0, 1.0]])
+    P, _ = cm.iso_stress(f, C, alpha)
+    sig = cm.cauchy(f, P)
+    assert abs(sig[0, 0, 1] - 2 * C * np.exp(alpha * g**2) * g) < 1e-13
+
+
+@pytest.mark.parametrize("formulation", ["mixed", "displacement"])
+def test_assembly_tangent_with_extra_stress_matches_finite_differences(formulation):
+    m = shell_section(1.0, 1.5, 2, 3)
+    a = Assembler(m, formulation)
+    mat = Material(1.0, 0.2, 1e3)
+    x = 0.005 * RNG.standard_normal(a.ndof)
+    S0 = 0.3 * RNG.standard_normal(a.B.shape[:2] + (5,))
+    S0[..., 2] = S0[..., 1]
+    r, K = a.internal(x, mat, extra_S=S0, iso_scale=1.7)
+    assert abs(K - K.T).max() < 1e-8 * abs(K).max()
+    dx = RNG.standard_normal(a.ndof)
+    Kn = _fd(lambda y: a.internal(y, mat, S0, 1.7, tangent=False)[0], x, dx, 1e-7)
+    assert np.abs(Kn - K @ dx).max() < 1e-7 * np.abs(K @ dx).max()
+
+
+def test_follower_pressure_tangent_and_resultant():
+    m = shell_section(1.0, 1.5, 2, 4)
+    a = Assembler(m)
+    x = 0.01 * RNG.standard_normal(a.ndof)
+    F, K = a.follower_pressure(x, 0.7, m.edges["inner"])
+    dx = RNG.standard_normal(a.ndof)
+    Kn = _fd(lambda y: a.follower_pressure(y, 0.7, m.edges["inner"], tangent=False)[0], x, dx)
+    assert np.abs(Kn - K @ dx).max() < 1e-8
+    # uniform expansion by (1 + e): axial resultant on the quarter sphere = p pi a^2 exactly
+    e = 0.3
+    u = np.zeros(a.ndof)
+    u[: a.n_u] = e * m.X.T.ravel()
+    F, _ = a.follower_pressure(u, 0.7, m.edges["inner"], tangent=False)
+    assert abs(F[1:a.n_u:2].sum() - 0.7 * np.pi * (1 + e) ** 2) < 1e-12
+
+
+def test_newton_quadratic_convergence_and_clear_error():
+    fun = lambda x: (np.array([x[0] ** 3 - 8.0]), sp.csr_matrix([[3 * x[0] ** 2]]))  # noqa: E731
+    res = newton(fun, np.array([3.0]), rtol=1e-14, xtol=1e-14)
+    assert abs(res.x[0] - 2.0) < 1e-14
+    h = res.residuals
+    assert h[-2] < 1e-3 and h[-1] < 10 * h[-2] ** 2 + 1e-15  # quadratic
+    sing = lambda x: (np.array([1.0]), sp.csr_matrix([[0.0]]))  # noqa: E731
+    with pytest.raises(NewtonError) as ei:
+        newton(sing, np.array([0.0]), load="p = 5 Pa")
+    assert "p = 5 Pa" in str(ei.value) and ei.value.residuals and ei.value.hint
+    bad = lambda x: (np.array([x[0] - 1.0]), sp.csr_matrix([[1.0]]))  # noqa: E731
+    with pytest.raises(NewtonError, match="line search"):
+        newton(bad, np.array([0.0]), admissible=lambda x: "J <= 0" if x[0] > 0.001 else None)
