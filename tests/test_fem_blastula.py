@@ -1,0 +1,127 @@
+"""FE blastula against the exact incompressible thick-shell solution (physics.md)."""
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+from scipy.optimize import brentq, minimize_scalar
+
+from fem.blastula import LimitPointError, inflate
+
+A, B, C = 50e-6, 75e-6, 200.0
+
+
+def p_exact(la, a0=A, b0=B, c=C, alpha=0.2):
+    """p(lambda_a) = int_{lambda_b}^{lambda_a} 4 C exp(alpha (2 l^2 + l^-4 - 3)) (l^3 + 1)/l^5 dl."""
+    lb = (1 + (la**3 - 1) * (a0 / b0) ** 3) ** (1 / 3)
+    g = lambda l: 4 * c * np.exp(alpha * (2 * l**2 + l**-4 - 3)) * (l**3 + 1) / l**5  # noqa: E731
+    return quad(g, lb, la, epsabs=0, epsrel=1e-13)[0]
+
+
+def la_exact(p, **kw):
+    return brentq(lambda l: p_exact(l, **kw) - p, 1.0, 20.0, xtol=1e-14)
+
+
+def test_default_mesh_matches_exact_to_1e5_with_outer_stretch():
+    r = inflate(inner_radius=A, outer_radius=B, C=C, alpha=0.2, pressures=[200.0, 500.0, 1000.0])
+    ex = np.array([la_exact(p) for p in r.pressure])
+    assert np.all(np.abs(r.inner_stretch / ex - 1) < 1e-5)
+    lb = (1 + (ex**3 - 1) * (A / B) ** 3) ** (1 / 3)
+    assert np.all(np.abs(r.outer_stretch / lb - 1) < 1e-5)
+    assert r.pressure.shape == r.newton_iterations.shape == r.wall_time.shape == (3,)
+
+
+def test_coarse_mesh_one_big_step_and_zero_pressure():
+    # 0 -> 1 kPa in one requested step (subdivided internally), coarse mesh: still ~1e-4
+    r = inflate(inner_radius=A, outer_radius=B, C=C, alpha=0.2, pressures=[0.0, 1000.0], mesh="coarse")
+    assert r.inner_stretch[0] == pytest.approx(1.0, abs=1e-14)
+    assert abs(r.inner_stretch[1] / la_exact(1000.0) - 1) < 1e-4
+    assert r.inner_stretch[1] > 2.9  # a large deformation, not a linear solve
+
+
+def test_mesh_refinement_reduces_error():
+    errs = []
+    for mesh in [(1, 2), (2, 4)]:
+        r = inflate(inner_radius=A, outer_radius=B, C=C, alpha=0.1, pressures=[400.0], mesh=mesh, kappa=2e11)
+        errs.append(abs(r.inner_stretch[-1] / la_exact(400.0, alpha=0.1) - 1))
+    assert errs[1] < errs[0] / 8
+
+
+def test_displacement_only_low_order_locks():
+    kw = dict(inner_radius=A, outer_radius=B, C=C, alpha=0.2, pressures=[100.0, 200.0])
+    from fem.blastula import _make_mesh  # noqa: F401  (same divisions, Q1 geometry)
+    from fem.mesh import shell_section
+
+    mixed = inflate(**kw, mesh=(4, 8))
+    q1 = inflate(**kw, mesh=shell_section(A, B, 4, 8, order=1), formulation="displacement")
+    ex = la_exact(200.0)
+    e_mixed = abs(mixed.inner_stretch[-1] / ex - 1)
+    e_q1 = abs(q1.inner_stretch[-1] / ex - 1)
+    assert e_q1 > 0.05 * (ex - 1)  # the locked shell barely inflates
+    assert e_q1 > 1e3 * e_mixed
+
+
+def test_neo_hookean_limit_point_load_control_and_arclength():
+    lim = minimize_scalar(lambda l: -p_exact(l, alpha=0.0), bounds=(1.1, 3.0), method="bounded",
+                          options={"xatol": 1e-10})
+    pmax, lam_max = -lim.fun, lim.x
+    with pytest.raises(LimitPointError) as ei:
+        inflate(inner_radius=A, outer_radius=B, C=C, alpha=1e-5, pressures=np.linspace(0, 250, 6), mesh="coarse")
+    last = ei.value.load
+    assert 0.97 * pmax < last < 1.01 * pmax
+    assert "arclength" in str(ei.value)
+    r = inflate(inner_radius=A, outer_radius=B, C=C, alpha=1e-5, pressures=[20.0], mesh="coarse",
+                method="arclength", max_inner_stretch=1.25 * lam_max)
+    assert abs(r.pressure.max() / pmax - 1) < 5e-3
+    assert r.inner_stretch[-1] >= 1.2 * lam_max
+    # the falling branch: past the limit the pressure decreases and matches the exact curve
+    k = np.argmax(r.pressure)
+    assert r.pressure[-1] < r.pressure[k]
+    assert abs(r.pressure[-1] / p_exact(r.inner_stretch[-1], alpha=0.0) - 1) < 1e-3
+
+
+def test_fields_export_and_plot(tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import meshio
+
+    r = inflate(inner_radius=A, outer_radius=B, C=C, alpha=0.2, pressures=[1000.0], mesh=(8, 4))
+    # exact von Mises |sigma_theta - sigma_r| = 2 W'(I1) (l^2 - l^-4), I1 = 2 l^2 + l^-4, with the hoop
+    # stretch l = r/R, r^3 = R^3 + a^3 - A^3; compared with each element's mean (its own quadrature)
+    b = r.mesh.basis
+    Rq = np.hypot(*b.global_coordinates().value)
+    la = r.inner_stretch[-1]
+    l = (1 + (la**3 - 1) / Rq**3) ** (1 / 3)
+    vm = 2 * C * np.exp(0.2 * (2 * l**2 + l**-4 - 3)) * (l**2 - l**-4)
+    w = b.dx * b.global_coordinates().value[0]
+    vm_el = (vm * w).sum(1) / w.sum(1)
+    assert np.all(np.abs(r.von_mises / vm_el - 1) < 5e-3)
+    # hydrostatic pressure: sigma_r = -p at the inner surface, 0 outside; -q lies in between per element
+    assert np.all(np.isfinite(r.hydrostatic_pressure))
+    r.to_vtu(str(tmp_path / "b.vtu"))
+    back = meshio.read(tmp_path / "b.vtu")
+    assert back.points.shape[0] == r.mesh.mesh.nvertices
+    ax = r.plot()
+    ax.figure.savefig(tmp_path / "vm.png")
+    assert (tmp_path / "vm.png").stat().st_size > 1000
+
+
+@pytest.mark.parametrize("kw, msg", [
+    (dict(inner_radius=-1e-6), "inner_radius"),
+    (dict(outer_radius=40e-6), "inner"),
+    (dict(C=0.0), "C"),
+    (dict(alpha=-0.1), "alpha"),
+    (dict(kappa=-1.0), "kappa"),
+    (dict(pressures=[100.0, 50.0]), "sorted"),
+    (dict(pressures=[-1.0]), ">= 0"),
+    (dict(pressures=[np.nan]), "finite"),
+    (dict(mesh="huge"), "mesh"),
+    (dict(mesh=(0, 3)), "mesh"),
+    (dict(method="riks"), "method"),
+    (dict(method="arclength"), "max_inner_stretch"),
+])
+def test_input_validation(kw, msg):
+    args = dict(inner_radius=A, outer_radius=B, C=C, alpha=0.2, pressures=[100.0])
+    args.update(kw)
+    with pytest.raises(ValueError, match=msg):
+        inflate(**args)
