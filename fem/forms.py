@@ -89,6 +89,7 @@ class Assembler:
         self.R = xq[0]
         self.w = 2 * np.pi * self.R * b.dx  # (ne, nq)
         self.B = b_matrix(N, dN, self.R)  # (ne, nq, 5, 2nb)
+        self.Bt = np.ascontiguousarray(self.B.reshape(self.B.shape[0], -1, self.B.shape[-1]).transpose(0, 2, 1))
         ed = b.element_dofs  # (nb, ne)
         self.edofs = np.stack([2 * ed, 2 * ed + 1], axis=-1).reshape(nb, -1, 2).transpose(1, 0, 2).reshape(-1, 2 * nb)
         self.n_u = 2 * b.N
@@ -112,7 +113,7 @@ class Assembler:
     # ---- kinematics at quadrature points ------------------------------------------------
     def f_at(self, u: np.ndarray) -> np.ndarray:
         """5-comp deformation gradient (ne, nq, 5) for the global displacement u."""
-        return IDENTITY5 + np.einsum("eqij,ej->eqi", self.B, u[self.edofs])
+        return IDENTITY5 + np.matmul(self.B, u[self.edofs][:, None, :, None])[..., 0]
 
     def q_at(self, x: np.ndarray) -> np.ndarray:
         """The mixed field q (mean Cauchy stress, scaled) at the points (ne, nq)."""
@@ -144,7 +145,8 @@ class Assembler:
     def internal(self, u: np.ndarray, mat: Material, extra_S=None, iso_scale: float = 1.0, tangent: bool = True):
         """Internal residual (ndof,) and tangent (CSR) of the elastic (+ extra) stress at x = (u, q)."""
         f, P, A, _ = self.stress(u, mat, extra_S, iso_scale)
-        re = np.einsum("eqij,eqi,eq->ej", self.B, P, self.w)
+        ne, nq, _, nd = self.B.shape
+        re = np.matmul((P * self.w[..., None]).reshape(ne, 1, nq * 5), self.B.reshape(ne, nq * 5, nd))[:, 0]
         if self.formulation == "mixed":
             _, J = invariants(f)
             rq = np.einsum("eqa,eq->ea", self.psi, (J - 1.0) * self.w) - np.einsum("eab,eb->ea", self.M, u[self.qdofs]) / mat.kappa
@@ -152,10 +154,11 @@ class Assembler:
         r = np.bincount(self.alldofs.ravel(), weights=re.ravel(), minlength=self.ndof)
         if not tangent:
             return r, None
-        BA = np.einsum("eqij,eqik,eq->eqjk", self.B, A, self.w)
-        Ke = np.einsum("eqjk,eqkl->ejl", BA, self.B)
+        AB = np.matmul(A * self.w[..., None, None], self.B).reshape(ne, nq * 5, nd)
+        Ke = np.matmul(self.Bt, AB)
         if self.formulation == "mixed":
-            G = np.einsum("eqa,eqi,eqij,eq->eaj", self.psi, dJ(f), self.B, self.w)
+            dJB = np.matmul((dJ(f) * self.w[..., None])[..., None, :], self.B)[..., 0, :]  # (ne, nq, nd)
+            G = np.matmul(self.psi.transpose(0, 2, 1), dJB)
             Ke = np.block([[Ke, np.swapaxes(G, 1, 2)], [G, -self.M / mat.kappa]])
         return r, self._pattern.matrix(Ke)
 
