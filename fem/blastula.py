@@ -9,7 +9,8 @@ deformed inner surface. Lengths scaled by A and stresses by C inside. ``pressure
 finite, >= 0 and non-decreasing; ``method="load"`` returns one entry per requested pressure
 (steps are subdivided internally when Newton struggles); ``method="arclength"`` traces from p = 0
 until the inner stretch reaches ``max_inner_stretch`` (``pressures`` then only sets the first
-step: its first positive entry, default C/20), through limit points. Stretch = mean deformed /
+step: its first positive entry; None for an automatic step raising the stretch by ~0.02; steps
+adapt up to twice the first), through limit points. Stretch = mean deformed /
 reference radius over the inner (outer) surface. Mesh: "coarse", "default", "fine", a tuple
 (n_radial, n_circ) or an ``AxiMesh`` from ``fem.mesh.shell_section``.
 """
@@ -27,7 +28,7 @@ from fem.continuation import LimitPointError, arc_length, load_control
 from fem.forms import Assembler, Material
 from fem.kinematics import invariants
 from fem.mesh import AxiMesh, shell_section
-from fem.newton import newton
+from fem.newton import newton, sparse_solve
 from fem.output import BlastulaResult
 
 __all__ = ["inflate", "MESHES", "LimitPointError"]
@@ -132,9 +133,16 @@ def inflate(*, inner_radius: float, outer_radius: float, C: float, alpha: float,
         wall = np.array([s[2] for s in steps])
     else:
         pos = p[p > 0] if pressures is not None else np.array([])
-        ds = (pos[0] if pos.size else C / 20.0) / C
-        steps = arc_length(lambda x, l: prob.rk(x, l), u0, 0.0, ds, stop=lambda x, l: prob.stretches(x)[0] >= max_inner_stretch,
-                           admissible=prob.admissible, ref_norm=ref, rtol=rtol, atol=floor, ds_max=ds * 4)
+        if pos.size:
+            dp = pos[0] / C
+        else:  # automatic: a first step that raises the inner stretch by ~ 0.02 (linear estimate)
+            _, K0, rl0 = prob.rk(u0, 0.0)
+            t = sparse_solve(K0, -rl0)
+            dp = 0.02 / max((prob.stretches(1e-6 * t)[0] - 1.0) / 1e-6, 1e-12)
+        ds = np.sqrt(2.0) * dp  # the first tangent has equal parts in |x|/c and the load
+        steps = arc_length(lambda x, l: prob.rk(x, l), u0, 0.0, ds,
+                           stop=lambda x, l: prob.stretches(x)[0] >= max_inner_stretch,
+                           admissible=prob.admissible, ref_norm=ref, rtol=rtol, atol=floor, ds_max=2 * ds)
         lam = np.array([0.0] + [s[0] for s in steps])
         xs = [u0] + [s[1] for s in steps]
         its = np.array([0] + [s[2] for s in steps])

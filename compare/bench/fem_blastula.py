@@ -1,0 +1,127 @@
+"""Benchmark of the FE blastula: accuracy vs the exact solution, convergence table, seed sets, speed.
+
+``python -m compare.bench fem-blastula [--quick]`` prints the tables. The exact reference is the
+incompressible thick-shell integral of physics.md (scipy quad + brentq). Timings exclude imports and
+the first (warm-up) call; the machine is shared, so they are pessimistic.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from scipy.integrate import quad
+from scipy.optimize import brentq, minimize_scalar
+
+from fem.blastula import LimitPointError, inflate
+
+A, C = 50e-6, 200.0
+
+
+def p_exact(la: float, B: float, alpha: float) -> float:
+    lb = (1 + (la**3 - 1) * (A / B) ** 3) ** (1 / 3)
+    g = lambda l: 4 * C * np.exp(alpha * (2 * l**2 + l**-4 - 3)) * (l**3 + 1) / l**5  # noqa: E731
+    return quad(g, lb, la, epsabs=0, epsrel=1e-13)[0]
+
+
+def la_exact(p: float, B: float, alpha: float) -> float:
+    return brentq(lambda l: p_exact(l, B, alpha) - p, 1.0, 50.0, xtol=1e-14)
+
+
+def _err(r, B, alpha):
+    """Relative inner-stretch error (load control) or pressure error p_exact(la_FE)/p_FE - 1 (arc-length)."""
+    if r.method == "arclength":
+        k = r.pressure > 0
+        return np.abs(np.array([p_exact(l, B, alpha) for l in r.inner_stretch[k]]) / r.pressure[k] - 1)
+    ex = np.array([la_exact(p, B, alpha) if p > 0 else 1.0 for p in r.pressure])
+    return np.abs(r.inner_stretch / ex - 1)
+
+
+def speed(repeats: int = 5) -> None:
+    ps = np.linspace(20.0, 1000.0, 50)
+    kw = dict(inner_radius=A, outer_radius=75e-6, C=C, alpha=0.2, pressures=ps)
+    inflate(**kw)  # warm-up
+    times = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        r = inflate(**kw)
+        times.append(time.perf_counter() - t)
+    e = _err(r, 75e-6, 0.2)
+    print("\n## Speed: alpha = 0.2, B = 75 um, 0 -> 1 kPa in 50 equal steps, default mesh (4 x 8 Q2/P1disc)")
+    print(f"wall time  min {min(times):.3f} s  median {np.median(times):.3f} s  ({repeats} runs)")
+    print(f"Newton iterations {r.newton_iterations.sum()} in total; max |inner stretch error| {e.max():.2e}"
+          f" (at 200/500/1000 Pa: {_err(inflate(**{**kw, 'pressures': [200.0, 500.0, 1000.0]}), 75e-6, 0.2)})")
+
+
+def convergence(quick: bool) -> None:
+    meshes = [(2, 4), (3, 6), (4, 8), (8, 16)] if not quick else [(2, 4), (4, 8), (8, 16)]
+    kappas = [2.2e5, 2.2e7, 2.2e9]
+    ps = [200.0, 500.0, 1000.0]
+    ex = np.array([la_exact(p, 75e-6, 0.2) for p in ps])
+    lam = {}
+    for k in kappas:
+        for m in meshes:
+            lam[k, m] = inflate(inner_radius=A, outer_radius=75e-6, C=C, alpha=0.2, pressures=ps, mesh=m,
+                                kappa=k).inner_stretch
+    print("\n## Convergence (alpha = 0.2, B = 75 um): max over p in {200, 500, 1000} Pa of relative error")
+    print("total = |FE/exact - 1|; mesh = |FE(mesh)/FE(finest) - 1| at the same kappa; "
+          "kappa = |FE(finest)/exact - 1| (the compressibility error)")
+    print(f"{'kappa/C':>8} {'mesh':>8} {'total':>10} {'mesh err':>10} {'kappa err':>10}")
+    for k in kappas:
+        fine = lam[k, meshes[-1]]
+        for m in meshes:
+            tot = np.abs(lam[k, m] / ex - 1).max()
+            me = np.abs(lam[k, m] / fine - 1).max()
+            ke = np.abs(fine / ex - 1).max()
+            print(f"{k / C:8.0e} {str(m):>8} {tot:10.2e} {me:10.2e} {ke:10.2e}")
+
+
+def seed_sets() -> None:
+    print("\n## Seed parameter sets (load control 0 -> 1 kPa in 20 steps, default mesh)")
+    print(f"{'B (um)':>6} {'alpha':>6} {'final p (Pa)':>12} {'inner stretch':>13} {'outer':>8} {'max rel err*':>12} {'time (s)':>8}  note")
+    for B, alpha in [(75e-6, 1e-5), (75e-6, 0.1), (75e-6, 0.2), (75e-6, 0.3), (52e-6, 0.2), (60e-6, 0.2)]:
+        t = time.perf_counter()
+        note = ""
+        try:
+            r = inflate(inner_radius=A, outer_radius=B, C=C, alpha=alpha, pressures=np.linspace(50, 1000, 20))
+        except LimitPointError as e:
+            note = f"limit point: load control stopped at {e.load:.4g} Pa"
+            r = inflate(inner_radius=A, outer_radius=B, C=C, alpha=alpha, pressures=None,
+                        method="arclength", max_inner_stretch=3.0)
+            note += "; arc-length from 0 to inner stretch 3 (err* = pressure error on the traced curve)"
+        dt = time.perf_counter() - t
+        print(f"{B * 1e6:6.0f} {alpha:6.0e} {r.pressure[-1]:12.2f} {r.inner_stretch[-1]:13.6f} "
+              f"{r.outer_stretch[-1]:8.5f} {_err(r, B, alpha).max():12.2e} {dt:8.2f}  {note}")
+
+
+def limit_point() -> None:
+    print("\n## Neo-Hookean (alpha = 1e-5) limit point by arc-length, default mesh")
+    print(f"{'B (um)':>6} {'exact p_max':>11} {'FE p_max':>10} {'rel err':>9} {'exact la*':>9} {'traced to':>9} {'steps':>5} {'time':>6}")
+    for B in [52e-6, 60e-6, 75e-6]:
+        o = minimize_scalar(lambda l: -p_exact(l, B, 1e-5), bounds=(1.01, 4.0), method="bounded",
+                            options={"xatol": 1e-10})
+        t = time.perf_counter()
+        r = inflate(inner_radius=A, outer_radius=B, C=C, alpha=1e-5, pressures=None, method="arclength",
+                    max_inner_stretch=1.25 * o.x)
+        dt = time.perf_counter() - t
+        print(f"{B * 1e6:6.0f} {-o.fun:11.4f} {r.pressure.max():10.4f} {r.pressure.max() / -o.fun - 1:9.1e} "
+              f"{o.x:9.4f} {r.inner_stretch[-1]:9.4f} {len(r.pressure):5d} {dt:6.2f}")
+    try:
+        inflate(inner_radius=A, outer_radius=75e-6, C=C, alpha=1e-5, pressures=np.linspace(10, 200, 20))
+    except LimitPointError as e:
+        print("load control message:", str(e).split(" (load level")[0])
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(argv or [])
+    quick = "--quick" in argv
+    print("# FE blastula benchmark (fem.blastula.inflate; A = 50 um, C = 200 Pa, kappa = 2.2 GPa unless stated)")
+    speed(3 if quick else 5)
+    convergence(quick)
+    seed_sets()
+    limit_point()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
