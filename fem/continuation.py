@@ -107,6 +107,8 @@ def arc_length(fun: Callable, x0: np.ndarray, lam0: float, ds: float, *, stop: C
             xi, li = xp.copy(), lp
             ok, hist = False, []
             for it in range(1, max_iter + 1):
+                if admissible is not None and admissible(xi) is not None:
+                    break
                 r, K, rl = fun(xi, li)
                 g = (tx @ (xi - xp)) / c**2 + tl * (li - lp)
                 rn = float(np.linalg.norm(r))
@@ -122,8 +124,6 @@ def arc_length(fun: Callable, x0: np.ndarray, lam0: float, ds: float, *, stop: C
                 except np.linalg.LinAlgError:
                     break
                 xi, li = xi + d[:-1], li + d[-1]
-                if admissible is not None and admissible(xi) is not None:
-                    break
             if ok:
                 break
             ds *= 0.5

@@ -83,9 +83,9 @@ class Assembler:
         self.mesh, self.formulation = mesh, formulation
         b = mesh.basis
         nb = b.Nbfun
-        N = np.array([b.basis[i][0].value for i in range(nb)])  # (nb, ne, nq)
+        N = np.array([np.asarray(b.basis[i][0]) for i in range(nb)])  # (nb, ne, nq)
         dN = np.array([b.basis[i][0].grad for i in range(nb)])  # (nb, 2, ne, nq)
-        xq = b.global_coordinates().value  # (2, ne, nq)
+        xq = np.asarray(b.global_coordinates())  # (2, ne, nq)
         self.R = xq[0]
         self.w = 2 * np.pi * self.R * b.dx  # (ne, nq)
         self.B = b_matrix(N, dN, self.R)  # (ne, nq, 5, 2nb)

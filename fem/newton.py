@@ -60,6 +60,10 @@ def newton(fun: Callable, x0: np.ndarray, *, free: Optional[np.ndarray] = None, 
     x = np.array(x0, dtype=float)
     free = np.arange(x.size) if free is None else np.asarray(free)
     ref = max(float(ref_norm), 1e-300)
+    why = admissible(x) if admissible is not None else None
+    if why is not None:
+        raise NewtonError(f"inadmissible initial guess ({why})", load=load, residuals=[],
+                          hint="reduce the load step (the predictor overshot)")
     r, K = fun(x)
     res = [float(np.linalg.norm(r[free]))]
     if not np.isfinite(res[0]):
