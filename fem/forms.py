@@ -17,9 +17,10 @@ Extra stress hook (viscoelasticity): ``internal(x, mat, extra_S=S0, iso_scale=s)
 2nd Piola stress S = S_vol + s S_iso + S0, S0 (n_el, n_qp, 5) fixed during the step, so the
 tangent is s A_iso + d(F S0)/dF + volumetric part. ``iso_S(u, mat)`` returns S_iso at the points.
 
-Follower pressure p (scaled by C) on a boundary curve (``follower_pressure(u, p, edges)``): the load
-on the deformed surface, f_a = p int N_a (z', -r') 2 pi r dxi (normal pointing away from the
-cavity for a curve ordered counterclockwise about the origin), and its exact linearisation.
+Follower pressure p (scaled by C) on a boundary curve (``follower_pressure(u, p, edges)``): the
+traction -p n on the deformed surface (p > 0 pushes into the material), with n da = (z', -r') 2 pi r dxi
+for edges oriented with the material on their left (as ``fem.mesh`` stores them):
+f_a = -p int N_a (z', -r') 2 pi r dxi, and its exact linearisation.
 
 API: ``Material(C, alpha, kappa)`` NamedTuple (scaled), ``Assembler`` with ``.internal``,
 ``.iso_S``, ``.stress`` (f, P, A, q at the points), ``.f_at``, ``.follower_pressure``,
@@ -179,7 +180,7 @@ class Assembler:
         x = X[:, edges] + np.stack([u[dofs[..., 0]], u[dofs[..., 1]]])  # (2, ned, nn)
         r, z = np.einsum("aq,ea->eq", Nl, x[0]), np.einsum("aq,ea->eq", Nl, x[1])
         rp, zp = np.einsum("aq,ea->eq", dNl, x[0]), np.einsum("aq,ea->eq", dNl, x[1])
-        c = 2 * np.pi * p * wq
+        c = -2 * np.pi * p * wq
         fr = np.einsum("aq,eq->ea", Nl, c * r * zp)
         fz = -np.einsum("aq,eq->ea", Nl, c * r * rp)
         fe = np.stack([fr, fz], -1)  # (ned, nn, 2)

@@ -5,7 +5,8 @@ API
 ``AxiMesh``                 dataclass: skfem mesh + scalar ``skfem.CellBasis`` (Q2 isoparametric or Q1),
                             nodal coordinates ``X`` (2, N) in units of ``length_scale`` (dimensionless),
                             ``nodes[name]`` (scalar dof indices on a boundary) and ``edges[name]``
-                            ((n_edges, 2 or 3) dof indices ordered along each boundary edge).
+                            ((n_edges, 2 or 3) dof indices ordered along each boundary edge, oriented
+                            with the material on the left: outward normal ~ (dZ, -dR)).
 ``shell_section(A, B, n_radial, n_circ, *, grading=1.0, order=2, half=False)``
                             quarter (0 <= theta <= 90 deg from the equator) or half wall section of a
                             hollow sphere, lengths scaled by A; tags "inner", "outer", "symmetry" (Z = 0),
@@ -83,6 +84,12 @@ def _finish(mesh1: skfem.Mesh, order: int, mapper, scale: float, tagger) -> AxiM
     X = basis.doflocs
     bf = m.boundary_facets()
     v = m.facets[:, bf]  # (2, nbf) vertex (= nodal dof) indices
+    # orient every boundary edge positively: the material on its left (outward normal (z', -r'))
+    el = m.f2t[0, bf]
+    cen = m.p[:, m.t[:4, el]].mean(axis=1)
+    p0, p1 = m.p[:, v[0]], m.p[:, v[1]]
+    flip = (p1[0] - p0[0]) * (cen[1] - p0[1]) - (p1[1] - p0[1]) * (cen[0] - p0[0]) < 0
+    v = np.where(flip, v[::-1], v)
     if order == 2:
         mid = basis.facet_dofs[0, bf]
         ed = np.stack([v[0], mid, v[1]], axis=1)

@@ -125,3 +125,10 @@ def test_input_validation(kw, msg):
     args.update(kw)
     with pytest.raises(ValueError, match=msg):
         inflate(**args)
+
+
+def test_mixed_kappa_error_scales_as_one_over_kappa():
+    """No locking over kappa/C = 1e3..1e4: the compressibility error falls 10x per decade of kappa."""
+    errs = [abs(inflate(inner_radius=50e-6, outer_radius=75e-6, C=200.0, alpha=0.2, pressures=[500.0],
+                        mesh="coarse", kappa=k).inner_stretch[-1] / la_exact(500.0) - 1) for k in (2e5, 2e6)]
+    assert 8 < errs[0] / errs[1] < 12

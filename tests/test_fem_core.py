@@ -136,3 +136,27 @@ def test_newton_quadratic_convergence_and_clear_error():
     bad = lambda x: (np.array([x[0] - 1.0]), sp.csr_matrix([[1.0]]))  # noqa: E731
     with pytest.raises(NewtonError, match="line search"):
         newton(bad, np.array([0.0]), admissible=lambda x: "J <= 0" if x[0] > 0.001 else None)
+
+
+def test_ball_under_outer_follower_pressure_compresses_uniformly():
+    """Solid ball, pressure p on its surface: sigma = -p I, q = -p, J = 1 - p/kappa, u = (J^(1/3) - 1) X."""
+    m = ball_section(500e-6, 3, 2, grading=2.0, pole_grading=2.0)
+    a = Assembler(m)
+    mat = Material(1.0, 0.2, 10.0)
+    fixed = np.concatenate([2 * m.nodes["axis"], 2 * m.nodes["symmetry"] + 1])
+    free = np.setdiff1d(np.arange(a.ndof), fixed)
+    p = 1.0
+
+    def fun(x):
+        ri, Ki = a.internal(x, mat)
+        fp, Kp = a.follower_pressure(x, p, m.edges["outer"])
+        return ri - fp, (Ki - Kp).tocsr()
+
+    res = newton(fun, np.zeros(a.ndof), free=free, rtol=1e-12, xtol=1e-12)
+    lam = (1 - p / mat.kappa) ** (1 / 3)
+    u = res.x[: a.n_u].reshape(-1, 2)
+    assert np.abs(u - (lam - 1) * m.X.T).max() < 1e-10
+    _, _, _, q = a.stress(res.x, mat)
+    assert np.abs(q + p).max() < 1e-9
+    assert abs(a.volume(res.x) / a.volume() - lam**3) < 1e-10
+
