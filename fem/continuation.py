@@ -28,7 +28,12 @@ __all__ = ["LimitPointError", "load_control", "arc_length"]
 
 
 class LimitPointError(NewtonError):
-    """Load control cannot pass a maximum of the load (limit point): use method='arclength'."""
+    """Load control cannot pass a maximum of the load (limit point): use method='arclength'.
+
+    ``load`` is the load that failed, ``last_converged`` the last converged load (both scaled by ``scale``).
+    """
+
+    last_converged: float = float("nan")
 
 
 def load_control(solve: Callable, loads: Sequence[float], x0: np.ndarray, *, lam0: float = 0.0,
@@ -58,12 +63,14 @@ def load_control(solve: Callable, loads: Sequence[float], x0: np.ndarray, *, lam
                         dm = monitor(x_c) - monitor(x_old)
                         s = (lam_c - lam_old) / dm if dm != 0 else np.inf
                     if s is not None and slope0 is not None and s < 0.02 * slope0:
-                        raise LimitPointError(
+                        lpe = LimitPointError(
                             f"load control reached a limit point: no equilibrium just above "
                             f"{lam_c * scale:.6g}{unit}, the curve is flat there", load=lam_t * scale,
                             residuals=err.residuals,
                             hint=f"the last converged load {lam_c * scale:.6g}{unit} is (close to) the maximum; "
-                                 "use method='arclength' to pass it") from None
+                                 "use method='arclength' to pass it")
+                        lpe.last_converged = lam_c * scale
+                        raise lpe from None
                     raise NewtonError(f"load step failed after {max_cuts} cuts", load=lam_t * scale,
                                       residuals=err.residuals, hint=err.hint) from None
                 dlam *= 0.5

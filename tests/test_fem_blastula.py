@@ -66,7 +66,7 @@ def test_neo_hookean_limit_point_load_control_and_arclength():
     pmax, lam_max = -lim.fun, lim.x
     with pytest.raises(LimitPointError) as ei:
         inflate(inner_radius=A, outer_radius=B, C=C, alpha=1e-5, pressures=np.linspace(0, 250, 6), mesh="coarse")
-    last = ei.value.load
+    last = ei.value.last_converged
     assert 0.97 * pmax < last < 1.01 * pmax
     assert "arclength" in str(ei.value)
     r = inflate(inner_radius=A, outer_radius=B, C=C, alpha=1e-5, pressures=[20.0], mesh="coarse",

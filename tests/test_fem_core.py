@@ -160,3 +160,27 @@ def test_ball_under_outer_follower_pressure_compresses_uniformly():
     assert np.abs(q + p).max() < 1e-9
     assert abs(a.volume(res.x) / a.volume() - lam**3) < 1e-10
 
+
+
+def test_arc_length_passes_a_limit_point_and_load_control_stops_there():
+    """lam(x) = x exp(-x) has a maximum 1/e at x = 1: Riks passes it, load control reports it."""
+    from fem.continuation import LimitPointError, arc_length, load_control
+
+    def fun(x, lam):
+        return (np.array([x[0] * np.exp(-x[0]) - lam]), sp.csr_matrix([[(1 - x[0]) * np.exp(-x[0])]]),
+                np.array([-1.0]))
+
+    path = arc_length(fun, np.array([0.0]), 0.0, 0.05, stop=lambda x, lam: x[0] >= 2.0, rtol=1e-12)
+    xs = np.array([p[1][0] for p in path])
+    lams = np.array([p[0] for p in path])
+    assert np.allclose(lams, xs * np.exp(-xs), atol=1e-12)  # every point is an equilibrium
+    assert xs[-1] >= 2.0 and lams[-1] < lams.max()  # on the falling branch
+    assert abs(lams.max() - np.exp(-1)) < 2e-3
+
+    def solve(lam, guess):
+        return newton(lambda x: fun(x, lam)[:2], guess, rtol=1e-12, xtol=1e-12, load=lam,
+                      admissible=lambda x: "past the maximum" if x[0] > 1.5 else None)
+
+    with pytest.raises(LimitPointError) as ei:
+        load_control(solve, np.linspace(0.05, 0.5, 10), np.array([0.0]), monitor=lambda x: x[0])
+    assert np.exp(-1) - 0.05 < ei.value.last_converged <= np.exp(-1) < ei.value.load

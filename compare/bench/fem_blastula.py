@@ -85,7 +85,7 @@ def seed_sets() -> None:
         try:
             r = inflate(inner_radius=A, outer_radius=B, C=C, alpha=alpha, pressures=np.linspace(50, 1000, 20))
         except LimitPointError as e:
-            note = f"limit point: load control stopped at {e.load:.4g} Pa"
+            note = f"limit point: load control stopped at {e.last_converged:.4g} Pa"
             r = inflate(inner_radius=A, outer_radius=B, C=C, alpha=alpha, pressures=None,
                         method="arclength", max_inner_stretch=3.0)
             note += "; arc-length from 0 to inner stretch 3 (err* = pressure error on the traced curve)"
