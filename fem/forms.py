@@ -165,7 +165,7 @@ class Assembler:
 
     # ---- boundary curves --------------------------------------------------------------
     def _edge(self, edges: np.ndarray, nq: int = 4):
-        key = (edges.ctypes.data, edges.shape, nq)
+        key = (edges.tobytes(), edges.shape, nq)
         if key not in self._edge_cache:
             xi, wq = np.polynomial.legendre.leggauss(nq)
             Nl, dNl = line_shape(edges.shape[1], xi)
