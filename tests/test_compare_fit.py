@@ -1,0 +1,169 @@
+"""compare.fit: recovery of known parameters from synthetic records, intervals, identifiability.
+
+The model here is a small JAX fake of the lumped generalized-Maxwell law (same signature as
+reduced.spheroid.nominal_stress) with a Fung-stiffened equilibrium
+F_eq = C a0^2 (32/3) x^1.5 exp(4 alpha x), x = delta/(2 a0), A_mid = pi a0^2 (1 + x), so that
+alpha matters and the C-alpha trade-off at one level can be checked against two levels.
+The ramp is integrated by the exact-for-linear-S recursion on 400 substeps; during the hold
+q decays exactly as exp(-(t - t_r)/tau).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import reduced  # noqa: F401
+import jax.numpy as jnp
+
+from compare import fit
+
+A0 = 500e-6
+TR = 0.2
+
+
+def fake_nominal_stress(t, *, radius, C, alpha, branches, displacement, ramp_time, equilibrium="fake"):
+    t = jnp.asarray(t, dtype=jnp.float64)
+    x_end = displacement / (2 * radius)
+
+    def feq(x):
+        return C * radius**2 * (32.0 / 3.0) * x**1.5 * jnp.exp(4.0 * alpha * x)
+
+    n = 400
+    s = jnp.linspace(0.0, 1.0, n + 1)
+    f = feq(x_end * s)
+    dt = ramp_time / n
+    xt = jnp.clip(t / ramp_time, 0.0, 1.0)
+    force = feq(x_end * xt)
+    for beta, tau in branches:
+        h = dt / tau
+        a = jnp.exp(-h)
+        g = beta * (-jnp.expm1(-h)) / h
+        # q_{k+1} = a q_k + g (f_{k+1} - f_k): closed sum over the ramp nodes
+        df = jnp.diff(f)
+        k = jnp.arange(1, n + 1)
+        qn = jnp.cumsum(df * a ** (-k)) * a**k
+        qn = jnp.concatenate([jnp.zeros(1), qn]) * g
+        q_ramp = jnp.interp(t, s * ramp_time, qn)
+        q_hold = qn[-1] * jnp.exp(-(jnp.maximum(t, ramp_time) - ramp_time) / tau)
+        force = force + jnp.where(t <= ramp_time, q_ramp, q_hold)
+    return force / (jnp.pi * radius**2 * (1.0 + x_end * xt))
+
+
+TRUE = dict(C=150.0, alpha=0.2, beta=0.4, tau=200.0)
+TIMES = np.concatenate([np.linspace(0, TR, 21), np.geomspace(0.3, 1500, 120)])
+
+
+def synthetic(displacements, noise=0.0, seed=0, params=TRUE, times=TIMES):
+    """Synthetic records (reduced fake model, known params, Gaussian noise of `noise` Pa)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for d in displacements:
+        y = np.asarray(fake_nominal_stress(times, radius=A0, C=params["C"], alpha=params["alpha"],
+                                           branches=[(params["beta"], params["tau"])], displacement=d,
+                                           ramp_time=TR))
+        out.append((times, y + noise * rng.standard_normal(y.shape), d))
+    return out
+
+
+def _fit(records, **kw):
+    return fit.relaxation(records, radius=A0, ramp_time=TR, model=fake_nominal_stress, **kw)
+
+
+def test_fake_model_limits():
+    # elastic limit (beta = 0): stress is F_eq/A_mid at every time; Maxwell peak = (1 + beta) at the end of a fast ramp
+    y0 = fake_nominal_stress(TIMES, radius=A0, C=100.0, alpha=0.0, branches=[(0.0, 10.0)],
+                             displacement=50e-6, ramp_time=TR)
+    x = 0.05
+    assert np.allclose(y0[-1], 100.0 * (32 / 3) * x**1.5 / (np.pi * (1 + x)), rtol=1e-12)
+    y1 = fake_nominal_stress(np.array([TR]), radius=A0, C=100.0, alpha=0.0, branches=[(0.5, 1e9)],
+                             displacement=50e-6, ramp_time=TR)
+    assert np.allclose(y1[0], 1.5 * y0[-1], rtol=1e-6)
+
+
+def test_exact_data_recovered_two_levels():
+    res = _fit(synthetic([50e-6, 200e-6]), initial=dict(C=80.0, alpha=0.05, beta=1.0, tau=50.0))
+    assert res.success
+    for k, v in TRUE.items():
+        assert res.params[k] == pytest.approx(v, rel=1e-6), k
+    assert res.residual < 1e-8
+
+
+def test_noisy_two_levels_within_intervals_and_identified():
+    res = _fit(synthetic([50e-6, 200e-6], noise=0.05, seed=1))
+    for k, v in TRUE.items():
+        lo, hi = res.intervals[k]
+        assert lo < v < hi, (k, lo, v, hi)
+        assert hi / lo < 2.0  # all four identified: intervals finite and tight
+    assert res.identifiability.poorly == ()
+    assert "all parameters are identified" in res.report
+    # residual ~ the noise level
+    assert 0.03 < res.residual < 0.07
+
+
+HOLD_ONLY = np.concatenate([[0.0, TR], np.geomspace(0.3, 1500, 120)])  # ramp not resolved
+
+
+def test_one_level_cannot_separate_C_and_alpha():
+    res = _fit(synthetic([50e-6], noise=0.05, seed=2, times=HOLD_ONLY))
+    ident = res.identifiability
+    assert 0 in ident.poorly  # weakest direction poorly determined
+    assert ident.mixes("C", "alpha")
+    assert abs(ident.correlation()[0, 1]) > 0.9
+    v = ident.eigenvectors[:, 0]
+    assert abs(v[0]) > 0.01 and abs(v[1]) > 0.5  # the weak direction: mostly alpha, with a C part
+    assert ident.eigenvalues[0] < 1e-3 * ident.eigenvalues[1]
+    assert "C and alpha trade off" in res.report
+    # the fitted curve still matches: beta and tau well determined
+    assert res.intervals["tau"][1] / res.intervals["tau"][0] < 1.5
+
+
+def test_one_level_with_resolved_ramp_is_informative():
+    """With a dense ramp record the weakest eigenvalue grows compared with sparse ramp sampling."""
+    sparse = HOLD_ONLY
+    dense = np.concatenate([np.linspace(0, TR, 201), np.geomspace(0.3, 1500, 120)])
+    r1 = _fit(synthetic([200e-6], noise=0.05, seed=3, times=sparse), initial=TRUE)
+    r2 = _fit(synthetic([200e-6], noise=0.05, seed=3, times=dense), initial=TRUE)
+    assert r2.identifiability.eigenvalues[0] > r1.identifiability.eigenvalues[0]
+
+
+def test_two_branches_names_and_fit():
+    p = dict(C=150.0, alpha=0.2)
+    times = TIMES
+    ys = []
+    for d in (50e-6, 200e-6):
+        y = np.asarray(fake_nominal_stress(times, radius=A0, C=150.0, alpha=0.2,
+                                           branches=[(0.3, 5.0), (0.5, 300.0)], displacement=d, ramp_time=TR))
+        ys.append((times, y, d))
+    res = _fit(ys, n_branches=2, initial=dict(C=120, alpha=0.1, beta_1=0.2, beta_2=0.2, tau_1=2.0, tau_2=100.0))
+    assert res.names == ("C", "alpha", "beta_1", "beta_2", "tau_1", "tau_2")
+    assert res.params["tau_1"] == pytest.approx(5.0, rel=1e-5)
+    assert res.params["beta_2"] == pytest.approx(0.5, rel=1e-5)
+    assert res.params["C"] == pytest.approx(p["C"], rel=1e-5)
+
+
+def test_read_csv(tmp_path):
+    t, y, d = synthetic([50e-6])[0]
+    f = tmp_path / "r.csv"
+    np.savetxt(f, np.c_[t, y], delimiter=",", header="time_s,stress_Pa", comments="")
+    rec = fit.read_csv(str(f), displacement=d)
+    assert np.allclose(rec.time, t) and np.allclose(rec.nominal_stress, y) and rec.displacement == d
+    g = tmp_path / "n.csv"
+    np.savetxt(g, np.c_[t, y], delimiter=",")
+    assert np.allclose(fit.read_csv(str(g), displacement=d).nominal_stress, y)
+    rec2 = fit.read_csv(str(f), displacement=d, time_column="time_s", stress_column="stress_Pa")
+    assert np.allclose(rec2.time, t)
+
+
+def test_validation_messages():
+    t, y, d = synthetic([50e-6])[0]
+    with pytest.raises(ValueError, match="displacement"):
+        _fit([(t, y, -1e-6)])
+    with pytest.raises(ValueError, match="same length"):
+        _fit([(t, y[:-1], d)])
+    with pytest.raises(ValueError, match="radius"):
+        fit.relaxation([(t, y, d)], radius=0.0, ramp_time=TR, model=fake_nominal_stress)
+    with pytest.raises(ValueError, match="negative"):
+        _fit([(t - 1.0, y, d)])
+    with pytest.raises(ValueError, match="at least 1"):
+        fit.parameter_names(0)
