@@ -1,0 +1,356 @@
+"""Parameter scans on the reduced models, with optional FE spot-checks, as tidy pandas tables.
+
+Every parameter of a scan is given as
+* a number: held fixed;
+* a pair ``(lo, hi)``: a range, sampled by the design;
+* a list/array of values (grid design only): used as given.
+
+Designs (``design=``): ``"grid"`` (``n`` values per ranged parameter, full factorial), ``"random"``
+(``n`` uniform points) and ``"lhs"`` (``n`` points of a Latin hypercube, ``scipy.stats.qmc``).
+Parameters named in ``log`` are sampled uniformly in their logarithm.
+
+The reduced model is evaluated in ``jax.vmap``-ed, jit-compiled batches of ``batch_size`` points.
+The returned DataFrame has one row per point and units in the column names (``C [Pa]``,
+``sigma_peak [Pa]``, ``inner_stretch [-]``...). With ``fe_checks=k`` the FE model is run (through
+``compare.batch``) at ``k`` of the points, chosen spread over the design; its outputs are added as
+``fe_...`` columns and ``deviation [-]`` (the largest relative difference between the reduced and
+FE outputs at that point; NaN where no FE run was made), so each scan says how far it can be trusted.
+"""
+
+from __future__ import annotations
+
+import itertools
+from typing import Any, Callable, Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+
+import reduced  # noqa: F401  (float64)
+import jax
+import jax.numpy as jnp
+
+from reduced.material import validate_material, validate_nonnegative, validate_positive, validate_radii
+
+__all__ = ["design", "spheroid", "blastula", "spread_indices"]
+
+UNITS = {
+    "radius": "m", "C": "Pa", "alpha": "-", "beta": "-", "tau": "s", "displacement": "m",
+    "ramp_time": "s", "inner_radius": "m", "outer_radius": "m", "pressure": "Pa",
+    "sigma_peak": "Pa", "sigma_end": "Pa", "relaxed_fraction": "-", "t_half": "s",
+    "inner_stretch": "-", "outer_stretch": "-", "p_limit": "Pa", "bursts": "-",
+    "fe_sigma_peak": "Pa", "fe_sigma_end": "Pa", "fe_inner_stretch": "-", "deviation": "-",
+}
+
+
+def _col(name: str) -> str:
+    return f"{name} [{UNITS[name]}]"
+
+
+def _is_range(v: Any) -> bool:
+    return isinstance(v, tuple) and len(v) == 2
+
+
+def design(params: Mapping[str, Any], *, n: int, method: str = "lhs", seed: int = 0,
+           log: Sequence[str] = ()) -> pd.DataFrame:
+    """Points of a design as a DataFrame (plain parameter names, SI values).
+
+    params  name -> number (fixed), (lo, hi) (range) or list of values (grid only).
+    n       grid: values per ranged parameter; random/lhs: number of points.
+    method  "grid", "random" or "lhs"; ``log`` names the parameters sampled in log scale.
+    """
+    if n < 1:
+        raise ValueError(f"n (the number of points) must be at least 1; got {n}")
+    names = list(params)
+    ranged = [k for k in names if _is_range(params[k])]
+    for k in ranged:
+        lo, hi = params[k]
+        if not (np.isfinite(lo) and np.isfinite(hi)) or lo > hi:
+            raise ValueError(f"range of {k} must be (low, high) with low <= high; got {params[k]}")
+        if k in log and lo <= 0:
+            raise ValueError(f"{k} is sampled in log scale, so its range must be positive; got {params[k]}")
+
+    def scale(k, u):
+        lo, hi = params[k]
+        if k in log:
+            return np.exp(np.log(lo) + u * (np.log(hi) - np.log(lo)))
+        return lo + u * (hi - lo)
+
+    if method == "grid":
+        axes = []
+        for k in names:
+            v = params[k]
+            if _is_range(v):
+                axes.append(scale(k, np.linspace(0.0, 1.0, n)) if n > 1 else np.array([scale(k, 0.5)]))
+            else:
+                axes.append(np.atleast_1d(np.asarray(v, dtype=float)))
+        rows = np.array(list(itertools.product(*axes)), dtype=float).reshape(-1, len(names))
+        return pd.DataFrame(rows, columns=names)
+    if method not in ("random", "lhs"):
+        raise ValueError(f'method must be "grid", "random" or "lhs"; got {method!r}')
+    for k in names:
+        if not _is_range(params[k]) and np.ndim(params[k]) > 0:
+            raise ValueError(f"{k}: lists of values need design='grid'; give a (low, high) range instead")
+    if method == "random":
+        u = np.random.default_rng(seed).random((n, len(ranged)))
+    else:
+        from scipy.stats import qmc
+
+        u = qmc.LatinHypercube(d=max(len(ranged), 1), seed=seed).random(n)[:, : len(ranged)]
+    cols = {}
+    for k in names:
+        cols[k] = scale(k, u[:, ranged.index(k)]) if k in ranged else np.full(n, float(params[k]))
+    return pd.DataFrame(cols)
+
+
+def spread_indices(points: pd.DataFrame, k: int, seed: int = 0) -> np.ndarray:
+    """``k`` row indices spread over the design (greedy max-min distance in the unit-scaled box)."""
+    k = min(int(k), len(points))
+    if k <= 0:
+        return np.zeros(0, dtype=int)
+    x = points.to_numpy(dtype=float)
+    span = x.max(axis=0) - x.min(axis=0)
+    x = (x - x.min(axis=0)) / np.where(span > 0, span, 1.0)
+    rng = np.random.default_rng(seed)
+    cand = rng.choice(len(x), size=min(len(x), 2000), replace=False)
+    chosen = [int(cand[np.argmin(np.abs(x[cand] - 0.5).sum(axis=1))])]  # start near the centre
+    d = np.linalg.norm(x[cand] - x[chosen[0]], axis=1)
+    for _ in range(k - 1):
+        j = int(cand[np.argmax(d)])
+        chosen.append(j)
+        d = np.minimum(d, np.linalg.norm(x[cand] - x[j], axis=1))
+    return np.array(chosen)
+
+
+def _batched(fn: Callable, arrays: dict[str, np.ndarray], batch_size: int) -> dict[str, np.ndarray]:
+    """Apply a jitted, vmapped fn(**arrays) chunk by chunk (last chunk padded with the first row)."""
+    n = len(next(iter(arrays.values())))
+    outs: dict[str, list] = {}
+    for s in range(0, n, batch_size):
+        chunk = {k: v[s:s + batch_size] for k, v in arrays.items()}
+        m = len(next(iter(chunk.values())))
+        if m < batch_size and n > batch_size:  # keep one compiled shape
+            chunk = {k: np.concatenate([v, np.repeat(v[:1], batch_size - m)]) for k, v in chunk.items()}
+        res = fn(**{k: jnp.asarray(v) for k, v in chunk.items()})
+        for k, v in res.items():
+            outs.setdefault(k, []).append(np.asarray(v)[:m])
+    return {k: np.concatenate(v) for k, v in outs.items()}
+
+
+# ---------------------------------------------------------------------------------------------
+# Spheroid compression-relaxation
+# ---------------------------------------------------------------------------------------------
+
+SPHEROID_PARAMS = ("radius", "C", "alpha", "beta", "tau", "displacement", "ramp_time")
+
+
+def default_times(ramp_time: float, end_time: float, n: int = 200) -> np.ndarray:
+    """Output times in s: 20 intervals through the ramp, the rest log-spaced through the hold."""
+    ramp = np.linspace(0.0, ramp_time, 21)
+    hold = np.geomspace(ramp_time, end_time, n - 20)[1:]
+    return np.concatenate([ramp, hold])
+
+
+def _summaries(t, s):
+    """sigma_peak, sigma_end, relaxed fraction and half-relaxation time of curves s (..., T)."""
+    peak = jnp.max(s, axis=-1)
+    ipk = jnp.argmax(s, axis=-1)
+    end = s[..., -1]
+    half = 0.5 * (peak + end)
+    after = (jnp.arange(s.shape[-1]) > ipk[..., None]) & (s <= half[..., None])
+    j = jnp.argmax(after, axis=-1)
+    jm = jnp.maximum(j - 1, 0)
+    s0 = jnp.take_along_axis(s, jm[..., None], -1)[..., 0]
+    s1 = jnp.take_along_axis(s, j[..., None], -1)[..., 0]
+    w = jnp.where(s0 != s1, (s0 - half) / (s0 - s1), 0.0)
+    th = t[jm] + w * (t[j] - t[jm])
+    th = jnp.where(jnp.any(after, axis=-1), th, jnp.nan)
+    return dict(sigma_peak=peak, sigma_end=end, relaxed_fraction=1.0 - end / peak, t_half=th)
+
+
+def _fe_spheroid(*, radius, C, alpha, beta, tau, displacement, ramp_time, end_time):
+    """One FE spheroid run (module level, so process pools can pickle it): time and nominal stress."""
+    from fem import spheroid as fem_spheroid
+
+    r = fem_spheroid.compress(radius=radius, C=C, alpha=alpha, branches=[(beta, tau)],
+                              displacement=displacement, ramp_time=ramp_time, end_time=end_time)
+    return {"time": np.asarray(r.time), "nominal_stress": np.asarray(r.nominal_stress)}
+
+
+def spheroid(
+    *,
+    radius: Any = 500e-6,
+    C: Any = 200.0,
+    alpha: Any = 0.2,
+    beta: Any = 1.2,
+    tau: Any = 200.0,
+    displacement: Any = 200e-6,
+    ramp_time: Any = 0.2,
+    end_time: float = 1500.0,
+    times: np.ndarray | None = None,
+    n: int = 10,
+    design_method: str = "grid",
+    log: Sequence[str] = ("tau",),
+    seed: int = 0,
+    equilibrium: Any = "hertz",
+    batch_size: int = 8192,
+    curves: bool = False,
+    fe_checks: int = 0,
+    fe_executor: Any = None,
+    fe_store: str | None = None,
+    model: Callable | None = None,
+    fe_function: Callable | None = None,
+) -> pd.DataFrame:
+    """Scan the reduced spheroid compression-relaxation over parameters (one Maxwell branch).
+
+    Parameters radius (m), C (Pa), alpha (-), beta (-), tau (s), displacement (total approach, m),
+    ramp_time (s): each a number, a (lo, hi) range or (grid) a list. ``times`` (s) default: 200
+    times to ``end_time`` (20 in the ramp, log-spaced hold). Returns a DataFrame with the
+    parameters and ``sigma_peak [Pa]``, ``sigma_end [Pa]``, ``relaxed_fraction [-]``
+    (1 - end/peak), ``t_half [s]`` (time at which the stress has fallen half-way from peak to
+    end); with ``curves=True`` also a column ``sigma [Pa]`` holding each curve (and
+    ``df.attrs["time [s]"]``). ``fe_checks=k``: FE runs (``fem.spheroid.compress``) at k spread
+    points, adding ``fe_sigma_peak [Pa]``, ``fe_sigma_end [Pa]`` and ``deviation [-]``.
+    ``model``: the reduced nominal-stress function (default ``reduced.spheroid.nominal_stress``).
+    """
+    params = dict(radius=radius, C=C, alpha=alpha, beta=beta, tau=tau, displacement=displacement,
+                  ramp_time=ramp_time)
+    pts = design(params, n=n, method=design_method, seed=seed, log=log)
+    validate_positive("radius", pts["radius"].to_numpy(), "m")
+    validate_material(pts["C"].to_numpy(), pts["alpha"].to_numpy())
+    validate_nonnegative("beta (the energy factor of the Maxwell branch)", pts["beta"].to_numpy())
+    validate_positive("tau (the relaxation time)", pts["tau"].to_numpy(), "s")
+    validate_positive("displacement (total approach)", pts["displacement"].to_numpy(), "m")
+    validate_positive("ramp_time", pts["ramp_time"].to_numpy(), "s")
+    if times is None:
+        if pts["ramp_time"].nunique() != 1:
+            raise ValueError("with a range of ramp_time, give the output times explicitly (times=...)")
+        times = default_times(float(pts["ramp_time"].iloc[0]), end_time)
+    t = jnp.asarray(np.asarray(times, dtype=float))
+    if model is None:
+        from reduced import spheroid as red
+
+        model = red.nominal_stress
+
+    def one(radius, C, alpha, beta, tau, displacement, ramp_time):
+        return model(t, radius=radius, C=C, alpha=alpha, branches=[(beta, tau)],
+                     displacement=displacement, ramp_time=ramp_time, equilibrium=equilibrium)
+
+    vm = jax.vmap(one)
+
+    @jax.jit
+    def evaluate(**kw):
+        s = vm(**kw)
+        out = _summaries(t, s)
+        if curves:
+            out["sigma"] = s
+        return out
+
+    res = _batched(evaluate, {k: pts[k].to_numpy() for k in SPHEROID_PARAMS}, batch_size)
+    df = pts.rename(columns={k: _col(k) for k in pts.columns})
+    for k in ("sigma_peak", "sigma_end", "relaxed_fraction", "t_half"):
+        df[_col(k)] = res[k]
+    if curves:
+        df["sigma [Pa]"] = list(res["sigma"])
+        df.attrs["time [s]"] = np.asarray(t)
+    if fe_checks:
+        idx = spread_indices(pts, fe_checks, seed)
+        fe_pts = [dict(pts.iloc[i].to_dict(), end_time=float(np.max(times))) for i in idx]
+        fe = _run_fe(fe_function or _fe_spheroid, fe_pts, fe_executor, fe_store)
+        for name in ("fe_sigma_peak", "fe_sigma_end", "deviation"):
+            df[_col(name)] = np.nan
+        for i, r in zip(idx, fe):
+            if r is None:
+                continue
+            s_fe = np.interp(np.asarray(t), r["time"], r["nominal_stress"])
+            peak, end = float(np.max(s_fe)), float(s_fe[-1])
+            df.loc[i, _col("fe_sigma_peak")] = peak
+            df.loc[i, _col("fe_sigma_end")] = end
+            df.loc[i, _col("deviation")] = max(abs(res["sigma_peak"][i] / peak - 1.0),
+                                               abs(res["sigma_end"][i] / end - 1.0))
+    return df
+
+
+def _run_fe(function, points, executor, store):
+    from compare import batch
+
+    return batch.run(function, points, executor=executor, store=store, raise_on_error=False)
+
+
+# ---------------------------------------------------------------------------------------------
+# Blastula inflation
+# ---------------------------------------------------------------------------------------------
+
+BLASTULA_PARAMS = ("inner_radius", "outer_radius", "C", "alpha", "pressure")
+
+
+def _fe_blastula(*, inner_radius, outer_radius, C, alpha, pressure):
+    """One FE blastula run to ``pressure`` (module level for process pools): final inner stretch."""
+    from fem import blastula as fem_blastula
+
+    ps = np.linspace(0.0, pressure, 11)[1:]
+    r = fem_blastula.inflate(inner_radius=inner_radius, outer_radius=outer_radius, C=C, alpha=alpha,
+                             pressures=ps)
+    return {"inner_stretch": float(np.asarray(r.inner_stretch)[-1])}
+
+
+def blastula(
+    *,
+    inner_radius: Any = 50e-6,
+    outer_radius: Any = 75e-6,
+    C: Any = 200.0,
+    alpha: Any = 0.2,
+    pressure: Any = (0.0, 100.0),
+    n: int = 10,
+    design_method: str = "grid",
+    log: Sequence[str] = (),
+    seed: int = 0,
+    batch_size: int = 8192,
+    fe_checks: int = 0,
+    fe_executor: Any = None,
+    fe_store: str | None = None,
+    fe_function: Callable | None = None,
+) -> pd.DataFrame:
+    """Scan the exact thick-shell blastula (``reduced.blastula``) over parameters.
+
+    Parameters inner_radius, outer_radius (m), C (Pa), alpha (-), pressure (Pa): each a number,
+    a (lo, hi) range or (grid) a list. Returns a DataFrame with the parameters and
+    ``inner_stretch [-]``, ``outer_stretch [-]`` (NaN where the shell bursts), ``p_limit [Pa]``
+    (limit pressure, NaN if none up to stretch 10) and ``bursts [-]`` (True where the pressure
+    exceeds the limit). ``fe_checks=k`` adds ``fe_inner_stretch [-]`` and ``deviation [-]``
+    (relative difference of the inner stretch) from ``fem.blastula.inflate`` at k spread points.
+    """
+    from reduced import blastula as red
+
+    params = dict(inner_radius=inner_radius, outer_radius=outer_radius, C=C, alpha=alpha, pressure=pressure)
+    pts = design(params, n=n, method=design_method, seed=seed, log=log)
+    validate_radii(pts["inner_radius"].to_numpy(), pts["outer_radius"].to_numpy())
+    validate_material(pts["C"].to_numpy(), pts["alpha"].to_numpy())
+
+    def one(inner_radius, outer_radius, C, alpha, pressure):
+        geo = dict(inner_radius=inner_radius, outer_radius=outer_radius)
+        la, _ = red.inner_stretch_solve(pressure, **geo, C=C, alpha=alpha)
+        lb = red.outer_stretch(jnp.where(jnp.isnan(la), 1.0, la), **geo)
+        lim = red.limit_point(**geo, C=C, alpha=alpha)
+        return dict(inner_stretch=la, outer_stretch=jnp.where(jnp.isnan(la), jnp.nan, lb),
+                    p_limit=lim.pressure)
+
+    evaluate = jax.jit(jax.vmap(one))
+    res = _batched(lambda **kw: evaluate(**kw), {k: pts[k].to_numpy() for k in BLASTULA_PARAMS}, batch_size)
+    df = pts.rename(columns={k: _col(k) for k in pts.columns})
+    for k in ("inner_stretch", "outer_stretch", "p_limit"):
+        df[_col(k)] = res[k]
+    df[_col("bursts")] = np.isnan(res["inner_stretch"]) & (pts["pressure"].to_numpy() > 0)
+    if fe_checks:
+        ok = np.nonzero(~np.isnan(res["inner_stretch"]) & (pts["pressure"].to_numpy() > 0))[0]
+        sub = spread_indices(pts.iloc[ok].reset_index(drop=True), fe_checks, seed)
+        idx = ok[sub]
+        fe = _run_fe(fe_function or _fe_blastula, [pts.iloc[i].to_dict() for i in idx], fe_executor, fe_store)
+        df[_col("fe_inner_stretch")] = np.nan
+        df[_col("deviation")] = np.nan
+        for i, r in zip(idx, fe):
+            if r is None:
+                continue
+            la_fe = float(r["inner_stretch"])
+            df.loc[i, _col("fe_inner_stretch")] = la_fe
+            df.loc[i, _col("deviation")] = abs(res["inner_stretch"][i] / la_fe - 1.0)
+    return df

@@ -1,0 +1,100 @@
+"""compare.scan: designs, vmapped reduced evaluation against direct calls, FE spot-check columns."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from compare import scan
+from test_compare_fit import fake_nominal_stress
+
+
+def test_design_grid_random_lhs():
+    g = scan.design({"C": (100.0, 300.0), "alpha": [0.0, 0.2], "tau": 5.0}, n=3, method="grid")
+    assert len(g) == 6 and set(g["C"]) == {100.0, 200.0, 300.0} and set(g["tau"]) == {5.0}
+    lh = scan.design({"C": (100.0, 300.0), "tau": (1.0, 1000.0)}, n=50, method="lhs", log=("tau",))
+    # Latin hypercube: exactly one point per stratum in each coordinate
+    assert sorted(np.floor((lh["C"] - 100) / 200 * 50).astype(int)) == list(range(50))
+    assert sorted(np.floor(np.log10(lh["tau"]) / 3 * 50).astype(int)) == list(range(50))
+    r = scan.design({"C": (100.0, 300.0)}, n=100, method="random", seed=1)
+    assert r["C"].between(100, 300).all() and r["C"].std() > 30
+    with pytest.raises(ValueError, match="low <= high"):
+        scan.design({"C": (3.0, 1.0)}, n=2)
+    with pytest.raises(ValueError, match="grid"):
+        scan.design({"C": [1.0, 2.0]}, n=2, method="lhs")
+    with pytest.raises(ValueError, match="log scale"):
+        scan.design({"tau": (0.0, 1.0)}, n=2, log=("tau",))
+
+
+def test_spheroid_scan_matches_direct_model():
+    df = scan.spheroid(C=(100.0, 300.0), alpha=(0.0, 0.3), beta=(0.1, 1.0), tau=(10.0, 500.0),
+                       n=3, model=fake_nominal_stress, equilibrium="fake", batch_size=16, curves=True)
+    assert len(df) == 81
+    assert {"C [Pa]", "sigma_peak [Pa]", "sigma_end [Pa]", "relaxed_fraction [-]", "t_half [s]"} <= set(df.columns)
+    t = df.attrs["time [s]"]
+    for i in (0, 40, 80):  # last batch is padded: check rows in every batch
+        row = df.iloc[i]
+        s = np.asarray(fake_nominal_stress(t, radius=row["radius [m]"], C=row["C [Pa]"], alpha=row["alpha [-]"],
+                                           branches=[(row["beta [-]"], row["tau [s]"])],
+                                           displacement=row["displacement [m]"], ramp_time=row["ramp_time [s]"]))
+        assert np.allclose(row["sigma [Pa]"], s, rtol=1e-13)
+        assert row["sigma_peak [Pa]"] == pytest.approx(s.max(), rel=1e-13)
+        assert row["sigma_end [Pa]"] == pytest.approx(s[-1], rel=1e-13)
+        # half-relaxation time of a single branch after a fast ramp ~ tau ln 2 (if the hold is long enough)
+        if row["tau [s]"] < 200:
+            assert row["t_half [s]"] - 0.2 == pytest.approx(row["tau [s]"] * np.log(2), rel=0.05)
+    # elastic-limit physics: peak/end = 1 + beta (fast ramp, long hold relative to tau)
+    fast = df[df["tau [s]"] == 10.0]
+    assert np.allclose(fast["sigma_peak [Pa]"] / fast["sigma_end [Pa]"], 1 + fast["beta [-]"], rtol=2e-2)
+
+
+def _fake_fe(*, radius, C, alpha, beta, tau, displacement, ramp_time, end_time):
+    t = scan.default_times(ramp_time, end_time)
+    s = np.asarray(fake_nominal_stress(t, radius=radius, C=C * 1.01, alpha=alpha, branches=[(beta, tau)],
+                                       displacement=displacement, ramp_time=ramp_time))
+    return {"time": t, "nominal_stress": s}
+
+
+def test_spheroid_fe_checks_columns(tmp_path):
+    df = scan.spheroid(C=(100.0, 300.0), alpha=(0.0, 0.3), n=20, design_method="lhs", model=fake_nominal_stress,
+                       fe_checks=3, fe_function=_fake_fe, fe_executor="serial", fe_store=str(tmp_path))
+    checked = df["deviation [-]"].notna()
+    assert checked.sum() == 3
+    # the fake FE is 1 % stiffer: deviation = 1 - 1/1.01 at every checked point
+    assert np.allclose(df.loc[checked, "deviation [-]"], 1 - 1 / 1.01, rtol=1e-9)
+    assert len(list(tmp_path.glob("*.npz"))) == 3
+
+
+def test_spread_indices_distinct_and_spread():
+    pts = scan.design({"x": (0.0, 1.0), "y": (0.0, 1.0)}, n=11, method="grid")
+    idx = scan.spread_indices(pts, 5)
+    assert len(set(idx)) == 5
+    chosen = pts.iloc[idx].to_numpy()
+    d = np.min([np.linalg.norm(a - b) for i, a in enumerate(chosen) for b in chosen[i + 1:]])
+    assert d > 0.4
+
+
+def test_blastula_scan_exact_and_bursts():
+    from reduced import blastula as red
+
+    df = scan.blastula(alpha=[1e-5, 0.2], outer_radius=[60e-6, 75e-6], pressure=(0.0, 150.0), n=16)
+    assert len(df) == 64
+    ok = ~df["bursts [-]"]
+    # round trip: p(lambda_a) reproduces the scanned pressure where the shell holds
+    p = red.pressure(df.loc[ok, "inner_stretch [-]"].to_numpy(), inner_radius=df.loc[ok, "inner_radius [m]"].to_numpy(),
+                     outer_radius=df.loc[ok, "outer_radius [m]"].to_numpy(), C=df.loc[ok, "C [Pa]"].to_numpy(),
+                     alpha=df.loc[ok, "alpha [-]"].to_numpy())
+    assert np.allclose(np.asarray(p), df.loc[ok, "pressure [Pa]"], rtol=1e-9, atol=1e-9)
+    # bursting exactly where the pressure exceeds the limit pressure
+    lim = df["p_limit [Pa]"].to_numpy()
+    assert np.array_equal(df["bursts [-]"].to_numpy(), np.nan_to_num(lim, nan=np.inf) < df["pressure [Pa]"].to_numpy())
+    assert df["bursts [-]"].any() and (~df["bursts [-]"]).any()
+    assert (df.loc[ok, "outer_stretch [-]"] <= df.loc[ok, "inner_stretch [-]"] + 1e-15).all()
+
+
+def test_validation():
+    with pytest.raises(ValueError, match="inner_radius must be smaller"):
+        scan.blastula(inner_radius=80e-6, outer_radius=75e-6, pressure=10.0, n=1)
+    with pytest.raises(ValueError, match="alpha"):
+        scan.spheroid(alpha=(-0.1, 0.2), n=2, model=fake_nominal_stress)
