@@ -196,25 +196,39 @@ def initial_guess(records: Sequence[Record], radius: float, ramp_time: float, n_
     return np.concatenate([[C0, 0.1], betas, taus])
 
 
+def _predict(theta, ts, ds, radius, ramp_time, model, equilibrium, nb):
+    p = jnp.exp(theta)
+    branches = [(p[2 + m], p[2 + nb + m]) for m in range(nb)]
+    return [model(t, radius=radius, C=p[0], alpha=p[1], branches=branches, displacement=d,
+                  ramp_time=ramp_time, equilibrium=equilibrium) for t, d in zip(ts, ds)]
+
+
+def _residual(theta, ts, ys, ds, scale, radius, ramp_time, model, equilibrium, nb):
+    pred = _predict(theta, ts, ds, radius, ramp_time, model, equilibrium, nb)
+    return jnp.concatenate([(m - y) / scale for m, y in zip(pred, ys)])
+
+
+_STATIC = ("model", "equilibrium", "nb")
+_residual_jit = jax.jit(_residual, static_argnames=_STATIC)
+_jacobian_jit = jax.jit(jax.jacfwd(_residual), static_argnames=_STATIC)
+
+
 def _builder(records, radius, ramp_time, n_branches, equilibrium, model):
-    """Jitted residual(theta) and its jacfwd Jacobian; theta = log(params)."""
-    ts = [jnp.asarray(r.time) for r in records]
-    ys = [jnp.asarray(r.nominal_stress) for r in records]
-    ds = [r.displacement for r in records]
+    """residual(theta) and its jacfwd Jacobian (theta = log params), jit-compiled once per model,
+    equilibrium and record shapes (records enter as arguments, so a refit of new data of the same
+    shape does not recompile). Unhashable equilibria (arrays) are closed over instead."""
+    args = (tuple(jnp.asarray(r.time) for r in records), tuple(jnp.asarray(r.nominal_stress) for r in records),
+            tuple(jnp.asarray(r.displacement) for r in records))
     scale = float(max(np.max(np.abs(r.nominal_stress)) for r in records)) or 1.0
-    nb = n_branches
-
-    def predict(theta):
-        p = jnp.exp(theta)
-        C, alpha = p[0], p[1]
-        branches = [(p[2 + m], p[2 + nb + m]) for m in range(nb)]
-        return [model(t, radius=radius, C=C, alpha=alpha, branches=branches, displacement=d,
-                      ramp_time=ramp_time, equilibrium=equilibrium) for t, d in zip(ts, ds)]
-
-    def residual(theta):
-        return jnp.concatenate([(m - y) / scale for m, y in zip(predict(theta), ys)])
-
-    return jax.jit(residual), jax.jit(jax.jacfwd(residual)), scale, jax.jit(predict)
+    rest = (jnp.asarray(scale), jnp.asarray(radius), jnp.asarray(ramp_time))
+    try:
+        hash(equilibrium)
+        kw = dict(model=model, equilibrium=equilibrium, nb=n_branches)
+        return (lambda th: _residual_jit(th, *args, *rest, **kw),
+                lambda th: _jacobian_jit(th, *args, *rest, **kw), scale)
+    except TypeError:
+        f = lambda th: _residual(th, *args, *rest, model, equilibrium, n_branches)  # noqa: E731
+        return jax.jit(f), jax.jit(jax.jacfwd(f)), scale
 
 
 def _inverse_eigenvalues(lam: np.ndarray) -> np.ndarray:
@@ -296,7 +310,7 @@ def relaxation(
     lo[1], hi[1] = np.log(ALPHA_BOUNDS[0]), np.log(ALPHA_BOUNDS[1])
     theta0 = np.clip(np.log(p0), lo + 1e-9, hi - 1e-9)
 
-    res_fn, jac_fn, scale, _ = _builder(recs, float(radius), float(ramp_time), n_branches, equilibrium, model)
+    res_fn, jac_fn, scale = _builder(recs, float(radius), float(ramp_time), n_branches, equilibrium, model)
     from scipy.optimize import least_squares
 
     def fun(th):
