@@ -1,0 +1,145 @@
+r"""Tabulate the spheroid's dimensionless equilibrium master curves from static FE runs.
+
+For an incompressible Fung ball of radius ``a0`` between frictionless plates, dimensional analysis
+gives the equilibrium plate force and equator radius as
+
+    F_eq / (C a0^2) = f(x; alpha),    r_mid / a0 = g(x; alpha),    x = delta / (2 a0),
+
+(``delta`` the total approach, m; ``C`` in Pa). One static FE run per ``alpha``
+(``fem.spheroid.compress(..., static=True)``, the whole curve from 0 to ``delta``) is interpolated
+onto a grid ``x`` in ``[0, x_max]`` (default 0.3). The table is written to
+``reduced/data/spheroid_master.npz`` with arrays ``x`` (n_x,), ``alpha`` (n_a,), ``f`` and ``g``
+(n_a, n_x), ``f_over_hertz`` = f / ((32/3) x^1.5) (smooth, -> 1 as x -> 0; interpolate this, not
+``f``, whose x-derivative is singular at 0), and ``metadata`` (JSON: mesh, command, kappa/C, the
+estimated discretisation error = max relative difference of f between the mesh and a coarser one).
+
+``python -m compare.calibrate [--out PATH] [--store DIR] [--n-x N] [--alphas a,b,..] [--mesh M]
+[--error-mesh M]`` regenerates it through ``compare.batch`` (resumable with ``--store``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any, Callable, NamedTuple, Sequence
+
+import numpy as np
+
+__all__ = ["MasterCurves", "tabulate", "write", "load", "main", "DEFAULT_ALPHAS", "DEFAULT_OUT"]
+
+DEFAULT_ALPHAS = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0)
+DEFAULT_OUT = Path(__file__).resolve().parent.parent / "reduced" / "data" / "spheroid_master.npz"
+RADIUS, C_REF, KAPPA = 500e-6, 200.0, 2.2e9  # the seed's ball; kappa/C = 1.1e7 (nearly incompressible)
+
+
+class MasterCurves(NamedTuple):
+    """x = delta/(2 a0) (n_x,), alpha (n_a,), f = F_eq/(C a0^2) and g = r_mid/a0 (n_a, n_x)."""
+
+    x: np.ndarray
+    alpha: np.ndarray
+    f: np.ndarray
+    g: np.ndarray
+
+
+def hertz_f(x: np.ndarray) -> np.ndarray:
+    """Small-strain Hertz law in master-curve form: F/(C a0^2) = (32/3) x^1.5 (E* = 8 C)."""
+    return (32.0 / 3.0) * np.asarray(x, dtype=float) ** 1.5
+
+
+def static_curve(*, alpha: float, x_max: float, mesh: Any = "default", radius: float = RADIUS,
+                 C: float = C_REF, kappa: float = KAPPA) -> dict:
+    """One static FE run (module level, picklable): approach (m), force (N), midplane radius (m)."""
+    from fem import spheroid as fem_spheroid
+
+    r = fem_spheroid.compress(radius=radius, C=C, alpha=alpha, branches=(), displacement=2 * radius * x_max,
+                              ramp_time=1.0, end_time=1.0, kappa=kappa, mesh=mesh, static=True)
+    return {"approach": np.asarray(r.approach), "force": np.asarray(r.force),
+            "midplane_radius": np.asarray(r.midplane_radius), "radius": radius, "C": C}
+
+
+def _to_master(run: Any, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    a0, C = float(run["radius"]), float(run["C"])
+    xs = np.asarray(run["approach"]) / (2 * a0)
+    order = np.argsort(xs)
+    xs = xs[order]
+    if xs[-1] < x[-1] * (1 - 1e-9):
+        raise RuntimeError(f"the static FE run stopped at x = delta/(2 a0) = {xs[-1]:.4g} before the "
+                           f"table end {x[-1]:.4g}. Hint: reduce x_max or refine the load stepping.")
+    f = np.interp(x, np.r_[0.0, xs], np.r_[0.0, np.asarray(run["force"])[order] / (C * a0**2)])
+    g = np.interp(x, np.r_[0.0, xs], np.r_[1.0, np.asarray(run["midplane_radius"])[order] / a0])
+    return f, g
+
+
+def tabulate(
+    *,
+    alphas: Sequence[float] = DEFAULT_ALPHAS,
+    n_x: int = 31,
+    x_max: float = 0.3,
+    mesh: Any = "default",
+    executor: Any = None,
+    store: str | None = None,
+    curve: Callable[..., Any] = static_curve,
+) -> MasterCurves:
+    """Run one static FE curve per alpha (through ``compare.batch``) and tabulate f, g on x in [0, x_max]."""
+    from compare import batch
+
+    if not 0 < x_max < 0.5:
+        raise ValueError(f"x_max = delta/(2 a0) must be in (0, 0.5); got {x_max}")
+    if any(a < 0 for a in alphas):
+        raise ValueError("alpha must be >= 0 (0 is neo-Hookean)")
+    x = np.linspace(0.0, x_max, n_x)
+    runs = batch.run(curve, [dict(alpha=float(a), x_max=float(x_max), mesh=mesh) for a in alphas],
+                     executor=executor, store=store)
+    fg = [_to_master(r, x) for r in runs]
+    return MasterCurves(x, np.asarray(alphas, dtype=float), np.array([a for a, _ in fg]), np.array([b for _, b in fg]))
+
+
+def write(path: str | Path, curves: MasterCurves, metadata: dict) -> None:
+    """Write the table (and ``f_over_hertz``) with JSON metadata to an npz file."""
+    x = curves.x
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(x > 0, curves.f / hertz_f(x), np.nan)
+    if x[0] == 0 and len(x) > 2:  # x -> 0 limit: extrapolate linearly from the first two positive nodes
+        ratio[:, 0] = 2 * ratio[:, 1] - ratio[:, 2]
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    np.savez(path, x=x, alpha=curves.alpha, f=curves.f, g=curves.g, f_over_hertz=ratio,
+             metadata=np.asarray(json.dumps(metadata)))
+
+
+def load(path: str | Path = DEFAULT_OUT) -> tuple[MasterCurves, dict]:
+    """Read a master-curve table: (MasterCurves, metadata dict)."""
+    with np.load(path, allow_pickle=False) as z:
+        return MasterCurves(z["x"], z["alpha"], z["f"], z["g"]), json.loads(str(z["metadata"]))
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m compare.calibrate", description=__doc__.split("\n")[0])
+    ap.add_argument("--out", default=str(DEFAULT_OUT))
+    ap.add_argument("--store", default=None, help="folder for per-run results (resume)")
+    ap.add_argument("--n-x", type=int, default=31)
+    ap.add_argument("--x-max", type=float, default=0.3)
+    ap.add_argument("--alphas", default=",".join(str(a) for a in DEFAULT_ALPHAS))
+    ap.add_argument("--mesh", default="default")
+    ap.add_argument("--error-mesh", default="coarse", help="coarser mesh for the error estimate ('' to skip)")
+    a = ap.parse_args(list(sys.argv[1:] if argv is None else argv))
+    alphas = [float(v) for v in a.alphas.split(",")]
+    kw = dict(alphas=alphas, n_x=a.n_x, x_max=a.x_max)
+    curves = tabulate(mesh=a.mesh, store=a.store, **kw)
+    err = None
+    if a.error_mesh:
+        coarse = tabulate(mesh=a.error_mesh, store=a.store, **kw)
+        err = float(np.max(np.abs(coarse.f[:, 1:] / curves.f[:, 1:] - 1.0)))
+    meta = dict(mesh=a.mesh, error_mesh=a.error_mesh or None, discretisation_error_f=err,
+                command="python -m compare.calibrate " + " ".join(sys.argv[1:] if argv is None else argv),
+                radius_m=RADIUS, C_Pa=C_REF, kappa_Pa=KAPPA,
+                definition="f = F_eq/(C a0^2), g = r_mid/a0, x = delta/(2 a0) (total approach delta)")
+    write(a.out, curves, meta)
+    print(f"wrote {a.out}: {len(curves.alpha)} alphas x {len(curves.x)} points; "
+          f"estimated discretisation error of f: {err if err is not None else 'not estimated'}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
