@@ -97,3 +97,15 @@ def test_validation():
         scan.blastula(inner_radius=80e-6, outer_radius=75e-6, pressure=10.0, n=1)
     with pytest.raises(ValueError, match="alpha"):
         scan.spheroid(alpha=(-0.1, 0.2), n=2, model=fake_nominal_stress)
+
+
+def test_spheroid_scan_with_reduced_model():
+    red = pytest.importorskip("reduced.spheroid")
+    df = scan.spheroid(C=(100.0, 300.0), beta=(0.1, 1.0), n=3, curves=True, batch_size=4)
+    t = df.attrs["time [s]"]
+    for i in (0, 8):
+        row = df.iloc[i]
+        s = np.asarray(red.nominal_stress(t, radius=row["radius [m]"], C=row["C [Pa]"], alpha=row["alpha [-]"],
+                                          branches=[(row["beta [-]"], row["tau [s]"])],
+                                          displacement=row["displacement [m]"], ramp_time=row["ramp_time [s]"]))
+        assert np.allclose(row["sigma [Pa]"], s, rtol=1e-10)
