@@ -109,3 +109,14 @@ def test_spheroid_scan_with_reduced_model():
                                           branches=[(row["beta [-]"], row["tau [s]"])],
                                           displacement=row["displacement [m]"], ramp_time=row["ramp_time [s]"]))
         assert np.allclose(row["sigma [Pa]"], s, rtol=1e-10)
+
+
+def test_blastula_scan_fe_spot_checks_agree():
+    """FE spot-checks (fem.blastula, default mesh, kappa = 2.2 GPa) against the exact shell: < 1e-5."""
+    pytest.importorskip("fem.blastula")
+    df = scan.blastula(alpha=[0.2], outer_radius=[60e-6, 75e-6], pressure=(10.0, 60.0), n=4, fe_checks=2,
+                       fe_executor="serial")
+    checked = df["deviation [-]"].notna()
+    assert checked.sum() == 2
+    assert (df.loc[checked, "deviation [-]"] < 1e-5).all()
+    assert np.allclose(df.loc[checked, "fe_inner_stretch [-]"], df.loc[checked, "inner_stretch [-]"], rtol=1e-5)
