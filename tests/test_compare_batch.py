@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -77,23 +78,29 @@ def test_process_pool_default(tmp_path):
     assert str(os.getpid()) not in pids
 
 
-def test_resume_after_kill(tmp_path):
-    """Kill a running batch mid-way; the rerun computes only the missing points; results match."""
+@pytest.mark.parametrize("executor", ["serial", "processes"])
+def test_resume_after_kill(tmp_path, executor):
+    """Kill a running batch (its whole process group) mid-way; the rerun computes only the missing
+    points; results equal an uninterrupted run."""
     log = tmp_path / "log"
     log.mkdir()
     store = tmp_path / "store"
-    pts = [dict(a=float(a), log=str(log), delay=0.3) for a in range(8)]
+    pts = [dict(a=float(a), log=str(log), delay=0.4) for a in range(10)]
+    ex = "'serial'" if executor == "serial" else "None"
     code = (
-        "import sys; sys.path.insert(0, %r); import test_compare_batch as t; from compare import batch; "
-        "batch.run(t.square, %r, executor='serial', store=%r, progress=False)"
-        % (str(Path(__file__).parent), pts, str(store))
+        "import sys; sys.path.insert(0, %r); import test_compare_batch as t; from compare import batch\n"
+        "if __name__ == '__main__': batch.run(t.square, %r, executor=%s, store=%r, progress=False)"
+        % (str(Path(__file__).parent), pts, ex, str(store))
     )
-    proc = subprocess.Popen([sys.executable, "-c", code])
+    script = tmp_path / "job.py"
+    script.write_text(code)
+    proc = subprocess.Popen([sys.executable, str(script)], start_new_session=True)
     t0 = time.time()
     while len(list(store.glob("*.npz"))) < 3 and time.time() - t0 < 60:
-        time.sleep(0.05)
-    proc.kill()
+        time.sleep(0.02)
+    os.killpg(proc.pid, signal.SIGKILL)  # the job and its worker processes
     proc.wait()
+    time.sleep(0.2)
     done = len(list(store.glob("*.npz")))
     assert 3 <= done < len(pts), "the kill must land mid-batch"
     calls_before = len(list(log.iterdir()))
