@@ -208,7 +208,7 @@ def _residual(theta, ts, ys, ds, scale, radius, ramp_time, model, equilibrium, n
     return jnp.concatenate([(m - y) / scale for m, y in zip(pred, ys)])
 
 
-_STATIC = ("model", "equilibrium", "nb")
+_STATIC = ("radius", "ramp_time", "model", "equilibrium", "nb")
 _residual_jit = jax.jit(_residual, static_argnames=_STATIC)
 _jacobian_jit = jax.jit(jax.jacfwd(_residual), static_argnames=_STATIC)
 
@@ -220,7 +220,7 @@ def _builder(records, radius, ramp_time, n_branches, equilibrium, model):
     args = (tuple(jnp.asarray(r.time) for r in records), tuple(jnp.asarray(r.nominal_stress) for r in records),
             tuple(jnp.asarray(r.displacement) for r in records))
     scale = float(max(np.max(np.abs(r.nominal_stress)) for r in records)) or 1.0
-    rest = (jnp.asarray(scale), jnp.asarray(radius), jnp.asarray(ramp_time))
+    rest = (jnp.asarray(scale), float(radius), float(ramp_time))  # geometry static (Python floats)
     try:
         hash(equilibrium)
         kw = dict(model=model, equilibrium=equilibrium, nb=n_branches)

@@ -231,21 +231,27 @@ def spheroid(
 
         model = red.nominal_stress
 
-    def one(radius, C, alpha, beta, tau, displacement, ramp_time):
-        return model(t, radius=radius, C=C, alpha=alpha, branches=[(beta, tau)],
-                     displacement=displacement, ramp_time=ramp_time, equilibrium=equilibrium)
+    # parameters that do not vary enter as Python floats (models may branch on geometry), the rest vmapped
+    fixed = {k: float(pts[k].iloc[0]) for k in SPHEROID_PARAMS if pts[k].nunique() == 1}
+    varying = [k for k in SPHEROID_PARAMS if k not in fixed]
 
-    vm = jax.vmap(one)
+    def one(**kw):
+        p = {**fixed, **kw}
+        return model(t, radius=p["radius"], C=p["C"], alpha=p["alpha"], branches=[(p["beta"], p["tau"])],
+                     displacement=p["displacement"], ramp_time=p["ramp_time"], equilibrium=equilibrium)
 
     @jax.jit
     def evaluate(**kw):
-        s = vm(**kw)
+        s = jax.vmap(one)(**kw) if kw else one()[None, :]
         out = _summaries(t, s)
         if curves:
             out["sigma"] = s
         return out
 
-    res = _batched(evaluate, {k: pts[k].to_numpy() for k in SPHEROID_PARAMS}, batch_size)
+    if varying:
+        res = _batched(evaluate, {k: pts[k].to_numpy() for k in varying}, batch_size)
+    else:
+        res = {k: np.asarray(v) for k, v in evaluate().items()}
     df = pts.rename(columns={k: _col(k) for k in pts.columns})
     for k in ("sigma_peak", "sigma_end", "relaxed_fraction", "t_half"):
         df[_col(k)] = res[k]
