@@ -46,6 +46,23 @@ def _col(name: str) -> str:
     return f"{name} [{UNITS[name]}]"
 
 
+def _points(params: dict, points: Any, n: int, method: str, seed: int, log: Sequence[str]) -> pd.DataFrame:
+    """The design: a user-given table of points (plain names or unit-labelled columns; parameters it
+    lacks are taken from the fixed keyword values) or one generated from the ranges."""
+    if points is None:
+        return design(params, n=n, method=method, seed=seed, log=log)
+    df = pd.DataFrame(points).rename(columns={_col(k): k for k in params})
+    unknown = set(df.columns) - set(params)
+    if unknown:
+        raise ValueError(f"points has unknown columns {sorted(unknown)}; expected some of {list(params)}")
+    for k, v in params.items():
+        if k not in df.columns:
+            if _is_range(v) or np.ndim(v) > 0:
+                raise ValueError(f"{k}: give it in points or as a single number, not a range, when points= is used")
+            df[k] = float(v)
+    return df[list(params)].astype(float).reset_index(drop=True)
+
+
 def _is_range(v: Any) -> bool:
     return isinstance(v, tuple) and len(v) == 2
 
@@ -199,6 +216,7 @@ def spheroid(
     fe_store: str | None = None,
     model: Callable | None = None,
     fe_function: Callable | None = None,
+    points: Any = None,
 ) -> pd.DataFrame:
     """Scan the reduced spheroid compression-relaxation over parameters (one Maxwell branch).
 
@@ -211,10 +229,12 @@ def spheroid(
     ``df.attrs["time [s]"]``). ``fe_checks=k``: FE runs (``fem.spheroid.compress``) at k spread
     points, adding ``fe_sigma_peak [Pa]``, ``fe_sigma_end [Pa]`` and ``deviation [-]``.
     ``model``: the reduced nominal-stress function (default ``reduced.spheroid.nominal_stress``).
+    ``points``: a ready design (DataFrame or dict of arrays, plain or unit-labelled column names);
+    parameters it lacks come from the keyword values (numbers).
     """
     params = dict(radius=radius, C=C, alpha=alpha, beta=beta, tau=tau, displacement=displacement,
                   ramp_time=ramp_time)
-    pts = design(params, n=n, method=design_method, seed=seed, log=log)
+    pts = _points(params, points, n, design_method, seed, log)
     validate_positive("radius", pts["radius"].to_numpy(), "m")
     validate_material(pts["C"].to_numpy(), pts["alpha"].to_numpy())
     validate_nonnegative("beta (the energy factor of the Maxwell branch)", pts["beta"].to_numpy())
@@ -315,6 +335,7 @@ def blastula(
     fe_executor: Any = None,
     fe_store: str | None = None,
     fe_function: Callable | None = None,
+    points: Any = None,
 ) -> pd.DataFrame:
     """Scan the exact thick-shell blastula (``reduced.blastula``) over parameters.
 
@@ -324,11 +345,12 @@ def blastula(
     (limit pressure, NaN if none up to stretch 10) and ``bursts [-]`` (True where the pressure
     exceeds the limit). ``fe_checks=k`` adds ``fe_inner_stretch [-]`` and ``deviation [-]``
     (relative difference of the inner stretch) from ``fem.blastula.inflate`` at k spread points.
+    ``points``: a ready design (DataFrame or dict of arrays), as in :func:`spheroid`.
     """
     from reduced import blastula as red
 
     params = dict(inner_radius=inner_radius, outer_radius=outer_radius, C=C, alpha=alpha, pressure=pressure)
-    pts = design(params, n=n, method=design_method, seed=seed, log=log)
+    pts = _points(params, points, n, design_method, seed, log)
     validate_radii(pts["inner_radius"].to_numpy(), pts["outer_radius"].to_numpy())
     validate_material(pts["C"].to_numpy(), pts["alpha"].to_numpy())
 

@@ -120,3 +120,15 @@ def test_blastula_scan_fe_spot_checks_agree():
     assert checked.sum() == 2
     assert (df.loc[checked, "deviation [-]"] < 1e-5).all()
     assert np.allclose(df.loc[checked, "fe_inner_stretch [-]"], df.loc[checked, "inner_stretch [-]"], rtol=1e-5)
+
+
+def test_user_design_points():
+    pts = {"C [Pa]": [100.0, 250.0], "alpha": [0.0, 0.3]}
+    df = scan.spheroid(points=pts, model=fake_nominal_stress, tau=20.0)
+    ref = scan.spheroid(C=[100.0, 250.0], alpha=[0.0, 0.3], tau=20.0, model=fake_nominal_stress)
+    ref = ref[((ref["C [Pa]"] == 100.0) & (ref["alpha [-]"] == 0.0)) | ((ref["C [Pa]"] == 250.0) & (ref["alpha [-]"] == 0.3))]
+    assert np.allclose(df["sigma_end [Pa]"].to_numpy(), ref["sigma_end [Pa]"].to_numpy(), rtol=1e-13)
+    with pytest.raises(ValueError, match="unknown columns"):
+        scan.blastula(points={"E": [1.0]})
+    with pytest.raises(ValueError, match="single number"):
+        scan.spheroid(points={"C": [1.0]}, alpha=(0.0, 0.1), model=fake_nominal_stress)
