@@ -43,6 +43,7 @@ __all__ = ["Record", "FitResult", "Identifiability", "relaxation", "read_csv", "
 
 Z95 = 1.959963984540054  # two-sided 95 % normal quantile
 ALPHA_BOUNDS = (1e-6, 10.0)
+BETA_BOUNDS = (1e-8, 1e4)
 POOR_SD = 0.5  # a log-combination with standard deviation above this (a factor ~2.7 at 95 %) is "poor"
 
 
@@ -308,6 +309,7 @@ def relaxation(
     lo = np.full(len(names), -np.inf)
     hi = np.full(len(names), np.inf)
     lo[1], hi[1] = np.log(ALPHA_BOUNDS[0]), np.log(ALPHA_BOUNDS[1])
+    lo[2:2 + n_branches], hi[2:2 + n_branches] = np.log(BETA_BOUNDS[0]), np.log(BETA_BOUNDS[1])
     theta0 = np.clip(np.log(p0), lo + 1e-9, hi - 1e-9)
 
     res_fn, jac_fn, scale = _builder(recs, float(radius), float(ramp_time), n_branches, equilibrium, model)
@@ -334,6 +336,13 @@ def relaxation(
     s2 = float(r @ r) / max(n - P, 1)
     s2 = max(s2, 1e-300)
     ident = _identifiability(J, s2, names)
+    at_bound = [nm for nm, th, a, b in zip(names, theta, lo, hi) if min(th - a, b - th) < 1e-6]
+    if at_bound:
+        ident.report += ("\n  -> at a bound of the search: " + ", ".join(at_bound)
+                         + f" (alpha in {ALPHA_BOUNDS}, beta in {BETA_BOUNDS}); e.g. alpha at 1e-6 means the "
+                         "data are consistent with a neo-Hookean law (alpha = 0).")
+    if not sol.success:
+        ident.report += f"\n  -> the optimizer did not converge: {sol.message}"
     lam, V = ident.eigenvalues, ident.eigenvectors
     cov = (V * _inverse_eigenvalues(lam)) @ V.T
     with np.errstate(over="ignore", invalid="ignore"):
