@@ -96,7 +96,7 @@ def _to_fields(result: Any) -> dict[str, np.ndarray]:
 
 
 def _save(path: Path, fields: dict[str, np.ndarray], point: Mapping[str, Any]) -> None:
-    tmp = path.with_suffix(".tmp.npz")
+    tmp = path.with_name(path.name + ".part")  # not matched by *.npz until complete
     with open(tmp, "wb") as fh:
         np.savez(fh, __point__=np.asarray(json.dumps(_jsonable(dict(point)))), **fields)
         fh.flush()

@@ -1,0 +1,107 @@
+r"""Smooth, differentiable interpolation of tabulated curves (JAX): natural cubic splines as weights.
+
+A natural cubic spline through values y_i at knots k_i is *linear* in the values: s(x) = w(x) . y.
+``spline_weights(knots, x)`` returns that weight vector (C^2 in x, so dF/dx exists everywhere and
+jax.grad / jax.jvp work), which makes 1-D and tensor-product 2-D tables one matrix product:
+
+    s(x)        = w(x) . y                      (``Spline1D``)
+    s(x, alpha) = w_alpha(alpha) . Y . w_x(x)   (``Spline2D``, Y of shape (n_alpha, n_x))
+
+Beyond the end knots the spline continues linearly (natural end conditions); callers decide
+whether that is allowed (``reduced.spheroid`` refuses points outside its calibrated range in eager
+calls).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import jax.numpy as jnp
+import numpy as np
+
+__all__ = ["second_derivative_map", "spline_weights", "Spline1D", "Spline2D"]
+
+
+def second_derivative_map(knots: np.ndarray) -> np.ndarray:
+    """Matrix L (n, n) with M = L y the knot second derivatives of the natural spline through y."""
+    k = np.asarray(knots, dtype=float)
+    n = k.size
+    if n < 2 or np.any(np.diff(k) <= 0):
+        raise ValueError("spline knots must be at least 2 strictly increasing numbers")
+    if n == 2:
+        return np.zeros((2, 2))
+    h = np.diff(k)
+    A = np.zeros((n, n))
+    B = np.zeros((n, n))
+    A[0, 0] = A[-1, -1] = 1.0
+    for i in range(1, n - 1):
+        A[i, i - 1], A[i, i], A[i, i + 1] = h[i - 1] / 6, (h[i - 1] + h[i]) / 3, h[i] / 6
+        B[i, i - 1], B[i, i], B[i, i + 1] = 1 / h[i - 1], -1 / h[i - 1] - 1 / h[i], 1 / h[i]
+    return np.linalg.solve(A, B)
+
+
+def spline_weights(knots: np.ndarray, L: np.ndarray, x: Any) -> jnp.ndarray:
+    """Weights w(x) (..., n) of the natural cubic spline: s(x) = w(x) @ y. ``L`` from
+    :func:`second_derivative_map`. Linear continuation outside [k_0, k_{n-1}]."""
+    k = jnp.asarray(knots)
+    n = k.shape[0]
+    x = jnp.asarray(x, dtype=jnp.float64)
+    i = jnp.clip(jnp.searchsorted(k, x, side="right") - 1, 0, n - 2)
+    x0, x1 = k[i], k[i + 1]
+    h = x1 - x0
+    a = (x1 - x) / h
+    b = (x - x0) / h
+    inside = (x >= k[0]) & (x <= k[-1])
+    # inside: cubic; outside: the end segment's tangent line (natural spline: zero curvature there)
+    c_a = jnp.where(inside, (a**3 - a) * h**2 / 6, 0.0)
+    c_b = jnp.where(inside, (b**3 - b) * h**2 / 6, 0.0)
+    eye = jnp.eye(n)
+    Lj = jnp.asarray(L)
+    w = a[..., None] * eye[i] + b[..., None] * eye[i + 1] + c_a[..., None] * Lj[i] + c_b[..., None] * Lj[i + 1]
+    # linear extrapolation uses the end slope of the cubic: s'(k0) = (y1-y0)/h - h (2 M0 + M1)/6 (M0 = 0)
+    left = x < k[0]
+    right = x > k[-1]
+    h0, hn = k[1] - k[0], k[-1] - k[-2]
+    slope0 = (eye[1] - eye[0]) / h0 - h0 * (2 * Lj[0] + Lj[1]) / 6
+    slopen = (eye[-1] - eye[-2]) / hn + hn * (Lj[-2] + 2 * Lj[-1]) / 6
+    w = jnp.where(left[..., None], eye[0] + (x - k[0])[..., None] * slope0, w)
+    w = jnp.where(right[..., None], eye[-1] + (x - k[-1])[..., None] * slopen, w)
+    return w
+
+
+class Spline1D:
+    """s(x) through (knots, values), natural cubic; callable on JAX arrays (jit/vmap/grad)."""
+
+    def __init__(self, knots: np.ndarray, values: np.ndarray):
+        self.knots = np.asarray(knots, dtype=float)
+        self.values = np.asarray(values, dtype=float)
+        if self.values.shape != self.knots.shape:
+            raise ValueError(f"table: {self.knots.size} knots but values of shape {self.values.shape}")
+        if not np.all(np.isfinite(self.values)):
+            raise ValueError("table values must be finite numbers")
+        self.L = second_derivative_map(self.knots)
+
+    def __call__(self, x: Any) -> jnp.ndarray:
+        return spline_weights(self.knots, self.L, x) @ jnp.asarray(self.values)
+
+
+class Spline2D:
+    """s(x, alpha) on a tensor grid: values (n_alpha, n_x); natural cubic in each direction."""
+
+    def __init__(self, x_knots: np.ndarray, alpha_knots: np.ndarray, values: np.ndarray):
+        self.x = np.asarray(x_knots, dtype=float)
+        self.alpha = np.asarray(alpha_knots, dtype=float)
+        self.values = np.asarray(values, dtype=float)
+        if self.values.shape != (self.alpha.size, self.x.size):
+            raise ValueError(f"table values need shape (n_alpha, n_x) = ({self.alpha.size}, {self.x.size}); "
+                             f"got {self.values.shape}")
+        self.Lx = second_derivative_map(self.x)
+        self.La = second_derivative_map(self.alpha) if self.alpha.size > 1 else None
+
+    def __call__(self, x: Any, alpha: Any) -> jnp.ndarray:
+        wx = spline_weights(self.x, self.Lx, x)
+        rows = wx @ jnp.asarray(self.values).T  # (..., n_alpha)
+        if self.La is None:
+            return rows[..., 0]
+        wa = spline_weights(self.alpha, self.La, alpha)
+        return jnp.sum(wa * rows, axis=-1)

@@ -1,0 +1,451 @@
+r"""Spheroid compression-relaxation, the lumped generalized-Maxwell model (JAX + diffrax, SI units).
+
+A ball of radius ``a0`` (m) of Fung material (``C`` Pa, ``alpha``) is squeezed between two rigid
+frictionless plates; ``delta(t)`` is the total approach (m). The plate force (N) is
+
+    F(t) = F_eq(delta(t)) + sum_m q_m(t),   dq_m/dt = -q_m / tau_m + beta_m d F_eq(delta(t)) / dt,
+
+(physics.md; beta_m energy factors, tau_m relaxation times in s), q_m(0) = 0. The equilibrium law
+F_eq is pluggable (``equilibrium=``):
+
+* ``"hertz"`` (default): small-strain Hertz for two plates, F = (4/3) E* sqrt(a0) (delta/2)^(3/2) with
+  E* = 8 C (incompressible), i.e. F_eq = C a0^2 f(x), f(x) = (32/3) x^(3/2), x = delta / (2 a0);
+* ``"fem"``: the master curves f(x; alpha) tabulated by the FE (``python -m compare.calibrate``, shipped
+  as ``reduced/data/spheroid_master.npz``), interpolated by C^2 splines of f / f_Hertz in x and alpha
+  (differentiable in both);
+* a table: ``(x, f)`` arrays (x = delta/(2 a0) from 0, f = F_eq / (C a0^2)), or a :class:`MasterCurve`;
+* a callable ``F_eq(delta, *, radius, C, alpha) -> N`` (JAX-traceable; its delta-derivative is taken
+  by ``jax.jvp``).
+
+The nominal stress (Pa) divides by the deformed midplane area, sigma~ = F / (pi r_mid^2), with r_mid
+pluggable the same way (``midplane=``): ``"incompressible"`` (the volume-preserving oblate estimate
+r_mid = a0 / sqrt(1 - x): a spheroid keeping its volume when its height shrinks by delta), ``"fem"``
+(the calibrated g(x; alpha) = r_mid / a0), a table ``(x, g)``, or a callable
+``r_mid(delta, *, radius, alpha) -> m``. ``midplane=None`` picks ``"fem"`` with ``equilibrium="fem"``,
+else ``"incompressible"``.
+
+Loading
+-------
+``displacement`` a number (m) and ``ramp_time`` (s): the approach grows linearly to ``displacement``
+over ``ramp_time`` and is then held. The kink is handled exactly by two segments: during the ramp
+diffrax integrates in v = sqrt(t / t_r) (which also removes the sqrt(t) non-smoothness of Hertz at
+first contact); during the hold the branches decay in closed form, q_m(t) = q_m(t_r) e^{-(t-t_r)/tau_m}.
+``displacement`` a callable delta(t) (m, JAX-traceable) instead: one diffrax solve over the output
+times, ``jump_times`` (s) naming any kinks of the history.
+
+Numerics: forces scaled by C a0^2 f(x_max) inside the solver; the L-stable ESDIRK ``Kvaerno5``
+(tau may be far shorter than the ramp: stiff) with a PID controller at ``rtol``/``atol`` (1e-10).
+Every public function broadcasts over array parameters (one call = a grid of curves; output shape
+``param_shape + t.shape``) and works under jit / vmap / grad / jacfwd. Eager calls validate inputs
+and raise on solver failure; inside jit a failed solve gives NaN (check with ``jnp.isnan``).
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+from pathlib import Path
+from typing import Any, Callable, NamedTuple, Sequence, Union
+
+import diffrax
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from reduced.interp import Spline1D, Spline2D
+from reduced.material import is_traced, validate_branches, validate_material, validate_positive
+
+__all__ = [
+    "force",
+    "nominal_stress",
+    "midplane_radius",
+    "equilibrium_force",
+    "hertz_f",
+    "MasterCurve",
+    "master_curve",
+    "DATA_FILE",
+]
+
+DATA_FILE = Path(__file__).resolve().parent / "data" / "spheroid_master.npz"
+Equilibrium = Union[str, Callable, tuple, "MasterCurve"]
+
+
+def hertz_f(x: Any) -> jnp.ndarray:
+    """Hertz master curve f(x) = F / (C a0^2) = (32/3) x^(3/2), x = delta / (2 a0) (E* = 8 C)."""
+    x = jnp.maximum(jnp.asarray(x, dtype=jnp.float64), 0.0)
+    return (32.0 / 3.0) * x * _sqrt_safe(x)  # derivative 16 sqrt(x): finite (0) at first contact
+
+
+def _sqrt_safe(x):
+    # sqrt with a finite derivative at 0 (gradient of x^1.5 at 0 is 0, and must not be NaN)
+    return jnp.sqrt(jnp.where(x > 0, x, 1.0)) * (x > 0)
+
+
+class MasterCurve:
+    """Tabulated equilibrium master curves f(x; alpha) = F_eq/(C a0^2), g(x; alpha) = r_mid/a0.
+
+    ``x`` (n_x,) from 0 (x = delta / (2 a0)), ``alpha`` (n_a,) or None for a single curve,
+    ``f``/``g`` shaped (n_a, n_x) or (n_x,). Interpolated as f = f_Hertz(x) * h(x, alpha) with h a C^2
+    spline (h -> 1 at x = 0 for a ball), and g directly. ``x_max``/``alpha_range`` bound the table.
+    """
+
+    def __init__(self, x: np.ndarray, f: np.ndarray, g: np.ndarray | None = None,
+                 alpha: np.ndarray | None = None, metadata: dict | None = None):
+        x = np.asarray(x, dtype=float)
+        f = np.asarray(f, dtype=float)
+        if x.ndim != 1 or x.size < 3 or x[0] < 0 or np.any(np.diff(x) <= 0):
+            raise ValueError("master curve: x = delta/(2 a0) must be >= 3 increasing values from 0")
+        if np.any(~np.isfinite(f)):
+            raise ValueError("master curve: f values must be finite")
+        self.x, self.metadata = x, dict(metadata or {})
+        self.x_max = float(x[-1])
+        pos = x > 0
+        hz = (32.0 / 3.0) * x[pos] ** 1.5
+
+        def ratio(fr):
+            r = np.empty_like(x)
+            r[pos] = fr[pos] / hz
+            if not pos.all():  # x = 0: extrapolate the ratio from the next two points
+                r[0] = r[1] - (r[2] - r[1]) * (x[1] - x[0]) / (x[2] - x[1])
+            return r
+
+        if alpha is None:
+            if f.shape != x.shape:
+                raise ValueError(f"master curve: f needs shape {x.shape}; got {f.shape}")
+            self.alpha = None
+            self._h = Spline1D(x, ratio(f))
+            self._g = None if g is None else Spline1D(x, np.asarray(g, dtype=float))
+            self.alpha_range = (0.0, np.inf)
+        else:
+            alpha = np.atleast_1d(np.asarray(alpha, dtype=float))
+            if f.shape != (alpha.size, x.size):
+                raise ValueError(f"master curve: f needs shape (n_alpha, n_x) = ({alpha.size}, {x.size}); got {f.shape}")
+            self.alpha = alpha
+            self._h = Spline2D(x, alpha, np.stack([ratio(fr) for fr in f]))
+            self._g = None if g is None else Spline2D(x, alpha, np.asarray(g, dtype=float))
+            self.alpha_range = (float(alpha[0]), float(alpha[-1]))
+
+    def f(self, x: Any, alpha: Any = 0.0) -> jnp.ndarray:
+        """F_eq / (C a0^2) at x = delta/(2 a0)."""
+        h = self._h(x) if self.alpha is None else self._h(x, alpha)
+        return hertz_f(x) * h
+
+    def g(self, x: Any, alpha: Any = 0.0) -> jnp.ndarray:
+        """r_mid / a0 at x = delta/(2 a0)."""
+        if self._g is None:
+            raise ValueError("this master curve has no midplane-radius table g; use midplane='incompressible'")
+        return self._g(x) if self.alpha is None else self._g(x, alpha)
+
+    def check_range(self, x_max: Any, alpha: Any) -> None:
+        """Raise ValueError (eager values only) outside the tabulated x and alpha."""
+        xv, av = _concrete(x_max), _concrete(alpha)
+        if xv is not None and np.max(xv) > self.x_max * (1 + 1e-12):
+            raise ValueError(
+                f"compression delta/(2 a0) = {np.max(xv):.4g} is beyond the calibrated table (up to "
+                f"{self.x_max:.4g}, i.e. {200 * self.x_max:.3g} % of the diameter). Use equilibrium='hertz' "
+                "or a callable, or extend the table with `python -m compare.calibrate --x-max ...`.")
+        if av is not None and self.alpha is not None:
+            lo, hi = self.alpha_range
+            if np.min(av) < lo - 1e-12 or np.max(av) > hi + 1e-12:
+                raise ValueError(f"alpha = {np.min(av):g}..{np.max(av):g} is outside the calibrated table "
+                                 f"(alpha in [{lo:g}, {hi:g}]); use equilibrium='hertz' or extend the table.")
+
+
+def _concrete(v):
+    if is_traced(v):
+        return None
+    try:
+        return np.asarray(v, dtype=float)
+    except (TypeError, ValueError):
+        return None
+
+
+@functools.lru_cache(maxsize=4)
+def master_curve(path: str | None = None) -> MasterCurve:
+    """The FE-calibrated master curves shipped with the package (or read from ``path``)."""
+    p = Path(path) if path is not None else DATA_FILE
+    if not p.exists():
+        raise FileNotFoundError(
+            f"no calibrated spheroid table at {p}. Generate it with `python -m compare.calibrate`, "
+            "or use equilibrium='hertz'.")
+    with np.load(p, allow_pickle=False) as z:
+        meta = json.loads(str(z["metadata"])) if "metadata" in z.files else {}
+        return MasterCurve(z["x"], z["f"], z["g"] if "g" in z.files else None, alpha=z["alpha"], metadata=meta)
+
+
+# ---------------------------------------------------------------- equilibrium laws (dimensionless)
+
+def _equilibrium_law(equilibrium: Any, radius, C, alpha) -> tuple[Callable, Any]:
+    """(f(x) dimensionless F_eq/(C a0^2), table-or-None) for a spec; x = delta/(2 a0)."""
+    if isinstance(equilibrium, str):
+        if equilibrium == "hertz":
+            return hertz_f, None
+        if equilibrium == "fem":
+            mc = master_curve()
+            return (lambda x: mc.f(x, alpha)), mc
+        raise ValueError(f"equilibrium must be 'hertz', 'fem', an (x, f) table or a callable; got {equilibrium!r}")
+    if isinstance(equilibrium, MasterCurve):
+        return (lambda x: equilibrium.f(x, alpha)), equilibrium
+    if isinstance(equilibrium, tuple) and len(equilibrium) == 2:
+        mc = MasterCurve(*equilibrium)
+        return (lambda x: mc.f(x)), mc
+    if callable(equilibrium):
+        return (lambda x: equilibrium(2.0 * radius * x, radius=radius, C=C, alpha=alpha) / (C * radius**2)), None
+    raise ValueError(f"equilibrium must be 'hertz', 'fem', an (x, f) table or a callable; got {equilibrium!r}")
+
+
+def _midplane_law(midplane: Any, equilibrium: Any, radius, alpha) -> tuple[Callable, Any]:
+    """(g(x) = r_mid / a0, table-or-None)."""
+    if midplane is None:
+        midplane = "fem" if (isinstance(equilibrium, str) and equilibrium == "fem") else "incompressible"
+    if isinstance(midplane, str):
+        if midplane == "incompressible":
+            return (lambda x: 1.0 / jnp.sqrt(1.0 - jnp.minimum(x, 0.999))), None
+        if midplane == "fem":
+            mc = master_curve()
+            return (lambda x: mc.g(x, alpha)), mc
+        raise ValueError(f"midplane must be 'incompressible', 'fem', an (x, g) table or a callable; got {midplane!r}")
+    if isinstance(midplane, MasterCurve):
+        return (lambda x: midplane.g(x, alpha)), midplane
+    if isinstance(midplane, Spline1D):
+        return midplane, None
+    if isinstance(midplane, tuple) and len(midplane) == 2:
+        s = Spline1D(*midplane)
+        return s, None
+    if callable(midplane):
+        return (lambda x: midplane(2.0 * radius * x, radius=radius, alpha=alpha) / radius), None
+    raise ValueError(f"midplane must be 'incompressible', 'fem', an (x, g) table or a callable; got {midplane!r}")
+
+
+# ---------------------------------------------------------------- the lumped ODE
+
+class _Opts(NamedTuple):
+    rtol: float
+    atol: float
+    max_steps: int
+    solver: Any
+    adjoint: Any
+
+
+def _adjoint(kind: Any):
+    if kind == "reverse":
+        return diffrax.RecursiveCheckpointAdjoint()
+    if kind == "forward":
+        return diffrax.ForwardMode()
+    if isinstance(kind, diffrax.AbstractAdjoint):
+        return kind
+    raise ValueError(f"adjoint must be 'reverse' (jax.grad/jacrev), 'forward' (jax.jacfwd/jvp) or a diffrax adjoint; got {kind!r}")
+
+
+class _Midplane1D(Spline1D):
+    """A user (x, g) midplane table (a hashable spline object, so compiled code is reused)."""
+
+
+@functools.partial(jax.jit, static_argnums=(4,))
+def _run(flat_t, params, betas, taus, static):
+    law, mid, history, jumps, o, stress, shape = static
+    disp = history if history is not None else None
+
+    def one(p, bs, ts):
+        b = jnp.stack(bs) if bs else jnp.zeros(0)
+        tau = jnp.stack(ts) if ts else jnp.ones(0)
+        return _curve(flat_t, p["radius"], p["C"], p["alpha"], b, tau,
+                      disp if disp is not None else p["displacement"], p.get("ramp_time"),
+                      law, mid, jumps, o, stress)
+
+    if shape == ():
+        out, ok = one(params, betas, taus)
+    else:
+        bc = lambda v: jnp.broadcast_to(v, shape).reshape(-1)  # noqa: E731
+        out, ok = jax.vmap(one)({k: bc(v) for k, v in params.items()}, tuple(bc(b) for b in betas),
+                                tuple(bc(tau) for tau in taus))
+    return out.reshape(shape + flat_t.shape[:0] + (-1,)) if shape else out, ok
+
+
+def _ramp_hold(t, f, X, tr, betas, taus, o: _Opts):
+    """Dimensionless F/(C a0^2) at times t (1-D, any order) for x(t) = X min(t/tr, 1)."""
+    n = betas.shape[0]
+    fX = f(X)
+    scale = jnp.where(fX > 0, fX, 1.0)
+    s = jnp.clip(t / tr, 0.0, 1.0)
+    x_t = X * s
+    feq = f(x_t)
+    if n == 0:
+        return feq, jnp.asarray(True)
+    k = tr / taus  # ramp time over relaxation times
+
+    def rhs(v, q, args):
+        # s = v^2, ds = 2 v dv; dq/ds = -k q + beta X f'(X s) / f(X)
+        _, df = jax.jvp(f, (X * v * v,), (X * 2.0 * v,))
+        return -k * q * 2.0 * v + betas * df / scale
+
+    vs = jnp.sqrt(s)
+    order = jnp.argsort(vs)
+    sol = diffrax.diffeqsolve(
+        diffrax.ODETerm(rhs), o.solver, t0=0.0, t1=1.0, dt0=1e-3, y0=jnp.zeros(n),
+        saveat=diffrax.SaveAt(ts=vs[order], t1=True),
+        stepsize_controller=diffrax.PIDController(rtol=o.rtol, atol=o.atol),
+        max_steps=o.max_steps, adjoint=o.adjoint, throw=False)
+    q_ramp = jnp.zeros((t.shape[0], n)).at[order].set(sol.ys[:-1])
+    q_end = sol.ys[-1]
+    hold = q_end * jnp.exp(-jnp.maximum(t - tr, 0.0)[:, None] / taus)
+    q = jnp.where((t <= tr)[:, None], q_ramp, hold) * scale
+    return feq + jnp.sum(q, axis=-1), sol.result == diffrax.RESULTS.successful
+
+
+def _history(t, f, x_of_t, betas, taus, jumps, o: _Opts):
+    """Dimensionless force for a general approach history x(t) (t sorted ascending inside)."""
+    n = betas.shape[0]
+    feq = f(x_of_t(t))
+    if n == 0:
+        return feq, jnp.asarray(True)
+    T = jnp.max(t)
+    scale = jnp.maximum(jnp.max(jnp.abs(feq)), 1e-300)
+
+    def rhs(tt, q, args):
+        _, df = jax.jvp(lambda s: f(x_of_t(s)), (tt,), (jnp.ones_like(tt),))
+        return -q / taus + betas * df / scale
+
+    order = jnp.argsort(t)
+    controller = diffrax.PIDController(rtol=o.rtol, atol=o.atol)
+    if jumps is not None:
+        controller = diffrax.ClipStepSizeController(controller, jump_ts=jnp.asarray(jumps, dtype=jnp.float64))
+    sol = diffrax.diffeqsolve(
+        diffrax.ODETerm(rhs), o.solver, t0=0.0, t1=T, dt0=T * 1e-4, y0=jnp.zeros(n),
+        saveat=diffrax.SaveAt(ts=t[order]), stepsize_controller=controller,
+        max_steps=o.max_steps, adjoint=o.adjoint, throw=False)
+    q = jnp.zeros((t.shape[0], n)).at[order].set(sol.ys) * scale
+    return feq + jnp.sum(q, axis=-1), sol.result == diffrax.RESULTS.successful
+
+
+def _curve(t, radius, C, alpha, betas, taus, displacement, ramp_time, equilibrium, midplane, jumps, o,
+           stress: bool):
+    """Force (N) or nominal stress (Pa) at flat times t for scalar parameters."""
+    f, _ = _equilibrium_law(equilibrium, radius, C, alpha)
+    if callable(displacement):
+        def x_of_t(tt):
+            return displacement(tt) / (2.0 * radius)
+        fhat, ok = _history(t, f, x_of_t, betas, taus, jumps, o)
+        x_t = x_of_t(t)
+    else:
+        X = displacement / (2.0 * radius)
+        fhat, ok = _ramp_hold(t, f, X, ramp_time, betas, taus, o)
+        x_t = X * jnp.clip(t / ramp_time, 0.0, 1.0)
+    out = fhat * C * radius**2
+    if stress:
+        g, _ = _midplane_law(midplane, equilibrium, radius, alpha)
+        out = out / (jnp.pi * (radius * g(x_t)) ** 2)
+    return jnp.where(ok, out, jnp.nan), ok
+
+
+def _evaluate(t, *, radius, C, alpha, branches, displacement, ramp_time, equilibrium, midplane,
+              jump_times, rtol, atol, max_steps, solver, adjoint, stress):
+    br = validate_branches(branches)
+    t_arr = jnp.asarray(t, dtype=jnp.float64)
+    eager = not is_traced(t, radius, C, alpha, ramp_time, *(v for b in br for v in b),
+                          *(() if callable(displacement) else (displacement,)))
+    if eager:
+        tn = np.asarray(t, dtype=float)
+        if tn.size == 0 or not np.all(np.isfinite(tn)) or np.min(tn) < 0:
+            raise ValueError("t must be a non-empty array of finite output times >= 0 s (t = 0: first contact)")
+        validate_positive("radius (of the ball)", radius, "m")
+        validate_material(C, alpha)
+        if not callable(displacement):
+            validate_positive("displacement (the total approach of the plates)", displacement, "m")
+            if ramp_time is None:
+                raise ValueError("ramp_time (s) is needed with a numeric displacement (linear ramp, then hold)")
+            validate_positive("ramp_time (duration of the loading ramp)", ramp_time, "s")
+            if np.any(np.asarray(displacement, dtype=float) >= 2 * np.asarray(radius, dtype=float)):
+                raise ValueError("displacement (total approach) must be smaller than the ball's diameter 2 * radius")
+            x_max = np.asarray(displacement, dtype=float) / (2 * np.asarray(radius, dtype=float))
+            for law in (equilibrium, midplane):
+                mc = _table_of(law)
+                if mc is not None:
+                    mc.check_range(x_max, alpha)
+    betas = tuple(jnp.asarray(b, dtype=jnp.float64) for b, _ in br)
+    taus = tuple(jnp.asarray(tau, dtype=jnp.float64) for _, tau in br)
+    params = dict(radius=radius, C=C, alpha=alpha)
+    if not callable(displacement):
+        params.update(displacement=displacement, ramp_time=ramp_time)
+    params = {k: jnp.asarray(v, dtype=jnp.float64) for k, v in params.items()}
+    shape = jnp.broadcast_shapes(*(v.shape for v in params.values()), *(b.shape for b in betas),
+                                 *(tau.shape for tau in taus))
+    o = _Opts(float(rtol), float(atol), int(max_steps), solver if solver is not None else diffrax.Kvaerno5(),
+              _adjoint(adjoint))
+    law = equilibrium if not (isinstance(equilibrium, tuple)) else MasterCurve(*equilibrium)
+    mid = midplane if not (isinstance(midplane, tuple)) else _Midplane1D(*midplane)
+    static = (law, mid, displacement if callable(displacement) else None,
+              None if jump_times is None else tuple(float(j) for j in jump_times), o, stress, shape)
+    out, ok = _run(t_arr.reshape(-1), params, betas, taus, static)
+    if eager and not bool(np.all(np.asarray(ok))):
+        raise RuntimeError(
+            f"the lumped viscoelastic ODE failed for {int(np.size(ok) - np.sum(np.asarray(ok)))} of "
+            f"{int(np.size(ok))} parameter sets. Hint: raise max_steps (now {max_steps}), loosen rtol/atol, "
+            "or check that the relaxation times are not absurdly short compared with the ramp.")
+    return out.reshape(shape + t_arr.shape)
+
+
+def _table_of(law):
+    if isinstance(law, MasterCurve):
+        return law
+    if isinstance(law, str) and law == "fem":
+        return master_curve()
+    if isinstance(law, tuple) and len(law) == 2:
+        return MasterCurve(*law)
+    return None
+
+
+def force(t: Any, *, radius: Any, C: Any, alpha: Any, branches: Sequence[tuple[Any, Any]] = (),
+          displacement: Any, ramp_time: Any = None, equilibrium: Equilibrium = "hertz",
+          jump_times: Sequence[float] | None = None, rtol: float = 1e-10, atol: float = 1e-10,
+          max_steps: int = 16384, solver: Any = None, adjoint: Any = "reverse") -> jnp.ndarray:
+    r"""Plate force F(t) in N of the lumped generalized-Maxwell spheroid.
+
+    F = F_eq(delta) + sum_m q_m,  dq_m/dt = -q_m/tau_m + beta_m dF_eq/dt,  q_m(0) = 0.
+
+    t            output times (s), any shape, >= 0 (t = 0 is first contact).
+    radius       ball radius a0 (m).       C, alpha   Fung parameters (Pa, -).
+    branches     sequence of (beta, tau): energy factor (-) and relaxation time (s); () = elastic.
+    displacement total approach delta of the plates (m) reached at ``ramp_time`` (s) and then held;
+                 or a callable delta(t) (m) for any history (``jump_times``: its kinks, s).
+    equilibrium  "hertz", "fem" (FE-calibrated table), an (x, f) table or a callable (module doc).
+    Parameters broadcast: the result has shape ``broadcast(params).shape + t.shape``.
+    """
+    return _evaluate(t, radius=radius, C=C, alpha=alpha, branches=branches, displacement=displacement,
+                     ramp_time=ramp_time, equilibrium=equilibrium, midplane=None, jump_times=jump_times,
+                     rtol=rtol, atol=atol, max_steps=max_steps, solver=solver, adjoint=adjoint, stress=False)
+
+
+def nominal_stress(t: Any, *, radius: Any, C: Any, alpha: Any, branches: Sequence[tuple[Any, Any]] = (),
+                   displacement: Any, ramp_time: Any = None, equilibrium: Equilibrium = "hertz",
+                   midplane: Any = None, jump_times: Sequence[float] | None = None, rtol: float = 1e-10,
+                   atol: float = 1e-10, max_steps: int = 16384, solver: Any = None, adjoint: Any = "reverse") -> jnp.ndarray:
+    r"""Nominal stress sigma~(t) = F(t) / (pi r_mid(delta(t))^2) in Pa (the seed's observable).
+
+    Same arguments as :func:`force`; ``midplane`` chooses r_mid: "incompressible" (a0/sqrt(1 - x)),
+    "fem" (calibrated), an (x, g) table, a callable r_mid(delta, *, radius, alpha) (m), or None (auto).
+    """
+    return _evaluate(t, radius=radius, C=C, alpha=alpha, branches=branches, displacement=displacement,
+                     ramp_time=ramp_time, equilibrium=equilibrium, midplane=midplane, jump_times=jump_times,
+                     rtol=rtol, atol=atol, max_steps=max_steps, solver=solver, adjoint=adjoint, stress=True)
+
+
+def equilibrium_force(displacement: Any, *, radius: Any, C: Any, alpha: Any,
+                      equilibrium: Equilibrium = "hertz") -> jnp.ndarray:
+    """Elastic equilibrium force F_eq(delta) in N for the total approach ``displacement`` (m)."""
+    if not is_traced(displacement, radius, C, alpha):
+        validate_positive("radius (of the ball)", radius, "m")
+        validate_material(C, alpha)
+        mc = _table_of(equilibrium)
+        if mc is not None:
+            mc.check_range(np.asarray(displacement, dtype=float) / (2 * np.asarray(radius, dtype=float)), alpha)
+    f, _ = _equilibrium_law(equilibrium, radius, C, alpha)
+    x = jnp.asarray(displacement, dtype=jnp.float64) / (2.0 * jnp.asarray(radius, dtype=jnp.float64))
+    return f(x) * C * jnp.asarray(radius) ** 2
+
+
+def midplane_radius(displacement: Any, *, radius: Any, alpha: Any = 0.0, midplane: Any = "incompressible") -> jnp.ndarray:
+    """Deformed equator radius r_mid (m) at total approach ``displacement`` (m)."""
+    g, _ = _midplane_law(midplane, None, radius, alpha)
+    x = jnp.asarray(displacement, dtype=jnp.float64) / (2.0 * jnp.asarray(radius, dtype=jnp.float64))
+    return jnp.asarray(radius) * g(x)

@@ -1,0 +1,173 @@
+"""reduced.spheroid: the lumped generalized-Maxwell plate force against closed forms and quadrature."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from reduced import spheroid as sp
+from reduced.interp import Spline1D, Spline2D
+
+A0, D, TR = 500e-6, 50e-6, 0.2
+T = np.concatenate([np.linspace(0.0, TR, 11), np.geomspace(TR, 1500.0, 40)[1:]])
+FIG10 = dict(radius=A0, C=150.0, alpha=0.2, branches=[(0.4, 200.0)], displacement=D, ramp_time=TR)
+
+
+def hertz(delta, C=150.0, a0=A0):
+    return (4.0 / 3.0) * 8.0 * C * np.sqrt(a0) * (delta / 2.0) ** 1.5
+
+
+def reference_force(t, C, beta, tau, delta=D, tr=TR):
+    """F_eq + q by adaptive quadrature of the convolution q = beta int e^{-(t-s)/tau} dF_eq/ds ds."""
+    s = min(t, tr)
+    rate = delta / tr
+    dfeq = lambda u: 1.5 * hertz(rate * u, C) / u if u > 0 else 0.0  # noqa: E731
+    q = quad(lambda u: beta * dfeq(u) * np.exp(-(s - u) / tau), 0.0, s, epsabs=0, epsrel=1e-13, limit=200)[0]
+    return hertz(rate * s, C) + q * np.exp(-max(t - tr, 0.0) / tau)
+
+
+def test_hertz_master_curve():
+    # F = (4/3) E* sqrt(a0) (delta/2)^1.5 with E* = 8C  <=>  f(x) = (32/3) x^1.5, x = delta / (2 a0)
+    x = D / (2 * A0)
+    assert float(sp.hertz_f(x)) * 150.0 * A0**2 == pytest.approx(hertz(D), rel=1e-14)
+    assert float(sp.equilibrium_force(D, radius=A0, C=150.0, alpha=0.2)) == pytest.approx(hertz(D), rel=1e-14)
+    assert float(jax.grad(sp.hertz_f)(0.0)) == 0.0  # finite slope at first contact
+
+
+def test_force_matches_convolution_quadrature():
+    F = np.asarray(sp.force(T, **FIG10))
+    ref = np.array([reference_force(t, 150.0, 0.4, 200.0) for t in T])
+    assert np.max(np.abs(F - ref)) < 1e-7 * ref.max()
+    tight = np.asarray(sp.force(T, **FIG10, rtol=1e-12, atol=1e-12))
+    assert np.max(np.abs(tight - ref)) < 1e-9 * ref.max()
+
+
+def test_limits_elastic_instantaneous_relaxed():
+    Feq = hertz(D)
+    # beta = 0: elastic
+    F0 = np.asarray(sp.force(T, **{**FIG10, "branches": [(0.0, 200.0)]}))
+    assert np.allclose(F0[T >= TR], Feq, rtol=1e-13)
+    # tau >> ramp: instantaneous response (1 + beta) F_eq at the end of the ramp
+    Fi = np.asarray(sp.force([TR], **{**FIG10, "branches": [(0.4, 1e9)]}))
+    assert Fi[0] == pytest.approx(1.4 * Feq, rel=1e-8)
+    # tau << ramp (stiff): the branch relaxes as fast as it loads, F -> F_eq (q ~ beta tau dF/dt)
+    Fs = np.asarray(sp.force([TR], **{**FIG10, "branches": [(0.4, 1e-6)]}))
+    assert Fs[0] == pytest.approx(Feq * (1 + 0.4 * 1e-6 * 1.5 / TR), rel=1e-6)
+    # the hold: F(t) - F_eq decays exactly with tau
+    F = np.asarray(sp.force([1.0, 201.0], **FIG10))
+    assert (F[1] - Feq) / (F[0] - Feq) == pytest.approx(np.exp(-1.0), rel=1e-10)
+
+
+def test_two_branches_superpose():
+    b = [(0.4, 200.0), (0.3, 5.0)]
+    F = np.asarray(sp.force(T, **{**FIG10, "branches": b}))
+    F1 = np.asarray(sp.force(T, **{**FIG10, "branches": b[:1]}))
+    F2 = np.asarray(sp.force(T, **{**FIG10, "branches": b[1:]}))
+    Feq = np.asarray(sp.force(T, **{**FIG10, "branches": []}))
+    assert np.allclose(F, F1 + F2 - Feq, rtol=1e-8, atol=1e-9 * F.max())
+
+
+def test_general_history_equals_ramp():
+    hist = lambda t: D * jnp.minimum(t / TR, 1.0)  # noqa: E731
+    Fh = np.asarray(sp.force(T, **{**FIG10, "displacement": hist, "ramp_time": None}, jump_times=[TR]))
+    F = np.asarray(sp.force(T, **FIG10))
+    assert np.max(np.abs(Fh - F)) < 1e-7 * F.max()
+
+
+def test_broadcast_grid_equals_loop():
+    Cs = np.array([100.0, 200.0, 300.0])
+    betas = np.array([[0.1], [1.0]])
+    G = np.asarray(sp.nominal_stress(T, **{**FIG10, "C": Cs, "branches": [(betas, 200.0)]}))
+    assert G.shape == (2, 3, T.size)
+    for i, b in enumerate(betas[:, 0]):
+        for j, C in enumerate(Cs):
+            s = np.asarray(sp.nominal_stress(T, **{**FIG10, "C": C, "branches": [(b, 200.0)]}))
+            assert np.allclose(G[i, j], s, rtol=1e-12)
+
+
+def test_nominal_stress_incompressible_area():
+    s = np.asarray(sp.nominal_stress([1500.0], **{**FIG10, "branches": []}))[0]
+    x = D / (2 * A0)
+    r_mid = A0 / np.sqrt(1 - x)  # oblate spheroid with the ball's volume and height 2 a0 - delta
+    assert s == pytest.approx(hertz(D) / (np.pi * r_mid**2), rel=1e-12)
+    assert r_mid**2 * (A0 - D / 2) == pytest.approx(A0**3, rel=1e-12)
+
+
+def test_gradients_forward_and_reverse_agree_with_finite_differences():
+    t = jnp.array([0.1, 0.2, 300.0])
+
+    def model(p, adjoint):
+        return sp.force(t, radius=A0, C=p[0], alpha=0.2, branches=[(p[1], p[2])], displacement=D,
+                        ramp_time=TR, adjoint=adjoint)
+
+    p = jnp.array([150.0, 0.4, 200.0])
+    Jf = np.asarray(jax.jacfwd(lambda q: model(q, "forward"))(p))
+    Jr = np.asarray(jax.jacrev(lambda q: model(q, "reverse"))(p))
+    h = np.array([1e-3, 1e-6, 1e-3])
+    Jfd = np.stack([(np.asarray(model(p.at[k].add(h[k]), "reverse")) - np.asarray(model(p.at[k].add(-h[k]), "reverse")))
+                    / (2 * h[k]) for k in range(3)], axis=1)
+    assert np.allclose(Jf, Jr, rtol=1e-8, atol=1e-20)
+    assert np.allclose(Jf, Jfd, rtol=1e-5, atol=1e-16)
+
+
+def test_jit_and_vmap_on_public_api():
+    f = jax.jit(lambda C, b: sp.nominal_stress(jnp.array([0.2, 100.0]), radius=A0, C=C, alpha=0.2,
+                                               branches=[(b, 200.0)], displacement=D, ramp_time=TR))
+    out = jax.vmap(f)(jnp.array([100.0, 200.0]), jnp.array([0.2, 0.4]))
+    ref = np.asarray(sp.nominal_stress([0.2, 100.0], **{**FIG10, "C": 200.0}))
+    assert np.allclose(out[1], ref, rtol=1e-12)
+
+
+def test_table_and_callable_equilibria():
+    x = np.linspace(0.0, 0.1, 41)
+    # a table of the Hertz curve itself reproduces Hertz (the spline is of f / f_Hertz = 1)
+    Ft = np.asarray(sp.force(T, **FIG10, equilibrium=(x, (32 / 3) * x**1.5)))
+    F = np.asarray(sp.force(T, **FIG10))
+    assert np.allclose(Ft, F, rtol=1e-12)
+    # a stiffening callable: F_eq = Hertz * (1 + 5 x)
+    call = lambda d, *, radius, C, alpha: (32 / 3) * C * radius**2 * (d / (2 * radius)) ** 1.5 * (1 + 5 * d / (2 * radius))  # noqa: E731
+    Fc = np.asarray(sp.force([1500.0], **{**FIG10, "branches": []}, equilibrium=call))
+    assert Fc[0] == pytest.approx(hertz(D) * (1 + 5 * D / (2 * A0)), rel=1e-12)
+    with pytest.raises(ValueError, match="beyond the calibrated table"):
+        sp.force(T, **{**FIG10, "displacement": 150e-6}, equilibrium=(x, (32 / 3) * x**1.5))
+
+
+def test_splines_interpolate_and_are_smooth():
+    k = np.linspace(0.0, 1.0, 9)
+    s = Spline1D(k, np.sin(3 * k))
+    xs = np.linspace(0.0, 1.0, 101)
+    assert np.allclose(np.asarray(s(k)), np.sin(3 * k), atol=1e-14)
+    assert np.max(np.abs(np.asarray(s(xs)) - np.sin(3 * xs))) < 2e-3
+    d = jax.vmap(jax.grad(s))(jnp.asarray(xs[1:-1]))
+    assert np.max(np.abs(np.asarray(d) - 3 * np.cos(3 * xs[1:-1]))) < 5e-2
+    a = np.array([0.0, 0.5, 1.0])
+    s2 = Spline2D(k, a, np.stack([np.sin(3 * k) * (1 + ai) for ai in a]))
+    assert float(s2(0.3, 0.5)) == pytest.approx(np.sin(0.9) * 1.5, rel=2e-3)
+
+
+@pytest.mark.parametrize("bad, match", [
+    (dict(C=-1.0), "C"),
+    (dict(alpha=-0.1), "alpha"),
+    (dict(radius=0.0), "radius"),
+    (dict(branches=[(0.4, 0.0)]), "tau"),
+    (dict(branches=[(-0.4, 10.0)]), "beta"),
+    (dict(displacement=1.2e-3), "diameter"),
+    (dict(ramp_time=None), "ramp_time"),
+])
+def test_validation(bad, match):
+    with pytest.raises(ValueError, match=match):
+        sp.force(T, **{**FIG10, **bad})
+
+
+def test_fem_table_missing_or_present():
+    if not sp.DATA_FILE.exists():
+        with pytest.raises(FileNotFoundError, match="compare.calibrate"):
+            sp.force(T, **FIG10, equilibrium="fem")
+        return
+    mc = sp.master_curve()
+    # the calibrated curve tends to Hertz at small compression and stiffens with alpha
+    assert float(mc.f(0.002, 0.2)) / float(sp.hertz_f(0.002)) == pytest.approx(1.0, abs=0.03)
+    assert float(mc.f(0.25, 0.5)) > float(mc.f(0.25, 0.0))
+    F = np.asarray(sp.force(T, **FIG10, equilibrium="fem"))
+    assert np.all(np.isfinite(F)) and F[-1] > 0
