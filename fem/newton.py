@@ -1,7 +1,7 @@
 r"""One Newton-Raphson solver for every FE scene.
 
 ``newton(fun, x0, *, free=None, ref_norm=1.0, rtol=1e-9, xtol=1e-9, max_iter=30, admissible=None,
-load=None, max_backtracks=8, growth=1e3, atol=0.0)`` solves r(x) = 0 with ``fun(x) -> (r, K)`` (r ndarray, K scipy
+load=None, max_backtracks=8, growth=1e3, atol=0.0, solver=None)`` solves r(x) = 0 with ``fun(x) -> (r, K)`` (r ndarray, K scipy
 sparse). Hooks:
 
 * ``free``: indices of the unknowns (condensation of Dirichlet dofs: the others keep x0's values).
@@ -12,7 +12,8 @@ sparse). Hooks:
 * Convergence needs BOTH |r_free| <= rtol * ref_norm + atol AND |dx| <= xtol * (1 + |x|)
   (``atol``: the round-off floor of the residual, e.g. ~10 eps kappa/C for nearly incompressible).
 
-Sparse direct solves (SuperLU via ``scipy.sparse.linalg.splu``). On failure ``NewtonError`` carries
+Sparse direct solves (SuperLU via ``scipy.sparse.linalg.splu``); ``solver(K, b) -> x`` replaces it
+(e.g. :func:`symmetric_solve`, fast for the symmetric saddle-point systems of the mixed u-p form). On failure ``NewtonError`` carries
 ``load`` (the load level being solved), ``residuals`` (history) and a ``hint``; no NaN is returned.
 Returns ``NewtonResult(x, iterations, residuals)``.
 """
@@ -25,7 +26,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-__all__ = ["NewtonError", "NewtonResult", "newton", "sparse_solve"]
+__all__ = ["NewtonError", "NewtonResult", "newton", "sparse_solve", "symmetric_solve"]
 
 
 class NewtonError(RuntimeError):
@@ -52,10 +53,41 @@ def sparse_solve(K: sp.spmatrix, b: np.ndarray) -> np.ndarray:
     return x
 
 
+def symmetric_solve(K: sp.spmatrix, b: np.ndarray, *, refine: int = 4, rtol: float = 1e-13) -> np.ndarray:
+    """Direct solve for structurally symmetric (saddle-point) matrices: SuperLU in symmetric mode
+    (minimum-degree ordering of K + K^T, diagonal pivots, several times fewer fill-ins than the default
+    COLAMD for the mixed u-p tangent) followed by iterative refinement (|b - K x| <= rtol |b|, at most
+    ``refine`` corrections: the unpivoted saddle-point factor is accurate to ~1e-6 before refinement).
+    Falls back to :func:`sparse_solve` when the diagonal pivots fail or refinement stalls."""
+    Kc = sp.csc_matrix(K)
+    try:
+        lu = spla.splu(Kc, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options=dict(SymmetricMode=True))
+    except RuntimeError:
+        return sparse_solve(Kc, b)
+    x = lu.solve(b)
+    nb = np.linalg.norm(b)
+    res = b - Kc @ x
+    rn = np.linalg.norm(res)
+    for _ in range(refine):
+        if not np.isfinite(rn) or rn <= rtol * nb:
+            break
+        x2 = x + lu.solve(res)
+        res2 = b - Kc @ x2
+        rn2 = np.linalg.norm(res2)
+        if not rn2 < 0.5 * rn:  # stalled: keep the better one
+            if rn2 < rn:
+                x, rn = x2, rn2
+            break
+        x, res, rn = x2, res2, rn2
+    if not (np.all(np.isfinite(x)) and rn <= 1e-8 * max(nb, 1e-300)):
+        return sparse_solve(Kc, b)
+    return x
+
+
 def newton(fun: Callable, x0: np.ndarray, *, free: Optional[np.ndarray] = None, ref_norm: float = 1.0,
            rtol: float = 1e-9, xtol: float = 1e-9, max_iter: int = 30,
            admissible: Optional[Callable] = None, load=None, max_backtracks: int = 8,
-           growth: float = 1e3, atol: float = 0.0) -> NewtonResult:
+           growth: float = 1e3, atol: float = 0.0, solver: Optional[Callable] = None) -> NewtonResult:
     """Solve fun(x)[0] = 0 from x0 (see the module docstring)."""
     x = np.array(x0, dtype=float)
     free = np.arange(x.size) if free is None else np.asarray(free)
@@ -71,7 +103,7 @@ def newton(fun: Callable, x0: np.ndarray, *, free: Optional[np.ndarray] = None, 
                           hint="check the inputs and the initial state")
     for it in range(1, max_iter + 1):
         try:
-            dx = sparse_solve(K[free][:, free], -r[free])
+            dx = (solver or sparse_solve)(K[free][:, free], -r[free])
         except np.linalg.LinAlgError:
             raise NewtonError("singular tangent matrix", load=load, residuals=res,
                               hint="a limit point or a missing constraint (rigid-body motion); "

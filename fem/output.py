@@ -1,6 +1,7 @@
 r"""Result containers, VTU export (meshio) and the von Mises figure on the deformed section.
 
-API: ``BlastulaResult`` (dataclass; arrays per converged step: ``pressure`` [Pa], ``inner_stretch``,
+API: ``SpheroidResult`` (spheroid compression, see its docstring), ``SpheroidField``,
+``BlastulaResult`` (dataclass; arrays per converged step: ``pressure`` [Pa], ``inner_stretch``,
 ``outer_stretch``, ``newton_iterations``, ``wall_time`` [s]; final fields: ``mesh`` (AxiMesh),
 ``displacement`` (N, 2) [m], ``deformed_nodes`` (N, 2) [m], ``hydrostatic_pressure`` and
 ``von_mises`` per element (mean over its quadrature points) [Pa]),
@@ -14,7 +15,7 @@ from typing import Optional
 
 import numpy as np
 
-__all__ = ["BlastulaResult", "write_vtu", "plot_von_mises"]
+__all__ = ["BlastulaResult", "SpheroidResult", "SpheroidField", "write_vtu", "plot_von_mises"]
 
 
 @dataclass
@@ -77,3 +78,84 @@ def plot_von_mises(mesh, displacement: np.ndarray, vm: np.ndarray, ax=None):
     ax.set_ylabel("z (um)")
     ax.figure.colorbar(pc, ax=ax, label="von Mises stress (Pa)")
     return ax
+
+
+@dataclass
+class SpheroidField:
+    """Fields of one converged step: ``displacement``/``deformed_nodes`` (N, 2) [m] at the mesh dofs,
+    element means of ``von_mises`` and ``hydrostatic_pressure`` (= -mean Cauchy stress) [Pa],
+    ``contact_nodal_force`` (compressive nodal contact force per candidate node, N; 0 where inactive)."""
+
+    time: float
+    displacement: np.ndarray
+    deformed_nodes: np.ndarray
+    von_mises: np.ndarray
+    hydrostatic_pressure: np.ndarray
+    contact_nodal_force: np.ndarray
+
+
+@dataclass
+class SpheroidResult:
+    """FE spheroid compression (``fem.spheroid.compress``); arrays have one entry per converged step.
+
+    ``time`` [s] (static runs: pseudo-time 0..1), ``approach`` (total plate approach delta = 2 x the
+    plate displacement of the quarter model) [m], ``force`` (plate force from the contact multipliers)
+    [N], ``reaction_force`` (reaction of the midplane symmetry constraint) [N], ``midplane_radius`` [m],
+    ``midplane_area`` (pi r_mid^2) [m^2], ``nominal_stress`` (F / A_mid) [Pa], ``mean_von_mises``
+    (average over the deformed volume) [Pa], ``contact_radius`` (deformed radius of the outermost node
+    in contact) [m], ``newton_iterations`` and ``contact_passes`` (active-set passes) per step,
+    ``wall_time`` [s] per step. ``fields``: SpheroidField at the requested ``field_times`` and the end.
+    """
+
+    time: np.ndarray
+    approach: np.ndarray
+    force: np.ndarray
+    reaction_force: np.ndarray
+    midplane_radius: np.ndarray
+    midplane_area: np.ndarray
+    nominal_stress: np.ndarray
+    mean_von_mises: np.ndarray
+    contact_radius: np.ndarray
+    newton_iterations: np.ndarray
+    contact_passes: np.ndarray
+    wall_time: np.ndarray
+    mesh: object
+    fields: list
+    static: bool = False
+    parameters: Optional[dict] = None
+
+    def field_at(self, time: Optional[float] = None) -> SpheroidField:
+        """The stored field closest to ``time`` (s; None: the last)."""
+        if time is None:
+            return self.fields[-1]
+        return min(self.fields, key=lambda f: abs(f.time - float(time)))
+
+    def to_vtu(self, path: str, time: Optional[float] = None) -> None:
+        """Write the stored state closest to ``time`` (default: the last) as VTU (ParaView)."""
+        f = self.field_at(time)
+        write_vtu(path, self.mesh, f.displacement,
+                  {"von_mises_Pa": f.von_mises, "hydrostatic_pressure_Pa": f.hydrostatic_pressure})
+
+    def plot_von_mises(self, time: Optional[float] = None, ax=None):
+        """Von Mises stress on the deformed quarter section (seed Fig. 8)."""
+        f = self.field_at(time)
+        ax = plot_von_mises(self.mesh, f.displacement, f.von_mises, ax=ax)
+        ax.set_title(f"von Mises stress, t = {f.time:.4g} s")
+        return ax
+
+    def plot_relaxation(self, axes=None):
+        """Nominal stress F/A_mid and mean von Mises stress vs time (seed Figs 9-10)."""
+        import matplotlib.pyplot as plt
+
+        if axes is None:
+            _, axes = plt.subplots(1, 2, figsize=(10, 4))
+        t = self.time
+        for ax, y, lab in zip(axes, (self.nominal_stress, self.mean_von_mises),
+                              ("nominal stress F / A_mid (Pa)", "mean von Mises stress (Pa)")):
+            ax.plot(t, y, "o-", ms=3)
+            ax.set_xlabel("pseudo-time" if self.static else "time t (s)")
+            ax.set_ylabel(lab)
+            if not self.static and t[0] > 0 and t[-1] / t[0] > 100:
+                ax.set_xscale("log")
+            ax.grid(alpha=0.3)
+        return axes
