@@ -26,6 +26,7 @@ direction (tiny eigenvalue, eigenvector mixing C and alpha); two or more levels 
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any, Callable, NamedTuple, Sequence
@@ -145,10 +146,13 @@ def parameter_names(n_branches: int = 1) -> tuple[str, ...]:
             + tuple(f"tau_{m}" for m in range(1, n_branches + 1)))
 
 
+@functools.lru_cache(maxsize=1)
 def _default_model() -> Callable:
+    """reduced.spheroid.nominal_stress with forward-mode sensitivities (the fit uses jax.jacfwd);
+    cached, so compiled residuals are reused between fits."""
     from reduced import spheroid
 
-    return spheroid.nominal_stress
+    return functools.partial(spheroid.nominal_stress, adjoint="forward")
 
 
 def _as_records(records: Sequence[Any]) -> list[Record]:

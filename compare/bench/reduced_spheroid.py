@@ -1,0 +1,117 @@
+"""Benchmark of the reduced spheroid (``reduced.spheroid``): one relaxation curve and a scan of
+many, against a convolution-quadrature reference and a SciPy ``solve_ivp`` baseline.
+
+    python -m compare.bench.reduced_spheroid [--n 10000]
+
+Rows: compile time, curves per second after compile (best of a few calls, ``block_until_ready``),
+the max error relative to the curve's peak force, the baseline (``scipy.integrate.solve_ivp``,
+LSODA at rtol 1e-10, one curve at a time, the same lumped ODE) and the speed-up.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from typing import Sequence
+
+import jax.numpy as jnp
+import numpy as np
+from scipy.integrate import quad, solve_ivp
+
+from compare.bench.reduced_blastula import _timed
+
+A0, D, TR, END = 500e-6, 50e-6, 0.2, 1500.0
+TIMES = np.concatenate([np.linspace(0.0, TR, 21), np.geomspace(TR, END, 80)[1:]])
+
+
+def _hertz(delta, C):
+    return (32.0 / 3.0) * C * A0**2 * (delta / (2 * A0)) ** 1.5
+
+
+def reference(t: float, C: float, beta: float, tau: float) -> float:
+    """F(t) by adaptive quadrature of q = beta int_0^min(t,tr) e^{-(t-s)/tau} dF_eq/ds ds."""
+    s = min(t, TR)
+    rate = D / TR
+    q = quad(lambda u: beta * 1.5 * _hertz(rate * u, C) / u * np.exp(-(s - u) / tau) if u > 0 else 0.0,
+             0.0, s, epsabs=0, epsrel=1e-13, limit=200)[0]
+    return _hertz(rate * s, C) + q * np.exp(-max(t - TR, 0.0) / tau)
+
+
+def _scipy_curve(C: float, beta: float, tau: float) -> np.ndarray:
+    """The same lumped ODE with solve_ivp (LSODA), two segments (ramp, hold)."""
+    rate = D / TR
+
+    def rhs(t, q):
+        d = rate * min(t, TR)
+        dfe = 1.5 * _hertz(d, C) / d * rate if (0 < t < TR) else 0.0
+        return [-q[0] / tau + beta * dfe]
+
+    ramp = TIMES[TIMES <= TR]
+    hold = TIMES[TIMES > TR]
+    s1 = solve_ivp(rhs, (0.0, TR), [0.0], t_eval=ramp, method="LSODA", rtol=1e-10, atol=1e-16)
+    s2 = solve_ivp(rhs, (TR, END), [s1.y[0, -1]], t_eval=hold, method="LSODA", rtol=1e-10, atol=1e-16)
+    q = np.concatenate([s1.y[0], s2.y[0]])
+    return _hertz(D * np.minimum(TIMES / TR, 1.0), C) + q
+
+
+def rows(n: int = 10_000, n_ref: int = 20, seed: int = 0) -> list[dict]:
+    from reduced import spheroid as sp
+
+    rng = np.random.default_rng(seed)
+    out = []
+    kw = dict(radius=A0, alpha=0.2, displacement=D, ramp_time=TR)
+
+    # one curve, the Fig. 10 case
+    def one(C, beta, tau, solver=None):
+        return sp.force(jnp.asarray(TIMES), C=C, branches=[(beta, tau)], solver=solver, **kw)
+
+    tc, dt, F = _timed(one, 150.0, 0.4, 200.0, repeats=5)
+    ref = np.array([reference(t, 150.0, 0.4, 200.0) for t in TIMES])
+    err = float(np.max(np.abs(np.asarray(F) - ref)) / ref.max())
+    t0 = time.perf_counter()
+    base = _scipy_curve(150.0, 0.4, 200.0)
+    t_base = time.perf_counter() - t0
+    out.append(dict(path="spheroid.force one curve (Fig. 10)", points=1, compile_s=tc, points_per_s=1 / dt,
+                    max_rel_err=err, baseline="scipy solve_ivp LSODA", baseline_points_per_s=1 / t_base,
+                    speedup=t_base / dt, baseline_err=float(np.max(np.abs(base - ref)) / ref.max())))
+
+    # a scan: n curves over (C, beta, tau), one call (vmapped)
+    Cs = jnp.asarray(rng.uniform(100.0, 300.0, n))
+    bs = jnp.asarray(rng.uniform(0.0, 1.5, n))
+    ts = jnp.asarray(10 ** rng.uniform(-1.0, 3.0, n))  # 0.1 s .. 1000 s: from stiff to slow
+    tc, dt, G = _timed(one, Cs, bs, ts, repeats=2)  # Kvaerno5 (traced parameters)
+    idx = rng.choice(n, n_ref, replace=False)
+    errs = []
+    for i in idx:
+        r = np.array([reference(t, float(Cs[i]), float(bs[i]), float(ts[i])) for t in TIMES])
+        errs.append(np.max(np.abs(np.asarray(G[i]) - r)) / r.max())
+    t0 = time.perf_counter()
+    for i in idx[:5]:
+        _scipy_curve(float(Cs[i]), float(bs[i]), float(ts[i]))
+    base_rate = 5 / (time.perf_counter() - t0)
+    out.append(dict(path=f"spheroid.force scan ({n} curves x {TIMES.size} times)", points=n, compile_s=tc,
+                    points_per_s=n / dt, max_rel_err=float(np.max(errs)), baseline="scipy solve_ivp LSODA loop",
+                    baseline_points_per_s=base_rate, speedup=n / dt / base_rate))
+    # the same scan with the explicit solver (all ramp_time / tau <= 2 here: non-stiff)
+    import diffrax
+
+    tc, dt, G2 = _timed(lambda c, b, t_: one(c, b, t_, diffrax.Tsit5()), Cs, bs, ts, repeats=2)
+    out.append(dict(path="  same scan, explicit Tsit5", points=n, compile_s=tc, points_per_s=n / dt,
+                    max_rel_err=float(np.max(np.abs(np.asarray(G2) - np.asarray(G)) / np.max(np.asarray(G), axis=1)[:, None])),
+                    baseline="scipy solve_ivp LSODA loop", baseline_points_per_s=base_rate, speedup=n / dt / base_rate))
+    return out
+
+
+def main(argv: Sequence[str] | None = None) -> list[dict]:
+    ap = argparse.ArgumentParser(prog="python -m compare.bench.reduced_spheroid", description=__doc__)
+    ap.add_argument("--n", type=int, default=10_000, help="curves in the scan (default %(default)s)")
+    a = ap.parse_args(argv)
+    from compare.bench.reduced import print_rows
+
+    r = rows(a.n)
+    print_rows(r)
+    return r
+
+
+if __name__ == "__main__":
+    main()
