@@ -9,6 +9,7 @@ SUITES = {
     "reduced": "compare.bench.reduced",
     "fem-blastula": "compare.bench.fem_blastula",
     "fem-spheroid": "compare.bench.fem_spheroid",
+    "hybrid": "compare.bench.hybrid",
 }
 
 
