@@ -19,8 +19,10 @@ Inside, lengths are scaled by a0, stresses by C, forces by C a0^2.
 * ``static=True``: branches and times are ignored; the steps are equilibrium states from delta = 0 to
   ``displacement`` (``n_static`` equal steps, cut back on failure): the F_eq(delta) curve; ``time`` then
   holds the load fraction delta/displacement.
-* ``mesh``: "coarse", "default", "fine", a level 0..4 (0 = coarse, 1 = default, 2 = fine) or an
-  ``AxiMesh`` from ``fem.mesh.ball_section`` (built with length_scale = radius).
+* ``mesh``: "coarse", "default", "fine", a level 0..4 (0 = coarse, 1 = default, 2 = fine; ``LEVELS``
+  gives (n_core, n_radial, surface grading, pole grading) of ``fem.mesh.ball_section``; 3 x 3 Gauss
+  points) or an ``AxiMesh`` from ``fem.mesh.ball_section`` (built with length_scale = radius; refine it
+  toward the pole, e.g. pole_grading = 30, for Hertz-scale approaches delta < 1 % of the radius).
 * ``field_times``: times (s) at which the deformed mesh, von Mises and pressure fields are stored
   (they become step times); the last step is always stored.
 
@@ -37,6 +39,7 @@ import time as _time
 from typing import Callable, NamedTuple, Sequence, Union
 
 import numpy as np
+import skfem
 
 from reduced.material import validate_branches, validate_material, validate_positive
 from fem import constitutive as cm
@@ -52,8 +55,8 @@ from fem.timestepping import march, ramp_hold_schedule
 __all__ = ["compress", "make_mesh", "MESHES", "LEVELS", "hertz_force"]
 
 # level -> (n_core, n_radial, surface grading, pole grading)
-LEVELS = {0: (4, 3, 2.0, 3.0), 1: (6, 4, 2.0, 4.0), 2: (10, 7, 2.0, 6.0), 3: (16, 12, 2.0, 8.0),
-          4: (24, 18, 2.0, 10.0)}
+LEVELS = {0: (4, 3, 2.0, 3.0), 1: (8, 6, 2.0, 4.0), 2: (16, 8, 2.0, 2.0), 3: (20, 10, 2.0, 3.0),
+          4: (32, 12, 2.0, 3.0)}
 MESHES = {"coarse": 0, "default": 1, "fine": 2}
 FORCE_CHECK = 1e-6  # |F_contact - F_reaction| / F
 
@@ -76,7 +79,10 @@ def make_mesh(mesh, radius: float) -> AxiMesh:
     if isinstance(mesh, (bool, np.bool_)) or not isinstance(mesh, (int, np.integer)) or int(mesh) not in LEVELS:
         raise ValueError(f"mesh level must be an integer 0..4 (0 coarse, 1 default, 2 fine), got {mesh!r}")
     nc, nr, gr, pg = LEVELS[int(mesh)]
-    return ball_section(radius, nc, nr, grading=gr, pole_grading=pg)
+    m = ball_section(radius, nc, nr, grading=gr, pole_grading=pg)
+    # 3 x 3 Gauss points (exact enough for Q2: forces change < 1e-5 relative vs 4 x 4), 1.8x cheaper
+    return AxiMesh(m.mesh, skfem.CellBasis(m.mesh, skfem.ElementQuad2(), intorder=4), 2, m.length_scale,
+                   m.nodes, m.edges)
 
 
 class _State(NamedTuple):

@@ -1,0 +1,224 @@
+"""FE spheroid between rigid frictionless plates: contact, Maxwell relaxation, Hertz limit (physics.md)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.optimize import curve_fit
+
+from fem import viscoelastic as ve
+from fem.mesh import ball_section
+from fem.newton import NewtonError, symmetric_solve, sparse_solve
+from fem.spheroid import compress, hertz_force, make_mesh
+from fem.timestepping import march, ramp_hold_schedule
+
+A0 = 500e-6
+FIG10 = dict(radius=A0, C=150.0, alpha=0.2, branches=[(0.4, 200.0)], displacement=50e-6, ramp_time=0.2,
+             end_time=1500.0)
+
+
+# ---- viscoelastic recursion ------------------------------------------------------------------
+def _conv_exact(t, beta, tau, rate):
+    """Q(t) for S_iso(t) = rate * t from rest: beta rate tau (1 - e^{-t/tau})."""
+    return beta * rate * tau * (1 - np.exp(-t / tau))
+
+
+def test_maxwell_update_exact_for_linear_history_any_step():
+    beta, tau, rate = np.array([0.4, 1.2]), np.array([2.0, 50.0]), 3.0
+    st = ve.initial_state(2, (1, 1, 5))
+    t = 0.0
+    for dt in [0.1, 3.0, 40.0, 0.5, 200.0]:
+        t += dt
+        S = np.full((1, 1, 5), rate * t)
+        st = ve.update(st, beta, tau, dt, S)
+    for m in range(2):
+        assert np.allclose(st.Q[m], _conv_exact(t, beta[m], tau[m], rate), rtol=1e-13)
+
+
+def test_maxwell_hold_decays_exactly_and_algorithmic_stress_matches():
+    beta, tau = np.array([0.7]), np.array([10.0])
+    S = np.full((2, 3, 5), 2.0)
+    st = ve.MaxwellState(np.full((1, 2, 3, 5), 0.5), S)
+    dt = 37.0
+    iso_scale, extra = ve.algorithmic(st, beta, tau, dt)
+    new = ve.update(st, beta, tau, dt, S)  # S_iso constant over the hold step
+    assert np.allclose(new.Q, 0.5 * np.exp(-dt / 10.0), rtol=1e-14)
+    # S_iso + Q^{n+1} == iso_scale * S^{n+1} + extra for any S^{n+1}
+    S1 = S * 1.3
+    new1 = ve.update(st, beta, tau, dt, S1)
+    assert np.allclose(S1 + new1.Q[0], iso_scale * S1 + extra, rtol=1e-14)
+    assert ve.algorithmic(ve.initial_state(0, (2, 3, 5)), [], [], 1.0) == (1.0, None)
+    _, g = ve.coefficients(np.array([1.0]), np.array([1.0]), 1e-12)
+    assert abs(g[0] - 1.0) < 1e-12
+    with pytest.raises(ValueError):
+        ve.coefficients(np.array([1.0]), np.array([1.0]), 0.0)
+
+
+# ---- time stepping -----------------------------------------------------------------------------
+def test_schedule_and_cutback():
+    t = ramp_hold_schedule(0.2, 1500.0, n_ramp=5, n_hold=10, breakpoints=[0.05, 700.0])
+    assert np.isclose(t[-1], 1500.0) and np.all(np.diff(t) > 0)
+    assert np.any(np.isclose(t, 0.05)) and np.any(np.isclose(t, 700.0)) and np.any(np.isclose(t, 0.2))
+    hold = np.diff(t[t >= 0.2])
+    assert hold[-1] > 50 * hold[0]  # geometric growth through the hold
+    calls = []
+
+    def step(t0, s, t1, prev):  # fails for steps longer than 0.3
+        calls.append((t0, t1))
+        if t1 - t0 > 0.3:
+            raise NewtonError("too big", load=t1)
+        return s + (t1 - t0), 2
+
+    out = march(step, 0.0, [1.0, 2.0])
+    assert np.isclose(out[-1].t, 2.0) and np.isclose(out[-1].state, 2.0)
+    assert all(b - a <= 0.3 + 1e-12 for a, b in zip([0.0] + [s.t for s in out[:-1]], [s.t for s in out]))
+    with pytest.raises(NewtonError, match="failed after"):
+        march(step, 0.0, [1.0], max_cuts=1)
+
+
+def test_symmetric_solve_matches_pivoted_lu():
+    m = make_mesh(0, A0)
+    from fem.forms import Assembler, Material
+
+    asm = Assembler(m)
+    x = np.zeros(asm.ndof)
+    x[:asm.n_u] = 1e-3 * np.sin(np.arange(asm.n_u))
+    _, K = asm.internal(x, Material(1.0, 0.2, 1e7))
+    fixed = np.concatenate([2 * m.nodes["axis"], 2 * m.nodes["symmetry"] + 1, 2 * m.nodes["outer"] + 1])
+    free = np.setdiff1d(np.arange(asm.ndof), fixed)
+    Kf = K[free][:, free]
+    b = np.cos(np.arange(free.size))
+    assert np.allclose(symmetric_solve(Kf, b), sparse_solve(Kf, b), rtol=1e-8, atol=1e-12)
+
+
+# ---- the spheroid ------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def fig10_coarse():
+    return compress(**FIG10, mesh="coarse", field_times=[0.2])
+
+
+@pytest.fixture(scope="module")
+def static_coarse():
+    return compress(radius=A0, C=150.0, alpha=0.2, branches=(), displacement=50e-6, ramp_time=1.0, end_time=1.0,
+                    mesh="coarse", static=True)
+
+
+def test_contact_force_equals_midplane_reaction_and_signorini(fig10_coarse):
+    r = fig10_coarse
+    assert np.all(r.force > 0)
+    assert np.max(np.abs(r.force - r.reaction_force) / r.force) < 1e-6
+    # multipliers compressive on the active nodes (exactly zero elsewhere), at every stored state
+    for f in r.fields:
+        assert np.all(f.contact_nodal_force >= -1e-9 * f.contact_nodal_force.sum())
+        # no node of the surface above the plate z = a0 - delta/2
+        z = f.deformed_nodes[:, 1]
+        assert np.max(z) <= A0 - 25e-6 + 1e-12 * A0
+    assert np.allclose(r.approach[r.time >= 0.2], 50e-6)
+    # incompressible: the midplane bulges
+    assert r.midplane_radius[-1] > A0
+
+
+def test_relaxation_time_and_long_time_force(fig10_coarse, static_coarse):
+    r = fig10_coarse
+    hold = r.time > 0.2 + 1e-9
+    t, F = r.time[hold], r.force[hold]
+    (Finf, amp, tau), _ = curve_fit(lambda t, a, b, c: a + b * np.exp(-(t - 0.2) / c), t, F,
+                                    p0=(F[-1], F[0] - F[-1], 100.0))
+    assert abs(tau / 200.0 - 1) < 0.01
+    F_eq = static_coarse.force[-1]
+    beta, tau0, tr = 0.4, 200.0, 0.2
+    ramp = tau0 / tr * (1 - np.exp(-tr / tau0))  # branch stress left after a linear ramp (S_iso ~ linear)
+    pred = F_eq * (1 + beta * ramp * np.exp(-(1500.0 - tr) / tau0))
+    assert abs(r.force[-1] / pred - 1) < 5e-3
+    # instantaneous response: (1 + beta) times the elastic one (a 0.2 s ramp is 1e-3 tau)
+    assert abs(r.force[r.time == 0.2][0] / ((1 + beta) * F_eq) - 1) < 2e-3
+    # mean von Mises relaxes with the force
+    assert r.mean_von_mises[-1] < r.mean_von_mises[hold][0]
+
+
+def test_callable_history_matches_ramp_hold(fig10_coarse):
+    d = lambda t: 50e-6 * min(t / 0.2, 1.0)  # noqa: E731
+    r = compress(**{**FIG10, "displacement": d, "end_time": 20.0}, mesh="coarse")
+    ref = fig10_coarse
+    assert np.isclose(np.interp(20.0, r.time, r.force), np.interp(20.0, ref.time, ref.force), rtol=2e-3)
+
+
+def test_unloading_releases_contact():
+    """Load-unload: contact nodes are released as the plate goes back up; the force goes to zero."""
+    d = lambda t: 40e-6 * (1 - abs(t - 1.0))  # noqa: E731  (0 -> 40 um -> 0 over 2 s)
+    r = compress(radius=A0, C=200.0, alpha=0.0, branches=(), displacement=d, ramp_time=1.0, end_time=1.9,
+                 mesh="coarse", n_hold=6)
+    k = np.argmax(r.force)
+    assert r.contact_radius[-1] < r.contact_radius[k]
+    assert r.force[-1] < 0.1 * r.force[k]
+
+
+def test_static_monotone_and_hertz_limit(static_coarse):
+    r = static_coarse
+    assert np.all(np.diff(r.force) > 0) and np.all(np.diff(r.midplane_radius) > 0)
+    ratio = r.force / hertz_force(r.approach, A0, 150.0)
+    assert np.all(np.abs(ratio - 1) < 0.12)
+
+
+def test_hertz_small_approach_on_pole_refined_mesh():
+    m = ball_section(A0, 12, 8, grading=3.0, pole_grading=20.0)
+    r = compress(radius=A0, C=200.0, alpha=0.0, branches=(), displacement=2 * A0 * 0.002, ramp_time=1.0,
+                 end_time=1.0, mesh=m, static=True, n_static=4)
+    ratio = r.force[-1] / hertz_force(r.approach[-1], A0, 200.0)
+    assert abs(ratio - 1) < 0.03
+    a_hertz = np.sqrt(A0 * r.approach[-1] / 2)
+    assert 0.8 < r.contact_radius[-1] / a_hertz < 1.1
+
+
+def test_outputs_vtu_and_plots(fig10_coarse, tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    r = fig10_coarse
+    assert len(r.fields) == 2 and np.isclose(r.fields[0].time, 0.2)
+    assert np.allclose(r.nominal_stress, r.force / (np.pi * r.midplane_radius**2))
+    r.to_vtu(str(tmp_path / "s.vtu"), time=0.2)
+    assert (tmp_path / "s.vtu").stat().st_size > 0
+    r.plot_von_mises(0.2)
+    r.plot_relaxation()
+    assert np.all(r.newton_iterations >= 1)
+
+
+@pytest.mark.parametrize("kw, msg", [
+    (dict(radius=-1.0), "radius"),
+    (dict(C=0.0), "C"),
+    (dict(alpha=-0.1), "alpha"),
+    (dict(branches=[(0.4, -1.0)]), "tau"),
+    (dict(displacement=0.9e-3), "squeeze"),
+    (dict(end_time=0.1), "end_time"),
+    (dict(mesh="huge"), "mesh"),
+    (dict(mesh=9), "mesh level"),
+    (dict(field_times=[2000.0]), "field_times"),
+])
+def test_bad_input_messages(kw, msg):
+    with pytest.raises(ValueError, match=msg):
+        compress(**{**FIG10, **kw})
+
+
+# ---- slow: the acceptance cases -------------------------------------------------------------------
+@pytest.mark.slow
+def test_static_to_30_percent_and_40():
+    for x, n in [(0.3, None), (0.4, 40)]:
+        r = compress(radius=A0, C=200.0, alpha=0.2, branches=(), displacement=2 * A0 * x, ramp_time=1.0,
+                     end_time=1.0, static=True, n_static=n)
+        assert np.isclose(r.approach[-1], 2 * A0 * x)
+        assert np.all(np.diff(r.force) > 0)
+        assert np.max(np.abs(r.force - r.reaction_force) / r.force) < 1e-6
+
+
+@pytest.mark.slow
+def test_fig8_9_case_and_default_mesh_fig10():
+    r = compress(radius=A0, C=200.0, alpha=0.2, branches=[(1.2, 200.0)], displacement=200e-6, ramp_time=0.2,
+                 end_time=1500.0, field_times=[0.2, 1497.0])
+    assert np.max(np.abs(r.force - r.reaction_force) / r.force) < 1e-6
+    assert r.force[-1] < 0.5 * r.force[r.time == 0.2][0]
+    assert any(np.isclose(f.time, 1497.0) for f in r.fields)
+    d = compress(**FIG10)
+    f = compress(**FIG10, mesh="fine")
+    for t in (0.2, 1500.0):
+        assert abs(np.interp(t, d.time, d.force) / np.interp(t, f.time, f.force) - 1) < 5e-3
