@@ -2,6 +2,7 @@
 
     tissuemech blastula [--out blastula.png] [--max-pressure 1000] [--step 100] [--fem]
     tissuemech spheroid [--out spheroid.png] [--C 150] [--alpha 0.2] [--beta 0.4] [--tau 200] ...
+    tissuemech report [--out DIR] [--quick]     (figures, accuracy-vs-speed charts, stability map)
 
 Tables go to stdout, the figure to a PNG. Bad arguments get a one-line error (exit code 2).
 """
@@ -90,6 +91,10 @@ def _parser() -> argparse.ArgumentParser:
         help="equilibrium law F_eq: 'hertz' (default) or another registered name",
     )
     s.add_argument("--fem", action="store_true", help="also run the finite-element model (slower) and compare")
+
+    from compare.report import add_parser as add_report_parser
+
+    add_report_parser(sub)
     return p
 
 
@@ -108,6 +113,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             from compare.scenes import spheroid_table
 
             spheroid_table(args)
+        elif args.command == "report":
+            from compare.report import run_cli
+
+            run_cli(args)
     except (ValueError, CLIError, OSError) as exc:
         print(f"tissuemech {args.command}: error: {exc}", file=sys.stderr)
         return 2

@@ -1,0 +1,192 @@
+r"""Accuracy versus speed, per scene: every method's error against its wall time, in one run.
+
+Blastula (``blastula_accuracy``): alpha = 0.2, A = 50 um, B = 75 um, C = 200 Pa, target pressures
+p_i in {200, 500, 1000} Pa. Each method returns a state (p_i, lambda_a,i); its error is the relative
+pressure residual of that state against the exact incompressible shell,
+
+    error = max_i | p_exact(lambda_a,i) / p_i - 1 |,
+    p_exact(lambda_a) = int_{lambda_b}^{lambda_a} 4 C exp(alpha (2 l^2 + l^-4 - 3)) (l^3 + 1) / l^5 dl
+
+(scipy ``quad`` at rtol 1e-13; ``compare.bench.fem_blastula.p_exact``), which puts the forward
+(p from lambda_a) and inverse (lambda_a from p) methods on one scale. Methods:
+
+* reduced, quadrature path: ``reduced.blastula.inner_stretch(p)`` (20-point Gauss-Legendre + Newton);
+* reduced, diffrax path: ``reduced.blastula.pressure(lambda_exact, method="ode")`` with the Dopri8
+  tolerance set to rtol in {1e-3 .. 1e-10} (``_ode_rtol``);
+* FE: ``fem.blastula.inflate`` (load control, kappa = 2.2 GPa) on 4 mesh levels (n_radial, n_circ).
+
+Wall times: best of ``repeats`` calls after one warm-up call (the reduced paths are ``jax.jit``-ed;
+JIT compile and mesh set-up of the warm-up call are reported separately in ``first_s``). The machine is shared: times are pessimistic.
+
+Spheroid (``spheroid_accuracy``, needs ``fem.spheroid`` and ``reduced.spheroid``): the seed's Fig. 10
+case; the reference is the finest FE mesh; error = max over t in {0.2 s, 1500 s} of
+|sigma~(t) / sigma~_ref(t) - 1| (sigma~ = F / A_mid, Pa). Methods: reduced with the Hertz law, reduced
+with the FE-calibrated law (when its table exists), FE at coarser mesh levels.
+
+``pareto(df)`` marks the rows not dominated in (wall time, error).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import time
+from typing import Callable, Iterator, Sequence
+
+import numpy as np
+import pandas as pd
+
+UM = 1e-6
+A, B, C, ALPHA = 50e-6, 75e-6, 200.0, 0.2
+PRESSURES = (200.0, 500.0, 1000.0)
+ODE_RTOLS = (1e-3, 1e-4, 1e-6, 1e-8, 1e-10)
+FE_MESHES = ((2, 4), (4, 8), (8, 16), (16, 32))
+FE_MESHES_QUICK = ((1, 2), (2, 4), (4, 8), (8, 16))
+
+__all__ = ["blastula_accuracy", "spheroid_accuracy", "pareto", "timed", "FE_MESHES", "FE_MESHES_QUICK"]
+
+
+def timed(fn: Callable[[], object], repeats: int = 3) -> tuple[float, float, object]:
+    """(first-call seconds, best seconds of ``repeats`` further calls, last result)."""
+    t0 = time.perf_counter()
+    out = fn()
+    first = time.perf_counter() - t0
+    best = np.inf
+    for _ in range(max(int(repeats), 1)):
+        t0 = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t0)
+    return first, best, out
+
+
+@contextlib.contextmanager
+def _ode_rtol(rtol: float) -> Iterator[None]:
+    """Temporarily set the relative tolerance of ``reduced.blastula``'s radial-ODE (diffrax) path.
+
+    The path reads the module constant ``_ODE_RTOL`` when it is traced (each eager call), so a
+    different value takes effect at once and the default is restored afterwards.
+    """
+    from reduced import blastula
+
+    old = blastula._ODE_RTOL
+    blastula._ODE_RTOL = float(rtol)
+    try:
+        yield
+    finally:
+        blastula._ODE_RTOL = old
+
+
+def _pressure_error(stretch: Sequence[float], pressure: Sequence[float], alpha: float = ALPHA) -> float:
+    from compare.bench.fem_blastula import p_exact
+
+    return float(max(abs(p_exact(float(l), B, alpha) / float(p) - 1.0) for l, p in zip(stretch, pressure)))
+
+
+def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
+    """Error against wall time for the reduced (quadrature, diffrax) and FE blastula paths.
+
+    Returns a DataFrame with columns method, setting, wall_s (best of ``repeats`` after warm-up),
+    first_s (first call, includes JIT compile / mesh set-up), error (see the module docstring),
+    stretch_error (max |lambda_a / lambda_exact - 1|) and pareto (bool).
+    """
+    import jax
+
+    from compare.bench.fem_blastula import la_exact
+    from fem.blastula import inflate
+    from reduced import blastula as bl
+
+    ps = np.asarray(PRESSURES)
+    la_ex = np.array([la_exact(p, B, ALPHA) for p in ps])
+    geo = dict(inner_radius=A, outer_radius=B, C=C, alpha=ALPHA)
+    rows = []
+
+    inv = jax.jit(lambda q: bl.inner_stretch(q, **geo))
+    first, wall, la = timed(lambda: jax.block_until_ready(inv(ps)), max(repeats, 20))
+    la = np.asarray(la)
+    rows.append(dict(method="reduced quadrature", setting="20-pt Gauss-Legendre", wall_s=wall, first_s=first,
+                     error=_pressure_error(la, ps), stretch_error=float(np.max(np.abs(la / la_ex - 1)))))
+
+    for rtol in ODE_RTOLS:
+        fwd = jax.jit(lambda x: bl.pressure(x, **geo, method="ode"))
+        with _ode_rtol(rtol):  # the tolerance is read when the call is traced (first call, in the block)
+            first, wall, p = timed(lambda: jax.block_until_ready(fwd(la_ex)), max(repeats, 20))
+        p = np.asarray(p)
+        rows.append(dict(method="reduced diffrax (Dopri8)", setting=f"rtol={rtol:.0e}", wall_s=wall, first_s=first,
+                         error=float(np.max(np.abs(ps / p - 1))), stretch_error=np.nan))
+
+    for m in (FE_MESHES_QUICK if quick else FE_MESHES):
+        run = lambda m=m: inflate(inner_radius=A, outer_radius=B, C=C, alpha=ALPHA, pressures=ps, mesh=m)  # noqa: E731
+        first, wall, r = timed(run, 1 if m[0] >= 8 else repeats)
+        rows.append(dict(method="FE Q2/P1 mixed", setting=f"mesh {m[0]}x{m[1]}", wall_s=wall, first_s=first,
+                         error=_pressure_error(r.inner_stretch, r.pressure),
+                         stretch_error=float(np.max(np.abs(r.inner_stretch / la_ex - 1)))))
+    df = pd.DataFrame(rows)
+    df["pareto"] = pareto(df)
+    return df
+
+
+def pareto(df: pd.DataFrame, x: str = "wall_s", y: str = "error") -> np.ndarray:
+    """Boolean mask of rows on the Pareto front: no other row is both faster and more accurate."""
+    xs, ys = df[x].to_numpy(float), df[y].to_numpy(float)
+    ok = np.isfinite(xs) & np.isfinite(ys)
+    mask = np.zeros(len(df), bool)
+    for i in np.flatnonzero(ok):
+        dominated = ok & (xs <= xs[i]) & (ys <= ys[i]) & ((xs < xs[i]) | (ys < ys[i]))
+        mask[i] = not dominated.any()
+    return mask
+
+
+# ---------------------------------------------------------------------------------------------
+# Spheroid (optional: needs fem.spheroid and reduced.spheroid)
+# ---------------------------------------------------------------------------------------------
+
+FIG10 = dict(radius=500 * UM, C=150.0, alpha=0.2, branches=[(0.4, 200.0)], displacement=50 * UM, ramp_time=0.2)
+SPHEROID_TIMES = (0.2, 1500.0)
+
+
+def spheroid_available() -> str | None:
+    """None when both spheroid modules import, else the reason (shown as 'not available')."""
+    try:
+        import fem.spheroid  # noqa: F401
+        import reduced.spheroid  # noqa: F401
+    except Exception as exc:  # ImportError, or a module that is still being written
+        return f"{type(exc).__name__}: {exc}"
+    return None
+
+
+def spheroid_accuracy(quick: bool = False, meshes: Sequence | None = None,
+                      equilibria: dict | None = None) -> tuple[pd.DataFrame, dict]:
+    """Error of sigma~ at t = 0.2 s and 1500 s against the finest FE mesh, with wall times (Fig. 10 case).
+
+    ``meshes``: FE mesh levels from coarsest to finest (the last is the reference); default (0, 1, 2, 3)
+    (quick: (0, 1, 2)). ``equilibria``: name -> keyword arguments of ``reduced.spheroid.nominal_stress``
+    (e.g. ``{"hertz": dict(equilibrium="hertz")}``, the default, or a calibrated table with
+    ``equilibrium=(x, f), midplane=(x, g)``). Returns (table, {mesh: FE result}).
+    """
+    from fem import spheroid as fes
+    from reduced import spheroid as rs
+
+    meshes = list(meshes or ((0, 1, 2) if quick else (0, 1, 2, 3)))
+    equilibria = equilibria or {"hertz": dict(equilibrium="hertz")}
+    ts = np.asarray(SPHEROID_TIMES)
+    fe = {}
+    for m in meshes:
+        t0 = time.perf_counter()
+        r = fes.compress(**FIG10, end_time=ts[-1], mesh=m)
+        fe[m] = (time.perf_counter() - t0, r)
+    _, ref = fe[meshes[-1]]
+    s_ref = np.interp(ts, ref.time, ref.nominal_stress)
+    rows = []
+    for m in meshes:
+        wall, r = fe[m]
+        s = np.interp(ts, r.time, r.nominal_stress)
+        rows.append(dict(method="FE Q2/P1 mixed", setting=f"level {m}" + (" (reference)" if m == meshes[-1] else ""),
+                         wall_s=wall, first_s=wall,
+                         error=float(np.max(np.abs(s / s_ref - 1))) if m != meshes[-1] else np.nan,
+                         sigma_0_2s=s[0], sigma_1500s=s[1]))
+    for name, kw in equilibria.items():
+        first, wall, s = timed(lambda kw=kw: np.asarray(rs.nominal_stress(ts, **FIG10, **kw)), 3)
+        rows.append(dict(method=f"reduced ({name})", setting="lumped Maxwell, diffrax Kvaerno5", wall_s=wall,
+                         first_s=first, error=float(np.max(np.abs(s / s_ref - 1))), sigma_0_2s=s[0], sigma_1500s=s[1]))
+    df = pd.DataFrame(rows)
+    df["pareto"] = pareto(df)
+    return df, {m: r for m, (_, r) in fe.items()}

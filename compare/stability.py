@@ -1,0 +1,333 @@
+r"""A stability map: each method pushed until it fails, with the boundary measured.
+
+Every function returns a ``pandas.DataFrame`` (one row per attempt) that ``compare.figures`` charts
+and ``compare.report`` writes as CSV:
+
+``limit_point_map``      neo-Hookean (alpha = 1e-5) blastula, B in {52, 60, 75} um: the largest
+                         pressure that FE load control reaches (it stops at the limit point), the
+                         maximum traced by FE arc-length (which passes it), and the exact limit
+                         ``reduced.blastula.limit_point``.
+``kappa_map``            kappa/C from 1e2 to 1e7: displacement-only P2 ("displacement") against mixed
+                         Q2/P1 u-p ("mixed"): inner-stretch error against the incompressible exact
+                         shell (alpha = 0.2, B = 75 um), or the load where Newton failed.
+``compression_map``      spheroid, static elastic: the largest total approach (fraction of the
+                         diameter) that converges (needs ``fem.spheroid``).
+``viscous_step_map``     the lumped Maxwell branch of physics.md,
+                             F(t) = F_eq(t) + q(t),  dq/dt = -q/tau + beta dF_eq/dt,
+                         F_eq = (delta(t)/delta_0)^(3/2) (the Hertz shape; ramp t_r = 0.2 s, hold
+                         to 1500 s), advanced with a uniform step h by three update formulas:
+                           exact-linear:   q+ = e^-x q + beta (1 - e^-x)/x dF       (x = h/tau)
+                           backward Euler: q+ = (q + beta dF) / (1 + x)
+                           forward Euler:  q+ = (1 - x) q + beta dF
+                         error = max_n |F_n - F(t_n)| / max F against the exact convolution
+                         q(t) = beta int_0^t e^{-(t-s)/tau} F_eq'(s) ds; the largest h with error
+                         <= 1e-3 is the boundary.
+``stiff_solver_map``     the same ODE in diffrax with tau << t_r: explicit Tsit5 / Dopri5 against
+                         implicit Kvaerno5 (PID control, rtol = atol = 1e-8, max_steps 20 000):
+                         accepted and rejected steps, failures, error against the exact solution.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Sequence
+
+import numpy as np
+import pandas as pd
+
+UM = 1e-6
+A, C = 50e-6, 200.0
+
+__all__ = ["limit_point_map", "kappa_map", "compression_map", "viscous_step_map", "stiff_solver_map",
+           "exact_lumped_force", "TOLERANCE"]
+
+TOLERANCE = 1e-3  # the accuracy a viscoelastic step must keep
+
+
+# ---------------------------------------------------------------------------------------------
+# Blastula: limit point
+# ---------------------------------------------------------------------------------------------
+
+def limit_point_map(outer_um: Sequence[float] = (52.0, 60.0, 75.0), mesh="default",
+                    n_load_steps: int = 40) -> tuple[pd.DataFrame, dict]:
+    """Load control vs arc-length vs reduced at the neo-Hookean limit point (alpha = 1e-5).
+
+    Returns (table, arc-length results keyed by B in um). Table columns: B_um, method, p_reached_Pa
+    (largest converged pressure; for arc-length the maximum along the trace), stretch_reached
+    (largest inner stretch reached), p_max_exact_Pa, stretch_limit_exact, rel_err_p (p_reached /
+    p_max - 1), passed_limit (bool), wall_s, note.
+    """
+    from fem.blastula import LimitPointError, inflate
+    from reduced import blastula as bl
+
+    alpha = 1e-5
+    rows, traces = [], {}
+    for b in outer_um:
+        B = b * UM
+        geo = dict(inner_radius=A, outer_radius=B, C=C, alpha=alpha)
+        bl.limit_point(**geo)  # warm-up (JIT compile)
+        t0 = time.perf_counter()
+        lim = bl.limit_point(**geo)
+        wall = time.perf_counter() - t0
+        pmax, lstar = float(lim[0]), float(lim[1])
+        base = dict(B_um=b, p_max_exact_Pa=pmax, stretch_limit_exact=lstar)
+        note = "closed-form slope root; inner_stretch(p > p_max) raises ValueError (no solution)"
+        try:
+            bl.inner_stretch(1.01 * pmax, **geo)
+        except ValueError:
+            pass
+        else:  # pragma: no cover - would be a bug in reduced.blastula
+            note = "inner_stretch above p_max did NOT raise"
+        rows.append(dict(base, method="reduced (exact)", p_reached_Pa=pmax, stretch_reached=np.inf,
+                         rel_err_p=0.0, passed_limit=True, wall_s=wall, note=note))
+
+        t0 = time.perf_counter()
+        try:
+            r = inflate(**geo, pressures=np.linspace(pmax / n_load_steps, 1.2 * pmax, n_load_steps), mesh=mesh)
+            p_last, note = float(r.pressure[-1]), "reached 1.2 p_max (unexpected)"
+        except LimitPointError as e:
+            p_last = float(e.last_converged)
+            note = "LimitPointError: " + str(e).split(" (load level")[0][:160]
+        wall = time.perf_counter() - t0
+        la_last = float(bl.inner_stretch(min(p_last, pmax * (1 - 1e-12)), **geo))
+        rows.append(dict(base, method="FE load control", p_reached_Pa=p_last, stretch_reached=la_last,
+                         rel_err_p=p_last / pmax - 1, passed_limit=p_last > pmax, wall_s=wall, note=note))
+
+        t0 = time.perf_counter()
+        r = inflate(**geo, pressures=None, method="arclength", max_inner_stretch=1.3 * lstar, mesh=mesh)
+        wall = time.perf_counter() - t0
+        traces[b] = r
+        p_top, l_top = _parabolic_max(r.inner_stretch, r.pressure)
+        rows.append(dict(base, method="FE arc-length", p_reached_Pa=p_top,
+                         stretch_reached=float(r.inner_stretch[-1]), rel_err_p=p_top / pmax - 1,
+                         passed_limit=bool(r.inner_stretch[-1] > lstar), wall_s=wall,
+                         note=f"{len(r.pressure)} steps; maximum (parabola through the 3 steps around it) "
+                              f"at inner stretch {l_top:.4f}"))
+    return pd.DataFrame(rows), traces
+
+
+def _parabolic_max(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
+    """(y_max, x at y_max) of the parabola through the largest sample of y and its two neighbours."""
+    i = int(np.argmax(y))
+    if i == 0 or i == len(y) - 1:
+        return float(y[i]), float(x[i])
+    c = np.polyfit(x[i - 1:i + 2], y[i - 1:i + 2], 2)
+    if c[0] >= 0:
+        return float(y[i]), float(x[i])
+    xm = -c[1] / (2 * c[0])
+    return float(np.polyval(c, xm)), float(xm)
+
+
+# ---------------------------------------------------------------------------------------------
+# Blastula: locking versus kappa / C
+# ---------------------------------------------------------------------------------------------
+
+def kappa_map(ratios: Sequence[float] = (1e2, 1e3, 1e4, 1e5, 1e6, 1e7), mesh=(4, 8),
+              pressures: Sequence[float] = (250.0, 500.0)) -> pd.DataFrame:
+    """Inner-stretch error vs kappa/C for displacement-only and mixed u-p elements (alpha = 0.2, B = 75 um).
+
+    error = max_p |lambda_a,FE / lambda_a,exact - 1| against the incompressible exact shell (so it
+    contains the physical compressibility error ~ C/kappa as well as locking). A Newton failure is
+    recorded (error NaN, failed True, the message).
+    """
+    from compare.bench.fem_blastula import la_exact
+    from fem.blastula import inflate
+    from fem.newton import NewtonError
+
+    B, alpha = 75e-6, 0.2
+    ex = np.array([la_exact(p, B, alpha) for p in pressures])
+    rows = []
+    for form in ("mixed", "displacement"):
+        for k in ratios:
+            t0 = time.perf_counter()
+            err, failed, note = np.nan, False, ""
+            try:
+                with np.errstate(all="ignore"):
+                    r = inflate(inner_radius=A, outer_radius=B, C=C, alpha=alpha, pressures=list(pressures),
+                                mesh=mesh, kappa=k * C, formulation=form)
+                err = float(np.max(np.abs(r.inner_stretch / ex - 1)))
+            except NewtonError as e:
+                failed, note = True, str(e)[:200]
+            rows.append(dict(formulation=form, kappa_over_C=k, error=err, failed=failed,
+                             wall_s=time.perf_counter() - t0, note=note))
+    return pd.DataFrame(rows)
+
+
+# ---------------------------------------------------------------------------------------------
+# Spheroid: compression depth (optional)
+# ---------------------------------------------------------------------------------------------
+
+def compression_map(fractions: Sequence[float] = (0.2, 0.3, 0.4, 0.5, 0.6), mesh="default",
+                    radius: float = 500 * UM, C_: float = 200.0, alpha: float = 0.2) -> pd.DataFrame:
+    """Static elastic compression to increasing total approach (fraction of the diameter) until it fails.
+
+    Needs ``fem.spheroid``. Columns: fraction, approach_um, converged, force_N, steps, wall_s, note.
+    Stops at the first failure.
+    """
+    from fem import spheroid as fes
+
+    rows = []
+    for f in fractions:
+        t0 = time.perf_counter()
+        try:
+            r = fes.compress(radius=radius, C=C_, alpha=alpha, branches=None, displacement=2 * radius * f,
+                             ramp_time=1.0, end_time=1.0, mesh=mesh, static=True)
+            rows.append(dict(fraction=f, approach_um=float(r.approach[-1]) / UM, converged=True,
+                             force_N=float(r.force[-1]), steps=len(r.force), wall_s=time.perf_counter() - t0, note=""))
+        except Exception as e:  # NewtonError or a contact failure: the boundary
+            rows.append(dict(fraction=f, approach_um=2 * radius * f / UM, converged=False, force_N=np.nan,
+                             steps=0, wall_s=time.perf_counter() - t0, note=f"{type(e).__name__}: {str(e)[:160]}"))
+            break
+    return pd.DataFrame(rows)
+
+
+# ---------------------------------------------------------------------------------------------
+# Viscoelastic update formulas: the largest step that keeps 1e-3
+# ---------------------------------------------------------------------------------------------
+
+def _feq(t, ramp_time):
+    return np.clip(np.asarray(t, float) / ramp_time, 0.0, 1.0) ** 1.5
+
+
+def exact_lumped_force(t: np.ndarray, *, beta: float, tau: float, ramp_time: float) -> np.ndarray:
+    r"""Exact F(t) = F_eq(t) + beta int_0^t e^{-(t-s)/tau} F_eq'(s) ds, F_eq = (min(t, t_r)/t_r)^(3/2).
+
+    During the ramp (T = t/tau, D = Dawson's integral, scipy.special.dawsn)
+        q(t) = (3/2) beta (tau/t_r)^{3/2} (sqrt(T) - D(sqrt(T)))
+    (from int_0^T e^v sqrt(v) dv = e^T (sqrt(T) - D(sqrt(T)))); after it q(t) = q(t_r) e^{-(t - t_r)/tau}.
+    Dimensionless force (F_eq(t_r) = 1); accurate to round-off for any tau (no quadrature).
+    """
+    from scipy.special import dawsn
+
+    t = np.asarray(t, float)
+    tt = np.minimum(t, ramp_time)
+    x = np.sqrt(tt / tau)
+    q = 1.5 * beta * (tau / ramp_time) ** 1.5 * (x - dawsn(x))
+    q = q * np.exp(-np.maximum(t - ramp_time, 0.0) / tau)
+    return _feq(t, ramp_time) + q
+
+
+def _step_grid(h: float, ramp_time: float, end_time: float) -> np.ndarray:
+    n_r = max(1, int(np.ceil(ramp_time / h - 1e-9)))
+    n_h = max(1, int(np.ceil((end_time - ramp_time) / h - 1e-9)))
+    return np.concatenate([np.linspace(0, ramp_time, n_r + 1), np.linspace(ramp_time, end_time, n_h + 1)[1:]])
+
+
+def _lumped_steps(t: np.ndarray, update: str, beta: float, tau: float, ramp_time: float) -> np.ndarray:
+    """F_n on the grid t by one update formula (piecewise-uniform steps, so a linear filter per piece)."""
+    from scipy.signal import lfilter
+
+    F = _feq(t, ramp_time)
+    dF = np.diff(F)
+    x = np.diff(t) / tau
+    if update == "exact-linear":
+        a, b = np.exp(-x), beta * -np.expm1(-x) / x
+    elif update == "backward Euler":
+        a, b = 1.0 / (1.0 + x), beta / (1.0 + x)
+    elif update == "forward Euler":
+        a, b = 1.0 - x, beta * np.ones_like(x)
+    else:
+        raise ValueError(f"update must be 'exact-linear', 'backward Euler' or 'forward Euler', got {update!r}")
+    q = np.zeros(t.size)
+    # group runs of equal step size: q_{n+1} = a q_n + b dF_n is a first-order IIR filter on each run
+    cuts = np.flatnonzero(np.abs(np.diff(x)) > 1e-9 * x[:-1]) + 1
+    for start, stop in zip(np.r_[0, cuts], np.r_[cuts, x.size]):
+        seg = lfilter([b[start]], [1.0, -a[start]], dF[start:stop], zi=[a[start] * q[start]])[0]
+        q[start + 1:stop + 1] = seg
+    return F + q
+
+
+def viscous_step_map(steps: Sequence[float] | None = None, *, beta: float = 1.2, tau: float = 200.0,
+                     ramp_time: float = 0.2, end_time: float = 1500.0,
+                     updates: Sequence[str] = ("exact-linear", "backward Euler", "forward Euler")) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Error of each update formula vs the step h; returns (all rows, boundary per update).
+
+    Rows: update, step_s, error, n_steps, ok (error <= TOLERANCE and finite). Boundary: update,
+    largest_ok_step_s (largest h such that every tested h' <= h keeps the tolerance), its error,
+    and whether that is simply the largest step tried (then the true boundary lies beyond).
+    """
+    steps = np.geomspace(1e-3, end_time, 34) if steps is None else np.asarray(steps, float)
+    rows = []
+    for h in steps:
+        t = _step_grid(float(h), ramp_time, end_time)
+        ref = exact_lumped_force(t, beta=beta, tau=tau, ramp_time=ramp_time)
+        scale = np.max(np.abs(ref))
+        for u in updates:
+            with np.errstate(all="ignore"):
+                F = _lumped_steps(t, u, beta, tau, ramp_time)
+                err = float(np.max(np.abs(F - ref)) / scale)
+            rows.append(dict(update=u, step_s=float(h), error=err, n_steps=t.size - 1,
+                             ok=bool(np.isfinite(err) and err <= TOLERANCE)))
+    df = pd.DataFrame(rows)
+    bounds = []
+    for u in updates:
+        d = df[df["update"] == u].sort_values("step_s")
+        bad = np.flatnonzero(~d.ok.to_numpy())
+        last = (bad[0] - 1) if bad.size else len(d) - 1
+        if last < 0:
+            bounds.append(dict(update=u, largest_ok_step_s=np.nan, error_at_boundary=np.nan, step_over_tau=np.nan,
+                               limited_by_range=False))
+            continue
+        row = d.iloc[last]
+        bounds.append(dict(update=u, largest_ok_step_s=row.step_s, error_at_boundary=row.error,
+                           step_over_tau=row.step_s / tau, limited_by_range=not bad.size))
+    return df, pd.DataFrame(bounds)
+
+
+# ---------------------------------------------------------------------------------------------
+# Explicit vs implicit diffrax on the stiff lumped ODE
+# ---------------------------------------------------------------------------------------------
+
+def stiff_solver_map(tau_over_ramp: Sequence[float] = (1e-1, 1e-2, 1e-3, 1e-4, 1e-5), *, beta: float = 1.2,
+                     ramp_time: float = 0.2, end_time: float = 2.0, rtol: float = 1e-8,
+                     max_steps: int = 20_000, solvers: Sequence[str] = ("Tsit5", "Dopri5", "Kvaerno5")) -> pd.DataFrame:
+    """Steps, rejections and failures of diffrax solvers on dq/dt = -q/tau + beta F_eq'(t), tau << t_r.
+
+    The ramp end is a jump time of the step-size controller. Error = max |q - q_exact| / beta at
+    t in {t_r/2, t_r, 2 t_r} (``exact_lumped_force``). Columns: solver, tau_over_ramp, tau_s,
+    steps (accepted), rejected, failed, error, wall_s (after compile), note.
+    """
+    import diffrax
+    import equinox as eqx
+    import jax
+    import jax.numpy as jnp
+
+    import reduced  # noqa: F401  (enables float64)
+
+    ts_out = np.array([0.5 * ramp_time, ramp_time, 2 * ramp_time])
+
+    def rhs(t, q, tau):
+        s = jnp.clip(t / ramp_time, 0.0, 1.0)
+        dF = jnp.where(t < ramp_time, 1.5 * jnp.sqrt(s) / ramp_time, 0.0)
+        return -q / tau + beta * dF
+
+    rows = []
+    for name in solvers:
+        solver = getattr(diffrax, name)()
+
+        @eqx.filter_jit
+        def solve(tau, solver=solver):
+            ctrl = diffrax.ClipStepSizeController(diffrax.PIDController(rtol=rtol, atol=rtol),
+                                                  jump_ts=jnp.asarray([ramp_time]))
+            return diffrax.diffeqsolve(diffrax.ODETerm(rhs), solver, t0=0.0, t1=end_time, dt0=None,
+                                       y0=jnp.asarray(0.0), args=tau, saveat=diffrax.SaveAt(ts=jnp.asarray(ts_out)),
+                                       stepsize_controller=ctrl, max_steps=max_steps, throw=False)
+
+        for r in tau_over_ramp:
+            tau = float(r) * ramp_time
+            tau_j = jnp.asarray(tau)
+            jax.block_until_ready(solve(tau_j))  # compile (once per solver) / warm-up
+            t0 = time.perf_counter()
+            sol = jax.block_until_ready(solve(tau_j))
+            wall = time.perf_counter() - t0
+            ok = bool(sol.result == diffrax.RESULTS.successful)
+            err, note = np.nan, ""
+            if ok:
+                ex = exact_lumped_force(ts_out, beta=beta, tau=tau, ramp_time=ramp_time) - _feq(ts_out, ramp_time)
+                err = float(np.max(np.abs(np.asarray(sol.ys) - ex)) / beta)
+            else:
+                note = f"failed: {sol.result} (max_steps = {max_steps})"
+            rows.append(dict(solver=name, implicit=name.startswith("Kvaerno"), tau_over_ramp=float(r), tau_s=tau,
+                             steps=int(sol.stats["num_accepted_steps"]), rejected=int(sol.stats["num_rejected_steps"]),
+                             failed=not ok, error=err, wall_s=wall, note=note))
+    return pd.DataFrame(rows)
