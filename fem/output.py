@@ -102,8 +102,9 @@ class SpheroidResult:
     plate displacement of the quarter model) [m], ``force`` (plate force from the contact multipliers)
     [N], ``reaction_force`` (reaction of the midplane symmetry constraint) [N], ``midplane_radius`` [m],
     ``midplane_area`` (pi r_mid^2) [m^2], ``nominal_stress`` (F / A_mid) [Pa], ``mean_von_mises``
-    (average over the deformed volume) [Pa], ``contact_radius`` (deformed radius of the outermost node
-    in contact) [m], ``newton_iterations`` and ``contact_passes`` (active-set passes) per step,
+    (average over the deformed volume) [Pa], ``contact_radius`` (deformed contact radius: edge estimate
+    between the outermost node in contact and the next, from the gaps of the first free nodes, g ~ (r - a)^1.5)
+    [m], ``contact_radius_node`` (the outermost node in contact) [m], ``newton_iterations`` and ``contact_passes`` (active-set passes) per step,
     ``wall_time`` [s] per step. ``fields``: SpheroidField at the requested ``field_times`` and the end.
     """
 
@@ -116,6 +117,7 @@ class SpheroidResult:
     nominal_stress: np.ndarray
     mean_von_mises: np.ndarray
     contact_radius: np.ndarray
+    contact_radius_node: np.ndarray
     newton_iterations: np.ndarray
     contact_passes: np.ndarray
     wall_time: np.ndarray

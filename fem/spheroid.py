@@ -30,7 +30,8 @@ Outputs per converged step: plate force from the contact multipliers (sum of the
 active nodes; they include the 2 pi R of the axisymmetric volume element, so this is the force on the
 whole plate), the midplane reaction (must be equal: checked to 1e-6 relative, else RuntimeError),
 midplane radius (deformed equator), nominal stress F / (pi r_mid^2), volume-averaged von Mises stress
-(deformed volume), contact radius (outermost active node).
+(deformed volume), contact radius (edge estimate between the outermost active node and the next one,
+from the gaps of the first free nodes; ``contact_radius_node``: the outermost active node itself).
 """
 
 from __future__ import annotations
@@ -55,7 +56,7 @@ from fem.timestepping import march, ramp_hold_schedule
 __all__ = ["compress", "make_mesh", "MESHES", "LEVELS", "hertz_force"]
 
 # level -> (n_core, n_radial, surface grading, pole grading)
-LEVELS = {0: (4, 3, 2.0, 3.0), 1: (8, 6, 2.0, 4.0), 2: (16, 8, 2.0, 2.0), 3: (20, 10, 2.0, 3.0),
+LEVELS = {0: (4, 3, 2.0, 3.0), 1: (10, 4, 2.0, 2.0), 2: (16, 8, 2.0, 2.0), 3: (20, 10, 2.0, 3.0),
           4: (32, 12, 2.0, 3.0)}
 MESHES = {"coarse": 0, "default": 1, "fine": 2}
 FORCE_CHECK = 1e-6  # |F_contact - F_reaction| / F
@@ -155,12 +156,34 @@ class _Problem:
         Fr = float(r[2 * self.sym + 1].sum())
         x = s.x
         r_mid = 1.0 + x[2 * self.equator]
-        rc = float(np.max((pl.R + x[2 * pl.nodes])[s.active])) if s.active.any() else 0.0
+        rc, rc_node = _contact_radius(pl, x, s.active, 1.0 - s.delta)
         f, P, _, q = self.asm.stress(x, self.mat, s.extra_S, s.iso_scale)
         vm = cm.von_mises(cm.cauchy(f, P))
         _, J = invariants(f)
         wJ = self.asm.w * J
-        return F, Fr, r_mid, rc, float(np.sum(vm * wJ) / np.sum(wJ)), vm, q, N
+        return F, Fr, r_mid, rc, rc_node, float(np.sum(vm * wJ) / np.sum(wJ)), vm, q, N
+
+
+def _contact_radius(pl: RigidPlane, x: np.ndarray, active: np.ndarray, h: float):
+    """(edge estimate, outermost active node) of the deformed contact radius (scaled).
+
+    Between the outermost active node (r_k) and the next node (r_1) the edge a is estimated from the
+    gaps g_1, g_2 of the next two free nodes with the Hertz-like law g ~ (r - a)^(3/2):
+    (g_1/g_2)^(2/3) = (r_1 - a)/(r_2 - a), clamped to [r_k, r_1]."""
+    if not active.any():
+        return 0.0, 0.0
+    r = pl.R + x[2 * pl.nodes]
+    k = int(np.max(np.flatnonzero(active)))  # candidates are ordered from the pole outward
+    rk = float(r[k])
+    if k + 2 >= r.size:
+        return rk, rk
+    g = pl.gap(x, h)
+    g1, g2, r1, r2 = g[k + 1], g[k + 2], r[k + 1], r[k + 2]
+    if not (g2 > g1 > 0 and r2 > r1 > rk):
+        return rk, rk
+    rho = (g1 / g2) ** (2.0 / 3.0)
+    a = (r1 - rho * r2) / (1.0 - rho)
+    return float(np.clip(a, rk, r1)), rk
 
 
 def compress(*, radius: float, C: float, alpha: float, branches: Sequence = (),
@@ -248,13 +271,13 @@ def compress(*, radius: float, C: float, alpha: float, branches: Sequence = (),
     want.add(len(steps) - 1)
     for k, st in enumerate(steps):
         s = st.state
-        F, Fr, rm, rc, vmm, vm, q, N = prob.observe(s)
+        F, Fr, rm, rc, rcn, vmm, vm, q, N = prob.observe(s)
         if F > 0 and abs(F - Fr) > FORCE_CHECK * abs(F) + 1e3 * prob.floor:
             raise RuntimeError(f"contact force {F * L2:.6g} N and midplane reaction {Fr * L2:.6g} N differ by "
                                f"{abs(F - Fr) / F:.2e} (relative) at t = {st.t:.6g} s: equilibrium not reached. "
                                "Hint: tighten rtol")
         rows.append((st.t, 2 * a0 * s.delta, F * L2, Fr * L2, rm * a0, rc * a0, vmm * C, st.iterations,
-                     s.passes, st.wall_s))
+                     s.passes, st.wall_s, rcn * a0))
         if k in want:
             w = prob.asm.w
             u = s.x[:prob.asm.n_u].reshape(-1, 2) * a0
@@ -266,7 +289,7 @@ def compress(*, radius: float, C: float, alpha: float, branches: Sequence = (),
     area = np.pi * a[:, 4] ** 2
     return SpheroidResult(time=a[:, 0], approach=a[:, 1], force=a[:, 2], reaction_force=a[:, 3],
                           midplane_radius=a[:, 4], midplane_area=area, nominal_stress=a[:, 2] / area,
-                          mean_von_mises=a[:, 6], contact_radius=a[:, 5], newton_iterations=a[:, 7].astype(int),
+                          mean_von_mises=a[:, 6], contact_radius=a[:, 5], contact_radius_node=a[:, 10], newton_iterations=a[:, 7].astype(int),
                           contact_passes=a[:, 8].astype(int), wall_time=a[:, 9], mesh=m, fields=fields,
                           static=bool(static),
                           parameters=dict(radius=a0, C=C, alpha=float(alpha), kappa=float(kappa),
