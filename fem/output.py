@@ -104,7 +104,9 @@ class SpheroidResult:
     ``midplane_area`` (pi r_mid^2) [m^2], ``nominal_stress`` (F / A_mid) [Pa], ``mean_von_mises``
     (average over the deformed volume) [Pa], ``contact_radius`` (deformed contact radius: edge estimate
     between the outermost node in contact and the next, from the gaps of the first free nodes, g ~ (r - a)^1.5)
-    [m], ``contact_radius_node`` (the outermost node in contact) [m], ``newton_iterations`` and ``contact_passes`` (active-set passes) per step,
+    [m], ``contact_radius_node`` (the outermost node in contact) [m], ``min_gap`` (smallest plate gap
+    of the surface nodes, >= 0 to round-off) [m], ``min_contact_force`` (smallest nodal contact force of
+    the active nodes, >= 0 to round-off) [N], ``newton_iterations`` and ``contact_passes`` (active-set passes) per step,
     ``wall_time`` [s] per step. ``fields``: SpheroidField at the requested ``field_times`` and the end.
     """
 
@@ -118,6 +120,8 @@ class SpheroidResult:
     mean_von_mises: np.ndarray
     contact_radius: np.ndarray
     contact_radius_node: np.ndarray
+    min_gap: np.ndarray
+    min_contact_force: np.ndarray
     newton_iterations: np.ndarray
     contact_passes: np.ndarray
     wall_time: np.ndarray

@@ -24,7 +24,8 @@ Inside, lengths are scaled by a0, stresses by C, forces by C a0^2.
   points) or an ``AxiMesh`` from ``fem.mesh.ball_section`` (built with length_scale = radius; refine it
   toward the pole, e.g. pole_grading = 30, for Hertz-scale approaches delta < 1 % of the radius).
 * ``field_times``: times (s) at which the deformed mesh, von Mises and pressure fields are stored
-  (they become step times); the last step is always stored.
+  (they become step times; static runs: load fractions delta/displacement in (0, 1], the stored field is
+  the closest step); the last step is always stored.
 
 Outputs per converged step: plate force from the contact multipliers (sum of the nodal reactions of the
 active nodes; they include the 2 pi R of the axisymmetric volume element, so this is the force on the
@@ -161,7 +162,9 @@ class _Problem:
         vm = cm.von_mises(cm.cauchy(f, P))
         _, J = invariants(f)
         wJ = self.asm.w * J
-        return F, Fr, r_mid, rc, rc_node, float(np.sum(vm * wJ) / np.sum(wJ)), vm, q, N
+        gmin = float(np.min(pl.gap(x, 1.0 - s.delta)))
+        nmin = float(np.min(N[s.active])) if s.active.any() else 0.0
+        return F, Fr, r_mid, rc, rc_node, float(np.sum(vm * wJ) / np.sum(wJ)), vm, q, N, gmin, nmin
 
 
 def _contact_radius(pl: RigidPlane, x: np.ndarray, active: np.ndarray, h: float):
@@ -220,8 +223,10 @@ def compress(*, radius: float, C: float, alpha: float, branches: Sequence = (),
             tr = float(ramp_time)
             delta_fn = lambda t: d_max * min(float(t) / tr, 1.0)  # noqa: E731
     ft = np.atleast_1d(np.asarray(field_times, float)) if len(np.atleast_1d(field_times)) else np.array([])
-    if ft.size and (not np.all(np.isfinite(ft)) or np.any(ft <= 0) or (not static and np.any(ft > end_time))):
-        raise ValueError("field_times must be finite times in (0, end_time] (s)")
+    t_max = 1.0 if static else float(end_time)
+    if ft.size and (not np.all(np.isfinite(ft)) or np.any(ft <= 0) or np.any(ft > t_max * (1 + 1e-12))):
+        raise ValueError("field_times must be finite times in (0, end_time] (s); for static=True load "
+                         "fractions in (0, 1]")
 
     m = make_mesh(mesh, a0)
     prob = _Problem(m, Material(1.0, float(alpha), float(kappa) / C), beta, tau, rtol)
@@ -271,13 +276,13 @@ def compress(*, radius: float, C: float, alpha: float, branches: Sequence = (),
     want.add(len(steps) - 1)
     for k, st in enumerate(steps):
         s = st.state
-        F, Fr, rm, rc, rcn, vmm, vm, q, N = prob.observe(s)
+        F, Fr, rm, rc, rcn, vmm, vm, q, N, gmin, nmin = prob.observe(s)
         if F > 0 and abs(F - Fr) > FORCE_CHECK * abs(F) + 1e3 * prob.floor:
             raise RuntimeError(f"contact force {F * L2:.6g} N and midplane reaction {Fr * L2:.6g} N differ by "
                                f"{abs(F - Fr) / F:.2e} (relative) at t = {st.t:.6g} s: equilibrium not reached. "
                                "Hint: tighten rtol")
         rows.append((st.t, 2 * a0 * s.delta, F * L2, Fr * L2, rm * a0, rc * a0, vmm * C, st.iterations,
-                     s.passes, st.wall_s, rcn * a0))
+                     s.passes, st.wall_s, rcn * a0, gmin * a0, nmin * L2))
         if k in want:
             w = prob.asm.w
             u = s.x[:prob.asm.n_u].reshape(-1, 2) * a0
@@ -289,7 +294,8 @@ def compress(*, radius: float, C: float, alpha: float, branches: Sequence = (),
     area = np.pi * a[:, 4] ** 2
     return SpheroidResult(time=a[:, 0], approach=a[:, 1], force=a[:, 2], reaction_force=a[:, 3],
                           midplane_radius=a[:, 4], midplane_area=area, nominal_stress=a[:, 2] / area,
-                          mean_von_mises=a[:, 6], contact_radius=a[:, 5], contact_radius_node=a[:, 10], newton_iterations=a[:, 7].astype(int),
+                          mean_von_mises=a[:, 6], contact_radius=a[:, 5], contact_radius_node=a[:, 10],
+                          min_gap=a[:, 11], min_contact_force=a[:, 12], newton_iterations=a[:, 7].astype(int),
                           contact_passes=a[:, 8].astype(int), wall_time=a[:, 9], mesh=m, fields=fields,
                           static=bool(static),
                           parameters=dict(radius=a0, C=C, alpha=float(alpha), kappa=float(kappa),

@@ -107,6 +107,7 @@ def test_contact_force_equals_midplane_reaction_and_signorini(fig10_coarse):
     r = fig10_coarse
     assert np.all(r.force > 0)
     assert np.max(np.abs(r.force - r.reaction_force) / r.force) < 1e-6
+    assert np.all(r.min_gap >= -1e-12 * A0) and np.all(r.min_contact_force >= -1e-9 * r.force)
     # multipliers compressive on the active nodes (exactly zero elsewhere), at every stored state
     for f in r.fields:
         assert np.all(f.contact_nodal_force >= -1e-9 * f.contact_nodal_force.sum())

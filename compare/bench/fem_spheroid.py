@@ -58,7 +58,8 @@ def fig10(quick: bool) -> None:
           f"{its.mean():.2f}/step (ramp {its[ramp].mean():.2f}, hold {its[~ramp].mean():.2f}); "
           f"active-set passes/step max {r.contact_passes.max()}")
     rel = np.abs(r.force - r.reaction_force) / r.force
-    print(f"max |F_contact - F_reaction| / F = {rel.max():.1e}")
+    print(f"max |F_contact - F_reaction| / F = {rel.max():.1e}; min gap {r.min_gap.min():.1e} m; "
+          f"min nodal contact force / F {np.min(r.min_contact_force / r.force):.1e} (over all steps)")
     fines = {}
     for lev in ([2] if quick else [2, 3]):
         fines[lev], w = _timed(**FIG10, mesh=lev)
