@@ -79,12 +79,13 @@ class RigidPlane:
 
     def solve(self, fun: Callable, x0: np.ndarray, h: float, active0: np.ndarray, free: np.ndarray, *,
               gap_tol: float = 1e-10, force_tol: float = 1e-9, max_sets: int = 12, load=None,
-              **newton_kw) -> ContactSolution:
+              residual: Callable | None = None, **newton_kw) -> ContactSolution:
         """Equilibrium with the exact contact conditions at plane height h.
 
         ``fun(x) -> (r, K)`` the residual/tangent without contact; ``free`` the unknowns without
         contact (Dirichlet dofs excluded); the active set starts from ``active0`` plus every node that
-        penetrates in x0. ``newton_kw`` go to :func:`fem.newton.newton`.
+        penetrates in x0. ``residual(x) -> r`` (optional) skips the tangent when only the reactions are
+        needed. ``newton_kw`` go to :func:`fem.newton.newton`.
         """
         active = np.asarray(active0, bool) | (self.gap(x0, h) < -gap_tol)
         x = np.asarray(x0, float)
@@ -99,7 +100,7 @@ class RigidPlane:
             fr = np.setdiff1d(free, self.dofs[active], assume_unique=True)
             res = newton(fun, x, free=fr, load=load, **newton_kw)
             x, its = res.x, its + res.iterations
-            r = fun(x)[0]
+            r = residual(x) if residual is not None else fun(x)[0]
             N, g = self.normal_force(r), self.gap(x, h)
             scale = max(float(np.sum(N[active])), 1e-300)
             release = active & (N < -force_tol * scale)

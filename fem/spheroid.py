@@ -130,7 +130,9 @@ class _Problem:
         h = 1.0 - d1
         fun = lambda x: self.asm.internal(x, self.mat, extra_S=extra, iso_scale=iso_scale)  # noqa: E731
         ref = max(32.0 / 3.0 * max(d1, 1e-6) ** 1.5 * iso_scale, 1e-12)
+        res = lambda x: self.asm.internal(x, self.mat, extra_S=extra, iso_scale=iso_scale, tangent=False)[0]  # noqa: E731
         sol = self.plane.solve(fun, guess, h, s0.active, self.free, load=load, ref_norm=ref, rtol=self.rtol,
+                               residual=res,
                                xtol=1e-9, atol=self.floor, admissible=self.admissible, max_iter=25,
                                solver=symmetric_solve)
         return sol
