@@ -197,14 +197,29 @@ def exact_lumped_force(t: np.ndarray, *, beta: float, tau: float, ramp_time: flo
     (from int_0^T e^v sqrt(v) dv = e^T (sqrt(T) - D(sqrt(T)))); after it q(t) = q(t_r) e^{-(t - t_r)/tau}.
     Dimensionless force (F_eq(t_r) = 1); accurate to round-off for any tau (no quadrature).
     """
-    from scipy.special import dawsn
-
     t = np.asarray(t, float)
     tt = np.minimum(t, ramp_time)
     x = np.sqrt(tt / tau)
-    q = 1.5 * beta * (tau / ramp_time) ** 1.5 * (x - dawsn(x))
+    q = 1.5 * beta * (tau / ramp_time) ** 1.5 * _x_minus_dawson(x)
     q = q * np.exp(-np.maximum(t - ramp_time, 0.0) / tau)
     return _feq(t, ramp_time) + q
+
+
+def _x_minus_dawson(x: np.ndarray) -> np.ndarray:
+    """x - D(x) without cancellation: the series sum_{n>=1} (-1)^(n+1) 2^n x^(2n+1) / (2n+1)!! for x < 0.5."""
+    from scipy.special import dawsn
+
+    x = np.asarray(x, float)
+    out = x - dawsn(x)
+    small = x < 0.5
+    if np.any(small):
+        xs = x[small]
+        term, acc = xs.copy(), np.zeros_like(xs)
+        for n in range(1, 20):  # 0.5^38 / 39!! is far below round-off
+            term = -term * 2.0 * xs * xs / (2 * n + 1)
+            acc -= term
+        out[small] = acc
+    return out
 
 
 def _step_grid(h: float, ramp_time: float, end_time: float) -> np.ndarray:

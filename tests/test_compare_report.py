@@ -1,0 +1,191 @@
+"""tissuemech report: the folder it promises, and the physics in its numbers.
+
+Fast tests check the pieces (Pareto front, the exact viscoelastic reference, update-formula orders,
+the CLI). The slow module fixture runs ``build(..., quick=True)`` once (about 1.5 minutes on 2 cores)
+and checks every figure and table, then the numbers in them against tolerances.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from compare import report, stability
+from compare.accuracy import pareto
+
+
+# ---------------------------------------------------------------------------------------------
+# fast
+# ---------------------------------------------------------------------------------------------
+
+def test_pareto_front_marks_non_dominated_rows():
+    df = pd.DataFrame(dict(wall_s=[1.0, 2.0, 0.5, 3.0, np.nan], error=[1e-3, 1e-6, 1e-2, 1e-6, 1e-9]))
+    assert pareto(df).tolist() == [True, True, True, False, False]
+
+
+def test_exact_lumped_force_matches_quadrature_and_limits():
+    from scipy.integrate import quad
+
+    beta, tau, tr = 1.2, 0.05, 0.2
+    t = np.array([0.03, 0.1, 0.2, 0.5])
+    F = stability.exact_lumped_force(t, beta=beta, tau=tau, ramp_time=tr)
+    for ti, Fi in zip(t, F):
+        tt = min(ti, tr)
+        q = beta * quad(lambda s: np.exp(-(tt - s) / tau) * 1.5 * np.sqrt(s) / tr**1.5, 0, tt, epsrel=1e-12)[0]
+        q *= np.exp(-max(ti - tr, 0) / tau)
+        assert Fi == pytest.approx(min(ti / tr, 1) ** 1.5 + q, rel=1e-10)
+    # glassy limit (tau >> ramp): F(t_r) = 1 + beta; relaxed (tau << ramp): F(t_r) = 1
+    assert stability.exact_lumped_force([tr], beta=beta, tau=1e9, ramp_time=tr)[0] == pytest.approx(1 + beta, rel=1e-8)
+    assert stability.exact_lumped_force([tr], beta=beta, tau=1e-9, ramp_time=tr)[0] == pytest.approx(1.0, rel=1e-6)
+
+
+def test_update_formulas_orders_and_stability():
+    df, bounds = stability.viscous_step_map([0.05, 0.1, 1.0, 10.0, 500.0])
+    e = df.pivot(index="step_s", columns="update", values="error")
+    # backward Euler is first order in the hold step: halving h halves the error
+    assert e.loc[0.1, "backward Euler"] / e.loc[0.05, "backward Euler"] == pytest.approx(2.0, rel=0.15)
+    # the exact-linear update is exact in the hold: only the ramp's curvature is left, for any hold step
+    assert e["exact-linear"].max() < 1e-4
+    # forward Euler is unstable beyond h = 2 tau
+    assert e.loc[500.0, "forward Euler"] > 1.0
+    b = bounds.set_index("update")
+    assert b.loc["exact-linear", "limited_by_range"]
+    assert b.loc["backward Euler", "largest_ok_step_s"] == 1.0
+
+
+def test_cli_has_report_subcommand(capsys):
+    from compare.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["report", "--help"])
+    assert exc.value.code == 0
+    assert "--quick" in capsys.readouterr().out
+
+
+# ---------------------------------------------------------------------------------------------
+# slow: the whole quick report once
+# ---------------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def quick_report(tmp_path_factory):
+    out = tmp_path_factory.mktemp("report")
+    summary = report.build(out, quick=True, progress=False)
+    return out, summary
+
+
+def _csv(out: Path, name: str) -> pd.DataFrame:
+    return pd.read_csv(out / name)
+
+
+@pytest.mark.slow
+def test_every_promised_file_exists_and_is_not_empty(quick_report):
+    out, summary = quick_report
+    names = list(report.FIGURES) + list(report.TABLES) + ["report.md", "summary.json"]
+    if summary["spheroid_available"]:
+        assert "spheroid_error" not in summary, summary.get("spheroid_error")
+        names += list(report.SPHEROID_FIGURES) + list(report.SPHEROID_TABLES)
+    for n in names:
+        p = out / n
+        assert p.is_file() and p.stat().st_size > 0, n
+        if n.endswith(".png"):
+            assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and p.stat().st_size > 10_000, n
+        if n.endswith(".csv"):
+            assert len(_csv(out, n)) > 0, n
+    md = (out / "report.md").read_text()
+    for n in names:
+        if n.endswith(".png"):
+            assert f"({n})" in md, f"report.md does not show {n}"
+    assert json.loads((out / "summary.json").read_text())["quick"] is True
+    assert summary["total_wall_s"] > 0
+
+
+@pytest.mark.slow
+def test_report_states_the_seed_burst_disagreement(quick_report):
+    out, _ = quick_report
+    md = (out / "report.md").read_text()
+    assert "197.41 Pa" in md and "90.06 Pa" in md and "19.44 Pa" in md
+    seed = _csv(out, "seed_comparison.csv")
+    row = seed[seed.claim.str.contains("B = 75")].iloc[0]
+    assert row.agrees == "NO"
+
+
+@pytest.mark.slow
+def test_blastula_accuracy_numbers(quick_report):
+    out, _ = quick_report
+    df = _csv(out, "accuracy_blastula.csv")
+    fe = df[df.method.str.startswith("FE")]
+    assert len(fe) == 4
+    # every FE level but the coarsest 1x2 is within 1e-4 of the exact inner stretch
+    assert (fe.stretch_error.iloc[1:] < 1e-4).all()
+    assert (fe.error.iloc[2:] < 1e-4).all()
+    quad = df[df.method == "reduced quadrature"].iloc[0]
+    assert quad.error < 1e-12 and bool(quad.pareto)
+    ode = df[df.method.str.contains("diffrax")].set_index("setting")
+    assert ode.loc["rtol=1e-10", "error"] < 1e-10
+    assert ode.loc["rtol=1e-10", "error"] < ode.loc["rtol=1e-06", "error"] < ode.loc["rtol=1e-03", "error"]
+    sets = _csv(out, "blastula_sets.csv")
+    assert sets.max_rel_pressure_err.max() < 2e-3
+
+
+@pytest.mark.slow
+def test_limit_point_map(quick_report):
+    out, _ = quick_report
+    lim = _csv(out, "stability_limit_point.csv")
+    exact = {52.0: 19.44, 60.0: 90.06, 75.0: 197.41}
+    for b, p in exact.items():
+        g = lim[lim.B_um == b].set_index("method")
+        assert g.loc["reduced (exact)", "p_reached_Pa"] == pytest.approx(p, abs=0.006)
+        arc = g.loc["FE arc-length"]
+        assert abs(arc.rel_err_p) < 5e-3 and bool(arc.passed_limit)
+        lc = g.loc["FE load control"]
+        assert -5e-3 < lc.rel_err_p <= 1e-9 and not bool(lc.passed_limit)
+
+
+@pytest.mark.slow
+def test_kappa_map_mixed_beats_displacement(quick_report):
+    out, _ = quick_report
+    k = _csv(out, "stability_kappa.csv")
+    top = k[k.kappa_over_C == k.kappa_over_C.max()].set_index("formulation")
+    assert k.kappa_over_C.max() == pytest.approx(1e7)
+    assert top.loc["mixed", "error"] < 1e-5
+    assert bool(top.loc["displacement", "failed"]) or top.loc["displacement", "error"] > 100 * top.loc["mixed", "error"]
+    # mixed: the error is the physical compressibility ~ C/kappa, falling tenfold per decade
+    m = k[(k.formulation == "mixed") & (k.kappa_over_C <= 1e5)].sort_values("kappa_over_C")
+    assert np.all(np.diff(np.log10(m.error)) < -0.9)
+
+
+@pytest.mark.slow
+def test_viscous_and_stiff_maps(quick_report):
+    out, _ = quick_report
+    b = _csv(out, "stability_viscous_boundary.csv").set_index("update")
+    assert b.loc["exact-linear", "largest_ok_step_s"] >= 100 * b.loc["backward Euler", "largest_ok_step_s"]
+    assert 0.1 < b.loc["backward Euler", "largest_ok_step_s"] < 10
+    s = _csv(out, "stability_stiff_solvers.csv")
+    imp = s[s.solver == "Kvaerno5"]
+    assert not imp.failed.any() and imp.steps.max() < 500
+    exp = s[s.solver == "Tsit5"].sort_values("tau_over_ramp", ascending=False)
+    assert bool(exp.failed.iloc[-1])
+    ok = exp[~exp.failed]
+    assert np.all(np.diff(ok.steps) > 0)
+
+
+@pytest.mark.slow
+def test_spheroid_numbers(quick_report):
+    out, summary = quick_report
+    if not summary["spheroid_available"]:
+        pytest.skip("fem.spheroid / reduced.spheroid not importable")
+    acc = _csv(out, "accuracy_spheroid.csv")
+    fe = acc[acc.method.str.startswith("FE")]
+    assert fe.error.iloc[:-1].max() < 0.02
+    cal = acc[acc.method == "reduced (calibrated)"].iloc[0]
+    assert cal.error < 1e-3
+    hertz = acc[acc.method == "reduced (hertz)"].iloc[0]
+    assert 0.02 < hertz.error < 0.3  # Hertz is a small-strain law: off by ~10 % at 5 % compression
+    fit = summary["spheroid"]["fit"]
+    assert fit["tau"] == pytest.approx(200.0, rel=0.15) and fit["beta"] == pytest.approx(0.4, rel=0.15)
+    comp = _csv(out, "stability_compression.csv")
+    assert comp[comp.converged].fraction.max() >= 0.4
