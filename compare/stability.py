@@ -38,6 +38,13 @@ import pandas as pd
 UM = 1e-6
 A, C = 50e-6, 200.0
 
+def _positive_list(name: str, values: Sequence[float], unit: str = "") -> np.ndarray:
+    v = np.atleast_1d(np.asarray(values, dtype=float))
+    if v.size == 0 or not np.all(np.isfinite(v)) or np.any(v <= 0):
+        raise ValueError(f"{name} must be a non-empty list of positive numbers{unit}; got {list(np.ravel(values))!r}")
+    return v
+
+
 __all__ = ["limit_point_map", "kappa_map", "compression_map", "viscous_step_map", "stiff_solver_map",
            "exact_lumped_force", "TOLERANCE"]
 
@@ -60,6 +67,9 @@ def limit_point_map(outer_um: Sequence[float] = (52.0, 60.0, 75.0), mesh="defaul
     from fem.blastula import LimitPointError, inflate
     from reduced import blastula as bl
 
+    _positive_list("outer_um (outer radii)", outer_um, " in um")
+    if any(b <= A / UM for b in outer_um):
+        raise ValueError(f"outer radii must exceed the inner radius {A / UM:g} um; got {list(outer_um)}")
     alpha = 1e-5
     rows, traces = [], {}
     for b in outer_um:
@@ -134,6 +144,8 @@ def kappa_map(ratios: Sequence[float] = (1e2, 1e3, 1e4, 1e5, 1e6, 1e7), mesh=(4,
     from fem.blastula import inflate
     from fem.newton import NewtonError
 
+    _positive_list("ratios (kappa/C)", ratios)
+    _positive_list("pressures", pressures, " in Pa")
     B, alpha = 75e-6, 0.2
     ex = np.array([la_exact(p, B, alpha) for p in pressures])
     rows = []
@@ -164,6 +176,9 @@ def compression_map(fractions: Sequence[float] = (0.2, 0.3, 0.4, 0.5, 0.6), mesh
     Needs ``fem.spheroid``. Columns: fraction, approach_um, converged, force_N, steps, wall_s, note.
     Stops at the first failure.
     """
+    fr = _positive_list("fractions (approach / diameter)", fractions)
+    if np.any(fr >= 1):
+        raise ValueError(f"fractions are total approach / diameter and must be below 1; got {list(fractions)}")
     from fem import spheroid as fes
 
     rows = []
@@ -261,7 +276,12 @@ def viscous_step_map(steps: Sequence[float] | None = None, *, beta: float = 1.2,
     largest_ok_step_s (largest h such that every tested h' <= h keeps the tolerance), its error,
     and whether that is simply the largest step tried (then the true boundary lies beyond).
     """
-    steps = np.geomspace(1e-3, end_time, 34) if steps is None else np.asarray(steps, float)
+    for name, v, unit in (("beta", beta, ""), ("tau", tau, " s"), ("ramp_time", ramp_time, " s"), ("end_time", end_time, " s")):
+        if not (np.isfinite(v) and v > 0):
+            raise ValueError(f"{name} must be a positive number{unit}; got {v!r}")
+    if end_time <= ramp_time:
+        raise ValueError(f"end_time ({end_time} s) must be after the end of the ramp ({ramp_time} s)")
+    steps = np.geomspace(1e-3, end_time, 34) if steps is None else _positive_list("steps", steps, " in s")
     rows = []
     for h in steps:
         t = _step_grid(float(h), ramp_time, end_time)
@@ -309,6 +329,9 @@ def stiff_solver_map(tau_over_ramp: Sequence[float] = (1e-1, 1e-2, 1e-3, 1e-4, 1
 
     import reduced  # noqa: F401  (enables float64)
 
+    _positive_list("tau_over_ramp", tau_over_ramp)
+    if not end_time > 2 * ramp_time:
+        raise ValueError(f"end_time ({end_time} s) must exceed twice the ramp time ({ramp_time} s): errors are read at 2 t_r")
     ts_out = np.array([0.5 * ramp_time, ramp_time, 2 * ramp_time])
 
     def rhs(t, q, tau):

@@ -189,3 +189,14 @@ def test_spheroid_numbers(quick_report):
     assert fit["tau"] == pytest.approx(200.0, rel=0.15) and fit["beta"] == pytest.approx(0.4, rel=0.15)
     comp = _csv(out, "stability_compression.csv")
     assert comp[comp.converged].fraction.max() >= 0.4
+
+
+def test_bad_inputs_raise_clear_errors():
+    with pytest.raises(ValueError, match="tau must be a positive"):
+        stability.viscous_step_map([1.0], tau=0.0)
+    with pytest.raises(ValueError, match="steps must be"):
+        stability.viscous_step_map([-1.0])
+    with pytest.raises(ValueError, match="below 1"):
+        stability.compression_map([0.5, 1.2])
+    with pytest.raises(ValueError, match="inner radius"):
+        stability.limit_point_map([40.0])
