@@ -91,6 +91,11 @@ def static_curve(quick: bool) -> None:
         print(f"to {x:.0%} of the diameter: {w:.3f} s, {len(r.time)} steps, {r.newton_iterations.sum()} Newton its "
               f"({r.newton_iterations.mean():.2f}/step), max active-set passes {r.contact_passes.max()}, "
               f"max |F_c - F_r|/F {np.max(np.abs(r.force - r.reaction_force) / r.force):.1e}")
+    f, w = _timed(**kw, displacement=2 * A0 * 0.3, mesh=2)
+    r3 = compress(**kw, displacement=2 * A0 * 0.3)
+    e = np.abs(r3.force / f.force - 1)
+    print(f"default vs level 2 ({f.mesh.mesh.nelements} el., {w:.1f} s) on the 30 % curve: max |F/F_fine - 1| = "
+          f"{e.max():.2e} (rms {np.sqrt(np.mean(e**2)):.2e}); for delta/2a0 <= 0.05 {e[r3.approach <= 0.1 * A0 * 1.0001].max():.2e}")
     print(f"{'delta/2a0':>9} {'delta um':>9} {'F uN':>10} {'F/F_Hertz':>9} {'r_mid um':>9} {'a_c um':>8} {'sigma~ Pa':>9}")
     for k in range(0, len(r.time), 2 if len(r.time) > 12 else 1):
         print(f"{r.approach[k] / (2 * A0):9.3f} {r.approach[k] * 1e6:9.2f} {r.force[k] * 1e6:10.4f} "
