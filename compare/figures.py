@@ -109,8 +109,15 @@ def fig8(result: Any, times: Sequence[float]):
     """Seed Fig. 8: von Mises on the deformed quarter section at the stored field times (one panel each)."""
     plt = _plt()
     fig, axes = plt.subplots(1, len(times), figsize=(5.5 * len(times), 4.6))
-    for ax, t in zip(np.atleast_1d(axes), times):
+    axes = np.atleast_1d(axes)
+    for ax, t in zip(axes, times):
         result.plot_von_mises(t, ax=ax)
+    # one colour scale for all panels, so the relaxation is visible as a colour change
+    vms = [result.field_at(t).von_mises for t in times]
+    lo, hi = float(min(v.min() for v in vms)), float(max(v.max() for v in vms))
+    for ax in axes:
+        for coll in ax.collections:
+            coll.set_clim(lo, hi)
     fig.tight_layout()
     return fig
 
