@@ -188,7 +188,7 @@ def spheroid_accuracy(quick: bool = False, meshes: Sequence | None = None,
     for name, kw in equilibria.items():
         fn = jax.jit(lambda tt, kw=kw: rs.nominal_stress(tt, **FIG10, **kw))  # tables become constants
         first, wall, s = timed(lambda fn=fn: np.asarray(jax.block_until_ready(fn(ts))), 3)
-        rows.append(dict(method=f"reduced ({name})", setting="lumped Maxwell, diffrax Kvaerno5", wall_s=wall,
+        rows.append(dict(method=f"reduced ({name})", setting="jit", wall_s=wall,
                          first_s=first, error=float(np.max(np.abs(s / s_ref - 1))), sigma_0_2s=s[0], sigma_1500s=s[1]))
     df = pd.DataFrame(rows)
     df["pareto"] = pareto(df)
