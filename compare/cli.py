@@ -87,8 +87,9 @@ def _parser() -> argparse.ArgumentParser:
     s.add_argument("--end-time", type=_positive(), default=1500.0, help="end of the hold in s (default: 1500)")
     s.add_argument(
         "--equilibrium",
-        default="hertz",
-        help="equilibrium law F_eq: 'hertz' (default) or another registered name",
+        default="fem",
+        choices=["fem", "hertz"],
+        help="equilibrium law F_eq: 'fem' (FE-calibrated master curve, default) or 'hertz' (small strain)",
     )
     s.add_argument("--fem", action="store_true", help="also run the finite-element model (slower) and compare")
 

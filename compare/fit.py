@@ -275,7 +275,7 @@ def relaxation(
     radius: float,
     ramp_time: float,
     n_branches: int = 1,
-    equilibrium: Any = "hertz",
+    equilibrium: Any = "fem",
     initial: dict[str, float] | Sequence[float] | None = None,
     model: Callable | None = None,
     max_nfev: int = 200,

@@ -208,7 +208,7 @@ def spheroid(
     design_method: str = "grid",
     log: Sequence[str] = ("tau",),
     seed: int = 0,
-    equilibrium: Any = "hertz",
+    equilibrium: Any = "fem",
     batch_size: int = 8192,
     curves: bool = False,
     fe_checks: int = 0,

@@ -8,11 +8,12 @@ frictionless plates; ``delta(t)`` is the total approach (m). The plate force (N)
 (physics.md; beta_m energy factors, tau_m relaxation times in s), q_m(0) = 0. The equilibrium law
 F_eq is pluggable (``equilibrium=``):
 
-* ``"hertz"`` (default): small-strain Hertz for two plates, F = (4/3) E* sqrt(a0) (delta/2)^(3/2) with
-  E* = 8 C (incompressible), i.e. F_eq = C a0^2 f(x), f(x) = (32/3) x^(3/2), x = delta / (2 a0);
-* ``"fem"``: the master curves f(x; alpha) tabulated by the FE (``python -m compare.calibrate``, shipped
-  as ``reduced/data/spheroid_master.npz``), interpolated by C^2 splines of f / f_Hertz in x and alpha
-  (differentiable in both);
+* ``"fem"`` (default): the master curves f(x; alpha) tabulated by the FE (``python -m compare.calibrate``,
+  shipped as ``reduced/data/spheroid_master.npz``; x = delta/(2 a0) in [0, 0.3], alpha in [0, 1]),
+  interpolated by C^2 splines of f / f_Hertz in x and alpha (differentiable in both);
+* ``"hertz"``: small-strain Hertz for two plates, F = (4/3) E* sqrt(a0) (delta/2)^(3/2) with
+  E* = 8 C (incompressible), i.e. F_eq = C a0^2 f(x), f(x) = (32/3) x^(3/2), x = delta / (2 a0)
+  (independent of alpha; 4 % soft at x = 0.05, 30 % at x = 0.3 against the FE);
 * a table: ``(x, f)`` arrays (x = delta/(2 a0) from 0, f = F_eq / (C a0^2)), or a :class:`MasterCurve`;
 * a callable ``F_eq(delta, *, radius, C, alpha) -> N`` (JAX-traceable; its delta-derivative is taken
   by ``jax.jvp``).
@@ -407,7 +408,7 @@ def _table_of(law):
 
 
 def force(t: Any, *, radius: Any, C: Any, alpha: Any, branches: Sequence[tuple[Any, Any]] = (),
-          displacement: Any, ramp_time: Any = None, equilibrium: Equilibrium = "hertz",
+          displacement: Any, ramp_time: Any = None, equilibrium: Equilibrium = "fem",
           jump_times: Sequence[float] | None = None, rtol: float = 1e-10, atol: float = 1e-10,
           max_steps: int = 16384, solver: Any = None, adjoint: Any = "reverse") -> jnp.ndarray:
     r"""Plate force F(t) in N of the lumped generalized-Maxwell spheroid.
@@ -428,7 +429,7 @@ def force(t: Any, *, radius: Any, C: Any, alpha: Any, branches: Sequence[tuple[A
 
 
 def nominal_stress(t: Any, *, radius: Any, C: Any, alpha: Any, branches: Sequence[tuple[Any, Any]] = (),
-                   displacement: Any, ramp_time: Any = None, equilibrium: Equilibrium = "hertz",
+                   displacement: Any, ramp_time: Any = None, equilibrium: Equilibrium = "fem",
                    midplane: Any = None, jump_times: Sequence[float] | None = None, rtol: float = 1e-10,
                    atol: float = 1e-10, max_steps: int = 16384, solver: Any = None, adjoint: Any = "reverse") -> jnp.ndarray:
     r"""Nominal stress sigma~(t) = F(t) / (pi r_mid(delta(t))^2) in Pa (the seed's observable).
@@ -442,7 +443,7 @@ def nominal_stress(t: Any, *, radius: Any, C: Any, alpha: Any, branches: Sequenc
 
 
 def equilibrium_force(displacement: Any, *, radius: Any, C: Any, alpha: Any,
-                      equilibrium: Equilibrium = "hertz") -> jnp.ndarray:
+                      equilibrium: Equilibrium = "fem") -> jnp.ndarray:
     """Elastic equilibrium force F_eq(delta) in N for the total approach ``displacement`` (m)."""
     if not is_traced(displacement, radius, C, alpha):
         validate_positive("radius (of the ball)", radius, "m")

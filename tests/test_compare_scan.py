@@ -108,7 +108,7 @@ def test_spheroid_scan_with_reduced_model():
         s = np.asarray(red.nominal_stress(t, radius=row["radius [m]"], C=row["C [Pa]"], alpha=row["alpha [-]"],
                                           branches=[(row["beta [-]"], row["tau [s]"])],
                                           displacement=row["displacement [m]"], ramp_time=row["ramp_time [s]"]))
-        assert np.allclose(row["sigma [Pa]"], s, rtol=1e-10)
+        assert np.allclose(row["sigma [Pa]"], s, rtol=1e-8)  # jit (Kvaerno5) vs eager (Tsit5), both at rtol 1e-10
 
 
 def test_blastula_scan_fe_spot_checks_agree():

@@ -11,7 +11,7 @@ from reduced.interp import Spline1D, Spline2D
 
 A0, D, TR = 500e-6, 50e-6, 0.2
 T = np.concatenate([np.linspace(0.0, TR, 11), np.geomspace(TR, 1500.0, 40)[1:]])
-FIG10 = dict(radius=A0, C=150.0, alpha=0.2, branches=[(0.4, 200.0)], displacement=D, ramp_time=TR)
+FIG10 = dict(radius=A0, C=150.0, alpha=0.2, branches=[(0.4, 200.0)], displacement=D, ramp_time=TR, equilibrium="hertz")
 
 
 def hertz(delta, C=150.0, a0=A0):
@@ -31,7 +31,7 @@ def test_hertz_master_curve():
     # F = (4/3) E* sqrt(a0) (delta/2)^1.5 with E* = 8C  <=>  f(x) = (32/3) x^1.5, x = delta / (2 a0)
     x = D / (2 * A0)
     assert float(sp.hertz_f(x)) * 150.0 * A0**2 == pytest.approx(hertz(D), rel=1e-14)
-    assert float(sp.equilibrium_force(D, radius=A0, C=150.0, alpha=0.2)) == pytest.approx(hertz(D), rel=1e-14)
+    assert float(sp.equilibrium_force(D, radius=A0, C=150.0, alpha=0.2, equilibrium="hertz")) == pytest.approx(hertz(D), rel=1e-14)
     assert float(jax.grad(sp.hertz_f)(0.0)) == 0.0  # finite slope at first contact
 
 
@@ -99,7 +99,7 @@ def test_gradients_forward_and_reverse_agree_with_finite_differences():
 
     def model(p, adjoint):
         return sp.force(t, radius=A0, C=p[0], alpha=0.2, branches=[(p[1], p[2])], displacement=D,
-                        ramp_time=TR, adjoint=adjoint)
+                        ramp_time=TR, adjoint=adjoint, equilibrium="hertz")
 
     p = jnp.array([150.0, 0.4, 200.0])
     Jf = np.asarray(jax.jacfwd(lambda q: model(q, "forward"))(p))
@@ -109,28 +109,39 @@ def test_gradients_forward_and_reverse_agree_with_finite_differences():
                     / (2 * h[k]) for k in range(3)], axis=1)
     assert np.allclose(Jf, Jr, rtol=1e-8, atol=1e-20)
     assert np.allclose(Jf, Jfd, rtol=1e-5, atol=1e-16)
+    # through the calibrated table: d sigma / d alpha (the spline is differentiable in alpha)
+    if sp.DATA_FILE.exists():
+        s = lambda a: sp.nominal_stress(t, radius=A0, C=150.0, alpha=a, branches=[(0.4, 200.0)],  # noqa: E731
+                                        displacement=150e-6, ramp_time=TR, equilibrium="fem", rtol=1e-13, atol=1e-13)
+        da = np.asarray(jax.jacfwd(lambda a: sp.nominal_stress(
+            t, radius=A0, C=150.0, alpha=a, branches=[(0.4, 200.0)], displacement=150e-6, ramp_time=TR,
+            equilibrium="fem", adjoint="forward"))(0.25))
+        fd = (np.asarray(s(0.25 + 2e-3)) - np.asarray(s(0.25 - 2e-3))) / 4e-3  # adaptive steps: not too small an h
+        assert np.all(da > 0)  # stiffer with alpha
+        assert np.allclose(da, fd, rtol=1e-4)
 
 
 def test_jit_and_vmap_on_public_api():
     f = jax.jit(lambda C, b: sp.nominal_stress(jnp.array([0.2, 100.0]), radius=A0, C=C, alpha=0.2,
-                                               branches=[(b, 200.0)], displacement=D, ramp_time=TR))
+                                               branches=[(b, 200.0)], displacement=D, ramp_time=TR,
+                                               equilibrium="hertz"))
     out = jax.vmap(f)(jnp.array([100.0, 200.0]), jnp.array([0.2, 0.4]))
     ref = np.asarray(sp.nominal_stress([0.2, 100.0], **{**FIG10, "C": 200.0}))
-    assert np.allclose(out[1], ref, rtol=1e-12)
+    assert np.allclose(out[1], ref, rtol=1e-8)  # traced: Kvaerno5; eager non-stiff: Tsit5 (both rtol 1e-10)
 
 
 def test_table_and_callable_equilibria():
     x = np.linspace(0.0, 0.1, 41)
     # a table of the Hertz curve itself reproduces Hertz (the spline is of f / f_Hertz = 1)
-    Ft = np.asarray(sp.force(T, **FIG10, equilibrium=(x, (32 / 3) * x**1.5)))
+    Ft = np.asarray(sp.force(T, **{**FIG10, "equilibrium": (x, (32 / 3) * x**1.5)}))
     F = np.asarray(sp.force(T, **FIG10))
     assert np.allclose(Ft, F, rtol=1e-12)
     # a stiffening callable: F_eq = Hertz * (1 + 5 x)
     call = lambda d, *, radius, C, alpha: (32 / 3) * C * radius**2 * (d / (2 * radius)) ** 1.5 * (1 + 5 * d / (2 * radius))  # noqa: E731
-    Fc = np.asarray(sp.force([1500.0], **{**FIG10, "branches": []}, equilibrium=call))
+    Fc = np.asarray(sp.force([1500.0], **{**FIG10, "branches": [], "equilibrium": call}))
     assert Fc[0] == pytest.approx(hertz(D) * (1 + 5 * D / (2 * A0)), rel=1e-12)
     with pytest.raises(ValueError, match="beyond the calibrated table"):
-        sp.force(T, **{**FIG10, "displacement": 150e-6}, equilibrium=(x, (32 / 3) * x**1.5))
+        sp.force(T, **{**FIG10, "displacement": 150e-6, "equilibrium": (x, (32 / 3) * x**1.5)})
 
 
 def test_splines_interpolate_and_are_smooth():
@@ -163,11 +174,19 @@ def test_validation(bad, match):
 def test_fem_table_missing_or_present():
     if not sp.DATA_FILE.exists():
         with pytest.raises(FileNotFoundError, match="compare.calibrate"):
-            sp.force(T, **FIG10, equilibrium="fem")
+            sp.force(T, **{**FIG10, "equilibrium": "fem"})
         return
     mc = sp.master_curve()
     # the calibrated curve tends to Hertz at small compression and stiffens with alpha
     assert float(mc.f(0.002, 0.2)) / float(sp.hertz_f(0.002)) == pytest.approx(1.0, abs=0.03)
     assert float(mc.f(0.25, 0.5)) > float(mc.f(0.25, 0.0))
-    F = np.asarray(sp.force(T, **FIG10, equilibrium="fem"))
-    assert np.all(np.isfinite(F)) and F[-1] > 0
+    F = np.asarray(sp.force(T, **{k: v for k, v in FIG10.items() if k not in ("equilibrium", "branches")}))
+    assert np.all(np.isfinite(F)) and F[-1] > 0  # the default equilibrium is "fem"
+    # x = 0.05: the FE equilibrium is ~8 % stiffer than Hertz (finite strain, finite ball)
+    assert F[-1] / hertz(D) == pytest.approx(float(mc.f(0.05, 0.2) / sp.hertz_f(0.05)), rel=1e-6)
+    assert 1.04 < F[-1] / hertz(D) < 1.12
+    # the midplane radius comes from the table too: r_mid / a0 grows with compression, = 1 at x = 0
+    assert float(mc.g(0.0, 0.2)) == pytest.approx(1.0, abs=1e-3)
+    assert float(mc.g(0.3, 0.2)) > float(mc.g(0.1, 0.2)) > 1.0
+    with pytest.raises(ValueError, match="beyond the calibrated table"):
+        sp.force(T, **{**FIG10, "equilibrium": "fem", "displacement": 400e-6})
