@@ -13,6 +13,20 @@ step: its first positive entry; None for an automatic step raising the stretch b
 adapt up to twice the first), through limit points. Stretch = mean deformed /
 reference radius over the inner (outer) surface. Mesh: "coarse", "default", "fine", a tuple
 (n_radial, n_circ) or an ``AxiMesh`` from ``fem.mesh.shell_section``.
+
+``creep(*, inner_radius, outer_radius, C, alpha, branches, pressure, ramp_time, end_time, kappa=2.2e9,
+mesh="default", times=(), n_ramp=8, n_hold=60, first_hold=None, rtol=1e-10) -> BlastulaResult``
+
+The same shell with generalized Maxwell branches (beta_m, tau_m [s]) on the isochoric stress
+(``fem.viscoelastic``: dQ_m/dt + Q_m/tau_m = beta_m dS_iso/dt, exact exponential update for S_iso
+linear over a step) under a pressure ramp-and-hold: p(t) = pressure * min(t / ramp_time, 1) (Pa),
+held to ``end_time`` (s). Quasi-static time marching (``fem.timestepping``: ``n_ramp`` equal ramp
+steps, ``n_hold`` geometrically growing hold steps from ``first_hold`` (default ramp_time / 2),
+``times`` merged in as step times; a failed step is halved). The result has one entry per converged
+step in ``time`` [s], ``pressure``, ``inner_stretch``, ``outer_stretch``, ``newton_iterations``,
+``wall_time`` and the fields at ``end_time``. A hold pressure above the relaxed limit point makes the
+shell creep past it (it bursts): the step that cannot find equilibrium raises ``NewtonError`` naming
+the time. No branches (or beta = 0) is the elastic shell at every step.
 """
 
 from __future__ import annotations
@@ -24,14 +38,19 @@ import numpy as np
 
 from reduced.material import validate_material, validate_radii
 from fem import constitutive as cm
+from typing import NamedTuple
+
+from reduced.material import validate_branches, validate_positive
+from fem import viscoelastic as ve
 from fem.continuation import LimitPointError, arc_length, load_control
 from fem.forms import Assembler, Material
 from fem.kinematics import invariants
 from fem.mesh import AxiMesh, shell_section
-from fem.newton import newton, sparse_solve
+from fem.newton import NewtonError, newton, sparse_solve
 from fem.output import BlastulaResult
+from fem.timestepping import march, ramp_hold_schedule
 
-__all__ = ["inflate", "MESHES", "LimitPointError"]
+__all__ = ["inflate", "creep", "MESHES", "LimitPointError", "NewtonError"]
 
 MESHES = {"coarse": (2, 4), "default": (4, 8), "fine": (8, 16)}
 
@@ -52,7 +71,11 @@ def _make_mesh(mesh, A: float, B: float) -> AxiMesh:
 
 
 class _Problem:
-    """The scaled blastula equations r(u, p) = f_int(u) - p f_p(u) on the free dofs."""
+    """The scaled blastula equations r(u, p) = f_int(u) - p f_p(u) on the free dofs.
+
+    ``iso_scale``/``extra_S`` (``fem.viscoelastic.algorithmic``) add the Maxwell branch stresses of a
+    time step; the defaults are the elastic shell. ``ref`` = |f_p| at unit pressure (the force scale),
+    ``floor`` = the round-off floor of the residual (kappa/C times eps times the force scale)."""
 
     def __init__(self, m: AxiMesh, mat: Material, formulation: str = "mixed"):
         self.m, self.mat = m, mat
@@ -60,21 +83,29 @@ class _Problem:
         fixed = np.concatenate([2 * m.nodes["axis"], 2 * m.nodes["symmetry"] + 1])
         self.free = np.setdiff1d(np.arange(self.asm.ndof), fixed)
         self.inner = m.edges["inner"]
+        self.ref = float(np.linalg.norm(self.rk(np.zeros(self.free.size), 0.0, tangent=False)[2]))
+        self.floor = 1e3 * np.finfo(float).eps * max(mat.kappa, 1.0) * self.ref
 
     def full(self, uf):
         u = np.zeros(self.asm.ndof)
         u[self.free] = uf
         return u
 
-    def rk(self, uf, p, tangent=True):
+    def rk(self, uf, p, tangent=True, iso_scale: float = 1.0, extra_S=None):
         u = self.full(uf)
-        ri, Ki = self.asm.internal(u, self.mat, tangent=tangent)
+        ri, Ki = self.asm.internal(u, self.mat, extra_S=extra_S, iso_scale=iso_scale, tangent=tangent)
         fp, Kp = self.asm.follower_pressure(u, 1.0, self.inner, tangent=tangent)
         r = (ri - p * fp)[self.free]
         if not tangent:
             return r, None, -fp[self.free]
         K = (Ki - p * Kp).tocsr()[self.free][:, self.free]
         return r, K, -fp[self.free]
+
+    def solve(self, lam, guess, rtol, load, iso_scale: float = 1.0, extra_S=None):
+        """Newton for the equilibrium at scaled pressure lam (raises NewtonError naming ``load``)."""
+        return newton(lambda x: self.rk(x, lam, iso_scale=iso_scale, extra_S=extra_S)[:2], guess,
+                      ref_norm=self.ref * max(lam, 1e-3), rtol=rtol, xtol=1e-9, atol=self.floor * (1 + lam),
+                      admissible=self.admissible, load=load)
 
     def admissible(self, uf):
         f = self.asm.f_at(self.full(uf))
@@ -90,14 +121,37 @@ class _Problem:
         return (self.asm.surface_mean_stretch(u, self.m.edges["inner"]),
                 self.asm.surface_mean_stretch(u, self.m.edges["outer"]))
 
+    def result(self, lam, xs, its, wall, C, method, iso_scale: float = 1.0, extra_S=None, **extra) -> BlastulaResult:
+        """BlastulaResult (SI) from the scaled states ``xs`` (free dofs) at scaled pressures ``lam``;
+        the fields are those of the last state (with its step's branch stresses)."""
+        A = self.m.length_scale
+        st = np.array([self.stretches(x) for x in xs])
+        x_end = self.full(xs[-1])
+        u = x_end[:self.asm.n_u].reshape(-1, 2) * A
+        f, P, _, q = self.asm.stress(x_end, self.mat, extra_S, iso_scale)
+        vm = cm.von_mises(cm.cauchy(f, P)) * C
+        wq = self.asm.w
+        return BlastulaResult(pressure=np.asarray(lam, float) * C, inner_stretch=st[:, 0], outer_stretch=st[:, 1],
+                              newton_iterations=np.asarray(its, int), wall_time=np.asarray(wall, float),
+                              mesh=self.m, displacement=u, deformed_nodes=self.m.X.T * A + u,
+                              hydrostatic_pressure=-(q * wq).sum(1) / wq.sum(1) * C,
+                              von_mises=(vm * wq).sum(1) / wq.sum(1), method=method, **extra)
+
+
+def _setup(inner_radius, outer_radius, C, alpha, kappa, mesh, formulation: str = "mixed") -> _Problem:
+    """Validate the shell inputs and build the scaled problem (lengths / A, stresses / C)."""
+    validate_radii(inner_radius, outer_radius)
+    validate_material(C, alpha, kappa)
+    A, B = float(inner_radius), float(outer_radius)
+    m = _make_mesh(mesh, A, B)
+    return _Problem(m, Material(1.0, float(alpha), float(kappa) / float(C)), formulation)
+
 
 def inflate(*, inner_radius: float, outer_radius: float, C: float, alpha: float,
             pressures: Union[Sequence[float], np.ndarray, None], kappa: float = 2.2e9,
             mesh="default", method: str = "load", max_inner_stretch: float | None = None,
             rtol: float = 1e-10, formulation: str = "mixed") -> BlastulaResult:
     """Inflate the hollow sphere; see the module docstring. SI units (m, Pa)."""
-    validate_radii(inner_radius, outer_radius)
-    validate_material(C, alpha, kappa)
     if method not in ("load", "arclength"):
         raise ValueError(f"method must be 'load' or 'arclength', got {method!r}")
     if pressures is not None:
@@ -113,17 +167,12 @@ def inflate(*, inner_radius: float, outer_radius: float, C: float, alpha: float,
     if method == "arclength":
         if max_inner_stretch is None or not np.isfinite(max_inner_stretch) or max_inner_stretch <= 1:
             raise ValueError("method='arclength' needs max_inner_stretch > 1 (where to stop the trace)")
-    A, B = float(inner_radius), float(outer_radius)
-    m = _make_mesh(mesh, A, B)
-    prob = _Problem(m, Material(1.0, float(alpha), float(kappa) / float(C)), formulation)
+    prob = _setup(inner_radius, outer_radius, C, alpha, kappa, mesh, formulation)
     u0 = np.zeros(prob.free.size)
-    ref = float(np.linalg.norm(prob.rk(u0, 0.0, tangent=False)[2]))  # |f_p| at unit pressure
-    # round-off floor of the residual: kappa/C times eps times the force scale (plus the load)
-    floor = 1e3 * np.finfo(float).eps * max(prob.mat.kappa, 1.0) * ref
+    ref, floor = prob.ref, prob.floor
 
     def solve(lam, guess):
-        return newton(lambda x: prob.rk(x, lam)[:2], guess, ref_norm=ref * max(lam, 1e-3), rtol=rtol,
-                      xtol=1e-9, atol=floor * (1 + lam), admissible=prob.admissible, load=f"p = {lam * C:.6g} Pa")
+        return prob.solve(lam, guess, rtol, load=f"p = {lam * C:.6g} Pa")
 
     if method == "load":
         steps = load_control(solve, p / C, u0, monitor=lambda x: prob.stretches(x)[0], unit=" Pa", scale=C)
@@ -147,13 +196,92 @@ def inflate(*, inner_radius: float, outer_radius: float, C: float, alpha: float,
         xs = [u0] + [s[1] for s in steps]
         its = np.array([0] + [s[2] for s in steps])
         wall = np.array([0.0] + [s[3] for s in steps])
-    st = np.array([prob.stretches(x) for x in xs])
-    u = prob.full(xs[-1])[:prob.asm.n_u].reshape(-1, 2) * A
-    f, P, _, q = prob.asm.stress(prob.full(xs[-1]), prob.mat)
-    vm = cm.von_mises(cm.cauchy(f, P)) * C
-    wq = prob.asm.w
-    return BlastulaResult(pressure=lam * C, inner_stretch=st[:, 0], outer_stretch=st[:, 1],
-                          newton_iterations=its, wall_time=wall, mesh=m, displacement=u,
-                          deformed_nodes=m.X.T * A + u,
-                          hydrostatic_pressure=-(q * wq).sum(1) / wq.sum(1) * C,
-                          von_mises=(vm * wq).sum(1) / wq.sum(1), method=method)
+    return prob.result(lam, xs, its, wall, C, method)
+
+
+class _CreepState(NamedTuple):
+    x: np.ndarray  # free dofs (scaled)
+    visco: ve.MaxwellState  # branch stresses and S_iso after the step
+    lam: float  # scaled pressure p / C
+    iso_scale: float  # algorithmic factors of the step that produced this state (for its stresses)
+    extra_S: object
+
+
+def creep(*, inner_radius: float, outer_radius: float, C: float, alpha: float, branches: Sequence,
+          pressure: float, ramp_time: float, end_time: float, kappa: float = 2.2e9, mesh="default",
+          times: Sequence[float] = (), n_ramp: int = 8, n_hold: int = 60, first_hold: float | None = None,
+          rtol: float = 1e-10) -> BlastulaResult:
+    r"""Creep of the viscoelastic shell under p(t) = pressure min(t / ramp_time, 1); see the module docstring.
+
+    SI units: radii (m), C, kappa, pressure (Pa), times (s); ``branches`` = [(beta_m, tau_m [s]), ...].
+    Every step solves the equilibrium r(u, t_{n+1}) = f_int(u; iso_scale, extra_S) - p(t_{n+1}) f_p(u) = 0
+    with the algorithmic Maxwell stress S = S_vol + (1 + sum beta_m g_m) S_iso + sum (e^{-h_m} Q_m^n -
+    beta_m g_m S_iso^n) (``fem.viscoelastic``), then updates Q_m. Returns a BlastulaResult with ``time``
+    and ``method="creep"`` (``parameters`` records the inputs).
+    """
+    br = validate_branches(branches)
+    validate_positive("pressure (the held cavity pressure)", pressure, "Pa")
+    validate_positive("ramp_time", ramp_time, "s")
+    validate_positive("end_time", end_time, "s")
+    if end_time < ramp_time:
+        raise ValueError(f"end_time ({end_time} s) must be >= ramp_time ({ramp_time} s): the pressure is "
+                         "ramped up over ramp_time, then held until end_time")
+    for name, n in (("n_ramp", n_ramp), ("n_hold", n_hold)):
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise ValueError(f"{name} (number of time steps) must be a positive integer, got {n!r}")
+    if first_hold is not None:
+        validate_positive("first_hold (the first step after the ramp)", first_hold, "s")
+    ts = np.atleast_1d(np.asarray(times, float)) if len(np.atleast_1d(times)) else np.array([])
+    if ts.size and (not np.all(np.isfinite(ts)) or np.any(ts <= 0) or np.any(ts > end_time * (1 + 1e-12))):
+        raise ValueError(f"times (extra output times) must be finite and in (0, end_time = {end_time} s]")
+    prob = _setup(inner_radius, outer_radius, C, alpha, kappa, mesh)
+    C, p0, tr = float(C), float(pressure), float(ramp_time)
+    beta = np.array([float(b) for b, _ in br])
+    tau = np.array([float(t) for _, t in br])
+    schedule = ramp_hold_schedule(tr, float(end_time), n_ramp=int(n_ramp), n_hold=int(n_hold),
+                                  first_hold=first_hold, breakpoints=list(ts))
+    lam_at = lambda t: p0 / C * min(t / tr, 1.0)  # noqa: E731
+    on_ramp = lambda t: t <= tr * (1 + 1e-12)  # noqa: E731
+
+    tried = [0.0]  # the last time a step was tried (for the failure message)
+
+    def step(t0, s: _CreepState, t1, prev):
+        tried[0] = t1
+        dt = t1 - t0
+        iso_scale, extra = ve.algorithmic(s.visco, beta, tau, dt)
+        lam = lam_at(t1)
+        guess = s.x
+        if prev is not None and on_ramp(t1) == on_ramp(t0) and on_ramp(prev[0]) == on_ramp(t0):
+            # secant predictor in time, within one segment (ramp or hold) of the history
+            cand = s.x + (s.x - prev[1].x) * dt / (t0 - prev[0])
+            if prob.admissible(cand) is None:
+                guess = cand
+        load = f"t = {t1:.6g} s, p = {lam * C:.6g} Pa"
+        sol = prob.solve(lam, guess, rtol, load, iso_scale, extra)
+        S_new = prob.asm.iso_S(prob.full(sol.x), prob.mat)
+        return _CreepState(sol.x, ve.update(s.visco, beta, tau, dt, S_new), lam, iso_scale, extra), sol.iterations
+
+    s0 = _CreepState(np.zeros(prob.free.size), ve.initial_state(beta.size, prob.asm.w.shape + (5,)), 0.0, 1.0, None)
+    try:
+        steps = march(step, s0, schedule)
+    except NewtonError as err:
+        t_fail = tried[0]
+        if t_fail > tr * (1 + 1e-12):
+            why = (f"no equilibrium of the viscoelastic shell under the held pressure {p0:g} Pa near "
+                   f"t = {t_fail:.6g} s: it creeps past its limit point (bursts)")
+            hint = ("compare the held pressure with the limit point of the relaxed shell (C), e.g. "
+                    "reduced.blastula.limit_point; lower the pressure or end the hold earlier")
+        else:
+            why = (f"no equilibrium on the pressure ramp near t = {t_fail:.6g} s (p = {lam_at(t_fail) * C:.6g} Pa): "
+                   "the shell passes its limit point while loading")
+            hint = ("compare the pressure with the limit point of the instantaneous shell ((1 + sum beta) C), "
+                    "e.g. reduced.blastula.limit_point; lower the pressure")
+        raise NewtonError(why, load=err.load, residuals=err.residuals, hint=hint) from err
+    last = steps[-1].state
+    return prob.result([st.state.lam for st in steps], [st.state.x for st in steps],
+                       [st.iterations for st in steps], [st.wall_s for st in steps], C, "creep",
+                       last.iso_scale, last.extra_S, time=np.array([st.t for st in steps]),
+                       parameters=dict(inner_radius=float(inner_radius), outer_radius=float(outer_radius), C=C,
+                                       alpha=float(alpha), kappa=float(kappa),
+                                       branches=tuple((float(b), float(t)) for b, t in br), pressure=p0,
+                                       ramp_time=tr, end_time=float(end_time)))

@@ -4,7 +4,8 @@ API: ``SpheroidResult`` (spheroid compression, see its docstring), ``SpheroidFie
 ``BlastulaResult`` (dataclass; arrays per converged step: ``pressure`` [Pa], ``inner_stretch``,
 ``outer_stretch``, ``newton_iterations``, ``wall_time`` [s]; final fields: ``mesh`` (AxiMesh),
 ``displacement`` (N, 2) [m], ``deformed_nodes`` (N, 2) [m], ``hydrostatic_pressure`` and
-``von_mises`` per element (mean over its quadrature points) [Pa]),
+``von_mises`` per element (mean over its quadrature points) [Pa]; creep runs (``fem.blastula.creep``,
+``method="creep"``) also have ``time`` [s] per step and ``parameters`` (the inputs)),
 ``write_vtu(path, mesh, displacement, cell_data)`` and ``plot_von_mises(mesh, displacement, vm, ax=None)``.
 """
 
@@ -31,6 +32,8 @@ class BlastulaResult:
     hydrostatic_pressure: np.ndarray
     von_mises: np.ndarray
     method: str = "load"
+    time: Optional[np.ndarray] = None
+    parameters: Optional[dict] = None
 
     def to_vtu(self, path: str) -> None:
         """Write the final deformed state (ParaView) with displacement and element fields."""

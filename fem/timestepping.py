@@ -61,7 +61,8 @@ def ramp_hold_schedule(ramp_time: float, end_time: float, *, n_ramp: int = 6, n_
             t += [end_time]
         else:
             # geometric steps h0 q^k (k < n_hold) summing to span: solve for q by bisection
-            lo, hi = 1.0, 1e3
+            # the largest step h0 q^(n_hold - 1) < span bounds q (and keeps q^n_hold finite)
+            lo, hi = 1.0, min(1e3, (span / h0) ** (1.0 / (n_hold - 1)))
             f = lambda q: h0 * (q**n_hold - 1) / (q - 1) - span if q > 1 else h0 * n_hold - span  # noqa: E731
             if f(1.0 + 1e-12) >= 0:  # even equal steps overshoot: use equal steps
                 t += list(ramp_time + np.linspace(0, span, n_hold + 1)[1:])
