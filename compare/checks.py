@@ -74,7 +74,7 @@ def spheroid(*, n_random: int = 10, seed: int = 0, mesh: str = "default", radius
     for k in range(n_random):
         cases[f"random {k}"] = dict(C=float(rng.uniform(100, 400)), alpha=float(rng.uniform(0.0, 0.6)),
                                     beta=float(rng.uniform(0.1, 1.5)), tau=float(10 ** rng.uniform(0.5, 2.7)),
-                                    displacement=float(rng.uniform(0.02, 0.4) * 2 * radius))
+                                    displacement=float(rng.uniform(0.02, 0.28) * 2 * radius))
     rows = []
     for name, c in cases.items():
         t0 = time.perf_counter()

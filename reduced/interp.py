@@ -16,10 +16,11 @@ from __future__ import annotations
 
 from typing import Any
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
-__all__ = ["second_derivative_map", "spline_weights", "Spline1D", "Spline2D"]
+__all__ = ["second_derivative_map", "spline_weights", "spline_eval", "Spline1D", "Spline2D"]
 
 
 def second_derivative_map(knots: np.ndarray) -> np.ndarray:
@@ -69,6 +70,24 @@ def spline_weights(knots: np.ndarray, L: np.ndarray, x: Any) -> jnp.ndarray:
     return w
 
 
+def spline_eval(knots: np.ndarray, y: Any, M: Any, x: Any) -> jnp.ndarray:
+    """Natural cubic spline through ``y`` with knot second derivatives ``M`` (= L y), at ``x``:
+    four gathered numbers per point (cheap inside ODE right-hand sides); linear beyond the ends."""
+    k = jnp.asarray(knots)
+    n = k.shape[0]
+    x = jnp.asarray(x, dtype=jnp.float64)
+    i = jnp.clip(jnp.searchsorted(k, x, side="right") - 1, 0, n - 2)
+    x0, x1 = k[i], k[i + 1]
+    h = x1 - x0
+    xc = jnp.clip(x, k[0], k[-1])
+    a = (x1 - xc) / h
+    b = (xc - x0) / h
+    y0, y1, M0, M1 = y[i], y[i + 1], M[i], M[i + 1]
+    s = a * y0 + b * y1 + ((a**3 - a) * M0 + (b**3 - b) * M1) * h**2 / 6
+    slope = (y1 - y0) / h + (-(3 * a**2 - 1) * M0 + (3 * b**2 - 1) * M1) * h / 6
+    return s + slope * (x - xc)  # linear continuation outside [k_0, k_-1] (slope of the end segment there)
+
+
 class Spline1D:
     """s(x) through (knots, values), natural cubic; callable on JAX arrays (jit/vmap/grad)."""
 
@@ -80,9 +99,10 @@ class Spline1D:
         if not np.all(np.isfinite(self.values)):
             raise ValueError("table values must be finite numbers")
         self.L = second_derivative_map(self.knots)
+        self.M = self.L @ self.values
 
     def __call__(self, x: Any) -> jnp.ndarray:
-        return spline_weights(self.knots, self.L, x) @ jnp.asarray(self.values)
+        return spline_eval(self.knots, jnp.asarray(self.values), jnp.asarray(self.M), x)
 
 
 class Spline2D:
@@ -96,12 +116,25 @@ class Spline2D:
             raise ValueError(f"table values need shape (n_alpha, n_x) = ({self.alpha.size}, {self.x.size}); "
                              f"got {self.values.shape}")
         self.Lx = second_derivative_map(self.x)
+        self.Mx = self.values @ self.Lx.T  # knot second derivatives in x of every alpha row
         self.La = second_derivative_map(self.alpha) if self.alpha.size > 1 else None
 
-    def __call__(self, x: Any, alpha: Any) -> jnp.ndarray:
-        wx = spline_weights(self.x, self.Lx, x)
-        rows = wx @ jnp.asarray(self.values).T  # (..., n_alpha)
+    def at(self, alpha: Any) -> tuple[jnp.ndarray, jnp.ndarray]:
+        """(values, x-second-derivatives) of the 1-D spline in x at this alpha (a spline in alpha of
+        the rows: linear in the rows, so the x-spline of the interpolated row is exact)."""
         if self.La is None:
-            return rows[..., 0]
-        wa = spline_weights(self.alpha, self.La, alpha)
-        return jnp.sum(wa * rows, axis=-1)
+            return jnp.asarray(self.values[0]), jnp.asarray(self.Mx[0])
+        wa = spline_weights(self.alpha, self.La, alpha)  # (n_alpha,)
+        return wa @ jnp.asarray(self.values), wa @ jnp.asarray(self.Mx)
+
+    def curve(self, alpha: Any):
+        """x -> s(x, alpha) for one (possibly traced) alpha, with the alpha work done once."""
+        y, M = self.at(alpha)
+        return lambda x: spline_eval(self.x, y, M, x)
+
+    def __call__(self, x: Any, alpha: Any) -> jnp.ndarray:
+        x = jnp.asarray(x, dtype=jnp.float64)
+        alpha = jnp.asarray(alpha, dtype=jnp.float64)
+        shape = jnp.broadcast_shapes(x.shape, alpha.shape)
+        xs, als = jnp.broadcast_to(x, shape).reshape(-1), jnp.broadcast_to(alpha, shape).reshape(-1)
+        return jax.vmap(lambda xi, ai: self.curve(ai)(xi))(xs, als).reshape(shape)

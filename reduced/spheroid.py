@@ -134,6 +134,17 @@ class MasterCurve:
         h = self._h(x) if self.alpha is None else self._h(x, alpha)
         return hertz_f(x) * h
 
+    def f_curve(self, alpha: Any = 0.0) -> Callable:
+        """x -> F_eq/(C a0^2) at one alpha (alpha interpolation done once: fast inside ODEs)."""
+        h = self._h if self.alpha is None else self._h.curve(alpha)
+        return lambda x: hertz_f(x) * h(x)
+
+    def g_curve(self, alpha: Any = 0.0) -> Callable:
+        """x -> r_mid / a0 at one alpha."""
+        if self._g is None:
+            raise ValueError("this master curve has no midplane-radius table g; use midplane='incompressible'")
+        return self._g if self.alpha is None else self._g.curve(alpha)
+
     def g(self, x: Any, alpha: Any = 0.0) -> jnp.ndarray:
         """r_mid / a0 at x = delta/(2 a0)."""
         if self._g is None:
@@ -146,7 +157,7 @@ class MasterCurve:
         if xv is not None and np.max(xv) > self.x_max * (1 + 1e-12):
             raise ValueError(
                 f"compression delta/(2 a0) = {np.max(xv):.4g} is beyond the calibrated table (up to "
-                f"{self.x_max:.4g}, i.e. {200 * self.x_max:.3g} % of the diameter). Use equilibrium='hertz' "
+                f"{self.x_max:.4g}, i.e. {100 * self.x_max:.3g} % of the diameter). Use equilibrium='hertz' "
                 "or a callable, or extend the table with `python -m compare.calibrate --x-max ...`.")
         if av is not None and self.alpha is not None:
             lo, hi = self.alpha_range
@@ -186,10 +197,10 @@ def _equilibrium_law(equilibrium: Any, radius, C, alpha) -> tuple[Callable, Any]
             return hertz_f, None
         if equilibrium == "fem":
             mc = master_curve()
-            return (lambda x: mc.f(x, alpha)), mc
+            return mc.f_curve(alpha), mc
         raise ValueError(f"equilibrium must be 'hertz', 'fem', an (x, f) table or a callable; got {equilibrium!r}")
     if isinstance(equilibrium, MasterCurve):
-        return (lambda x: equilibrium.f(x, alpha)), equilibrium
+        return equilibrium.f_curve(alpha), equilibrium
     if isinstance(equilibrium, tuple) and len(equilibrium) == 2:
         mc = MasterCurve(*equilibrium)
         return (lambda x: mc.f(x)), mc
@@ -207,10 +218,10 @@ def _midplane_law(midplane: Any, equilibrium: Any, radius, alpha) -> tuple[Calla
             return (lambda x: 1.0 / jnp.sqrt(1.0 - jnp.minimum(x, 0.999))), None
         if midplane == "fem":
             mc = master_curve()
-            return (lambda x: mc.g(x, alpha)), mc
+            return mc.g_curve(alpha), mc
         raise ValueError(f"midplane must be 'incompressible', 'fem', an (x, g) table or a callable; got {midplane!r}")
     if isinstance(midplane, MasterCurve):
-        return (lambda x: midplane.g(x, alpha)), midplane
+        return midplane.g_curve(alpha), midplane
     if isinstance(midplane, Spline1D):
         return midplane, None
     if isinstance(midplane, tuple) and len(midplane) == 2:
