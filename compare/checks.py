@@ -7,6 +7,9 @@ r"""How far the reduced models can be trusted: reduced vs FE, case by case, as t
 * ``spheroid(...)``: the calibrated lumped model (``reduced.spheroid``, ``equilibrium="fem"``) against
   the FE compression-relaxation (``fem.spheroid.compress``) over the whole ramp-and-hold, sigma~(t)
   compared at the FE step times: max relative deviation during the ramp and after it.
+* ``blastula_creep(...)``: the viscoelastic shell (``reduced.viscoshell``) against the FE shell with the same
+  Maxwell branches (``fem.blastula.creep``) under a pressure ramp-and-hold (issue 5: alpha = 0.2,
+  beta = 0.5, tau = 100 s, 300 Pa in 1 s, held 600 s): max |lambda_FE / lambda_reduced - 1| over the history.
 * ``hertz_table()``: F_Hertz / F_FE from the calibrated master curve, as compression grows.
 
 Every function returns a pandas DataFrame with units in the column names.
@@ -23,13 +26,16 @@ from typing import Sequence
 import numpy as np
 import pandas as pd
 
-__all__ = ["blastula", "spheroid", "hertz_table", "SPHEROID_CASES", "main"]
+__all__ = ["blastula", "blastula_creep", "spheroid", "hertz_table", "SPHEROID_CASES", "CREEP_CASES", "main"]
 
 UM = 1e-6
 A_BLASTULA = 50 * UM
 SPHEROID_CASES = {
     "Fig. 10": dict(C=150.0, alpha=0.2, beta=0.4, tau=200.0, displacement=50 * UM),
     "Figs 8-9": dict(C=200.0, alpha=0.2, beta=1.2, tau=200.0, displacement=200 * UM),
+}
+CREEP_CASES = {  # blastula A = 50 um, B = 75 um, C = 200 Pa; pressure ramped over ramp_time, held `hold` s
+    "issue 5": dict(alpha=0.2, beta=0.5, tau=100.0, pressure=300.0, ramp_time=1.0, hold=600.0),
 }
 
 
@@ -60,6 +66,44 @@ def blastula(*, n_random: int = 10, seed: int = 0, mesh: str = "default", kappa:
             rows.append({"case": name, "alpha [-]": a, "B/A [-]": B / A_BLASTULA, "pressure [Pa]": float(p),
                          "exact inner_stretch [-]": float(le), "FE inner_stretch [-]": float(lf),
                          "rel. deviation [-]": abs(float(lf) / float(le) - 1.0), "FE wall [s]": wall})
+    return pd.DataFrame(rows)
+
+
+def blastula_creep(*, cases: dict | None = None, outer_radius: float = 75 * UM, C: float = 200.0,
+                   kappa: float = 2.2e9, mesh: str = "default", n_ramp: int = 8, n_hold: int = 60) -> pd.DataFrame:
+    """Inner stretch history, reduced viscoelastic shell vs FE shell (same Maxwell branches), per creep case.
+
+    Deviation = |lambda_FE / lambda_reduced - 1| at the FE step times: max over the whole history, during
+    the ramp (t <= ramp_time) and the hold; also for the outer stretch. ``cases`` as ``CREEP_CASES``.
+    """
+    from fem import blastula as fe
+    from reduced import viscoshell as red
+
+    rows = []
+    for name, c in dict(CREEP_CASES if cases is None else cases).items():
+        geo = dict(inner_radius=A_BLASTULA, outer_radius=outer_radius, C=C, alpha=c["alpha"],
+                   branches=[(c["beta"], c["tau"])])
+        tr = c["ramp_time"]
+        t0 = time.perf_counter()
+        r = fe.creep(**geo, pressure=c["pressure"], ramp_time=tr, end_time=tr + c["hold"], kappa=kappa, mesh=mesh,
+                     n_ramp=n_ramp, n_hold=n_hold)
+        wall = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        ref = red.inflate(r.time, pressure=c["pressure"], ramp_time=tr, **geo)
+        wall_red = time.perf_counter() - t0
+        dev = np.abs(r.inner_stretch / np.asarray(ref.inner_stretch) - 1.0)
+        dev_b = np.abs(r.outer_stretch / np.asarray(ref.outer_stretch) - 1.0)
+        ramp = r.time <= tr * (1 + 1e-12)
+        rows.append({"case": name, "alpha [-]": c["alpha"], "beta [-]": c["beta"], "tau [s]": c["tau"],
+                     "pressure [Pa]": c["pressure"], "ramp [s]": tr, "hold [s]": c["hold"],
+                     "B [m]": outer_radius, "max dev. history [-]": float(dev.max()),
+                     "max dev. during ramp [-]": float(dev[ramp].max()),
+                     "max dev. during hold [-]": float(dev[~ramp].max()) if (~ramp).any() else float("nan"),
+                     "max dev. outer [-]": float(dev_b.max()),
+                     "FE inner_stretch end of ramp [-]": float(r.inner_stretch[ramp][-1]),
+                     "FE inner_stretch end [-]": float(r.inner_stretch[-1]),
+                     "FE steps": int(r.time.size), "FE Newton its": int(r.newton_iterations.sum()),
+                     "FE wall [s]": wall, "reduced wall (incl. compile) [s]": wall_red})
     return pd.DataFrame(rows)
 
 
@@ -122,7 +166,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--blastula-random", type=int, default=10)
     ap.add_argument("--mesh", default="default", help="FE mesh for the spheroid checks")
     ap.add_argument("--out", default=None, help="folder for CSV tables")
-    ap.add_argument("--skip", default="", help="comma list of: blastula,spheroid,hertz")
+    ap.add_argument("--skip", default="", help="comma list of: blastula,creep,spheroid,hertz")
     a = ap.parse_args(list(sys.argv[1:] if argv is None else argv))
     skip = set(filter(None, a.skip.split(",")))
     pd.set_option("display.width", 200)
@@ -132,6 +176,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         tables["hertz"] = hertz_table()
     if "blastula" not in skip:
         tables["blastula"] = blastula(n_random=a.blastula_random)
+    if "creep" not in skip:
+        tables["creep"] = blastula_creep()
     if "spheroid" not in skip:
         tables["spheroid"] = spheroid(n_random=a.spheroid_random, mesh=a.mesh)
     for name, df in tables.items():
@@ -139,6 +185,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(df.to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     if "blastula" in tables:
         print(f"\nblastula: max relative deviation FE vs exact {tables['blastula']['rel. deviation [-]'].max():.2e}")
+    if "creep" in tables:
+        d = tables["creep"]
+        print(f"blastula creep: max |lambda_FE/lambda_reduced - 1| {d['max dev. history [-]'].max():.2e} over the history "
+              f"(ramp {d['max dev. during ramp [-]'].max():.2e}, hold {d['max dev. during hold [-]'].max():.2e}), "
+              f"FE {d['FE wall [s]'].sum():.2f} s, {d['FE steps'].sum()} steps")
     if "spheroid" in tables:
         d = tables["spheroid"]
         print(f"spheroid: max deviation after the ramp {d['max dev. after ramp [-]'].max():.2%}, "
