@@ -32,15 +32,12 @@ the time. No branches (or beta = 0) is the elastic shell at every step.
 from __future__ import annotations
 
 import time
-from typing import Sequence, Union
+from typing import NamedTuple, Sequence, Union
 
 import numpy as np
 
-from reduced.material import validate_material, validate_radii
+from reduced.material import validate_branches, validate_material, validate_positive, validate_radii
 from fem import constitutive as cm
-from typing import NamedTuple
-
-from reduced.material import validate_branches, validate_positive
 from fem import viscoelastic as ve
 from fem.continuation import LimitPointError, arc_length, load_control
 from fem.forms import Assembler, Material
