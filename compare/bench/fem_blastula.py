@@ -1,7 +1,8 @@
 """Benchmark of the FE blastula: accuracy vs the exact solution, convergence table, seed sets, speed.
 
 ``python -m compare.bench fem-blastula [--quick] [--figure PATH.png]`` prints the tables. The exact reference is the
-incompressible thick-shell integral of physics.md (scipy quad + brentq). Timings exclude imports and
+incompressible thick-shell integral of physics.md (scipy quad + brentq); for the creep table
+(``fem.blastula.creep``, issue 5's ramp-and-hold) it is the reduced viscoelastic shell ``reduced.viscoshell``. Timings exclude imports and
 the first (warm-up) call; the machine is shared, so they are pessimistic.
 """
 
@@ -13,7 +14,7 @@ import numpy as np
 from scipy.integrate import quad
 from scipy.optimize import brentq, minimize_scalar
 
-from fem.blastula import LimitPointError, inflate
+from fem.blastula import LimitPointError, creep, inflate
 
 A, C = 50e-6, 200.0
 
@@ -112,6 +113,37 @@ def limit_point() -> None:
         print("load control message:", str(e).split(" (load level")[0])
 
 
+def creep_table(quick: bool) -> None:
+    """Issue 5 creep (alpha = 0.2, beta = 0.5, tau = 100 s, 300 Pa in 1 s, held 600 s), B = 75 um:
+    max |lambda_FE / lambda_reduced - 1| over the history vs mesh and number of hold steps, FE wall time."""
+    from reduced import viscoshell as vs
+
+    kw = dict(inner_radius=A, outer_radius=75e-6, C=C, alpha=0.2, branches=[(0.5, 100.0)], pressure=300.0,
+              ramp_time=1.0, end_time=601.0)
+    meshes = ["coarse", "default"] if quick else ["coarse", "default", "fine"]
+    holds = [30, 60] if quick else [15, 30, 60, 120]
+    creep(**kw, mesh="coarse", n_hold=5)  # warm-up
+    runs = {}
+    for m in meshes:
+        for n in holds:
+            t = time.perf_counter()
+            r = creep(**kw, mesh=m, n_hold=n)
+            runs[m, n] = (r, time.perf_counter() - t)
+    ts = np.unique(np.concatenate([r.time for r, _ in runs.values()]))
+    red = vs.inflate(ts, pressure=300.0, ramp_time=1.0, **{k: kw[k] for k in ("inner_radius", "outer_radius",
+                                                                              "C", "alpha", "branches")})
+    la_red = np.asarray(red.inner_stretch)
+    print("\n## Creep (fem.blastula.creep vs reduced.viscoshell): alpha = 0.2, beta = 0.5, tau = 100 s, "
+          "300 Pa in 1 s (8 ramp steps), held 600 s")
+    print(f"{'mesh':>8} {'n_hold':>6} {'steps':>5} {'Newton':>6} {'max dev':>9} {'ramp':>9} {'hold':>9} "
+          f"{'la(601 s)':>9} {'wall (s)':>8}")
+    for (m, n), (r, w) in runs.items():
+        d = np.abs(r.inner_stretch / la_red[np.searchsorted(ts, r.time)] - 1)
+        ramp = r.time <= 1.0
+        print(f"{m:>8} {n:6d} {r.time.size:5d} {r.newton_iterations.sum():6d} {d.max():9.2e} {d[ramp].max():9.2e} "
+              f"{d[~ramp].max():9.2e} {r.inner_stretch[-1]:9.5f} {w:8.2f}")
+
+
 def figure(path: str) -> None:
     """Seed Fig. 3: von Mises on the deformed section, alpha = 0.2, B = 75 um, p = 1 kPa (+ VTU)."""
     import matplotlib
@@ -135,6 +167,7 @@ def main(argv: list[str] | None = None) -> int:
     convergence(quick)
     seed_sets()
     limit_point()
+    creep_table(quick)
     if "--figure" in argv:
         figure(argv[argv.index("--figure") + 1])
     return 0
