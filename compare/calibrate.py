@@ -152,12 +152,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--n-x", type=int, default=31)
     ap.add_argument("--x-max", type=float, default=0.3)
     ap.add_argument("--alphas", default=",".join(str(a) for a in DEFAULT_ALPHAS))
-    ap.add_argument("--mesh", default="fine", help="FE mesh of the table (default: %(default)s)")
-    ap.add_argument("--error-mesh", default="default",
+    ap.add_argument("--mesh", default="3", help="FE mesh of the table: a fem.spheroid level or name (default: %(default)s)")
+    ap.add_argument("--error-mesh", default="fine",
                     help="coarser mesh for the error estimate ('' to skip; default: %(default)s)")
     ap.add_argument("--degree", type=int, default=3, help="degree of the smoothing polynomials in x (0: none)")
     a = ap.parse_args(list(sys.argv[1:] if argv is None else argv))
     alphas = [float(v) for v in a.alphas.split(",")]
+    a.mesh = int(a.mesh) if str(a.mesh).isdigit() else a.mesh  # "fine" or a level number of fem.spheroid
+    a.error_mesh = int(a.error_mesh) if str(a.error_mesh).isdigit() else a.error_mesh
     kw = dict(alphas=alphas, n_x=a.n_x, x_max=a.x_max)
     raw = tabulate(mesh=a.mesh, store=a.store, **kw)
     curves, change = smooth(raw, a.degree) if a.degree > 0 else (raw, 0.0)

@@ -169,6 +169,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--skip", default="", help="comma list of: blastula,creep,spheroid,hertz")
     a = ap.parse_args(list(sys.argv[1:] if argv is None else argv))
     skip = set(filter(None, a.skip.split(",")))
+    a.mesh = int(a.mesh) if str(a.mesh).isdigit() else a.mesh  # a fem.spheroid level number or name
     pd.set_option("display.width", 200)
     pd.set_option("display.max_columns", 20)
     tables = {}
