@@ -147,7 +147,8 @@ def spheroid(*, n_random: int = 10, seed: int = 0, mesh: str = "default", radius
 
 def fit_demo(*, levels: Sequence[float] = (50 * UM, 150 * UM), noise: float = 0.01, seed: int = 0,
              mesh: str | int = "fine", radius: float = 500 * UM, ramp_time: float = 0.2,
-             end_time: float = 1500.0, truth: dict | None = None) -> tuple[pd.DataFrame, dict]:
+             end_time: float = 1500.0, truth: dict | None = None, n_ramp: int = 10,
+             n_hold: int = 80) -> tuple[pd.DataFrame, dict]:
     """Fit the calibrated reduced model to SYNTHETIC records made by the FE (known parameters plus
     Gaussian noise of ``noise`` x the record's peak): once with all ``levels`` and once with the first
     level alone. Returns (table of values and 95 % intervals, {label: FitResult})."""
@@ -159,7 +160,8 @@ def fit_demo(*, levels: Sequence[float] = (50 * UM, 150 * UM), noise: float = 0.
     records = []
     for d in levels:
         r = fe.compress(radius=radius, C=truth["C"], alpha=truth["alpha"], branches=[(truth["beta"], truth["tau"])],
-                        displacement=d, ramp_time=ramp_time, end_time=end_time, mesh=mesh)
+                        displacement=d, ramp_time=ramp_time, end_time=end_time, mesh=mesh,
+                        n_ramp=n_ramp, n_hold=n_hold)
         s = np.asarray(r.nominal_stress)
         records.append((np.asarray(r.time), s + noise * s.max() * rng.standard_normal(s.shape), d))
     results, rows = {}, []
