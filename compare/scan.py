@@ -230,8 +230,8 @@ def spheroid(
     ``df.attrs["time [s]"]``). ``fe_checks=k``: FE runs (``fem.spheroid.compress``) at k spread
     points, adding ``fe_sigma_peak [Pa]``, ``fe_sigma_end [Pa]`` and ``deviation [-]``.
     ``model``: the reduced nominal-stress function (default ``reduced.spheroid.nominal_stress``).
-    ``rtol``: the ODE tolerance of the default model (rtol = atol; 1e-6 keeps the curves within ~1e-6
-    of the 1e-10 solution, because steps land on the output times anyway, and is ~15x faster).
+    ``rtol``: the ODE tolerance of the default model when it uses ``method="ode"`` (the default ramp-and-hold
+    path is the exact-kernel quadrature, ~1e-10 accurate with the calibrated law, which ignores it).
     ``points``: a ready design (DataFrame or dict of arrays, plain or unit-labelled column names);
     parameters it lacks come from the keyword values (numbers).
     """
