@@ -49,50 +49,29 @@ def second_derivative_map(knots: np.ndarray) -> np.ndarray:
 
 
 def spline_weights(knots: np.ndarray, L: np.ndarray, x: Any) -> jnp.ndarray:
-    """Weights w(x) (..., n) of the natural cubic spline: s(x) = w(x) @ y. ``L`` from
-    :func:`second_derivative_map`. Linear continuation outside [k_0, k_{n-1}]."""
-    k = jnp.asarray(knots)
-    n = k.shape[0]
-    x = jnp.asarray(x, dtype=jnp.float64)
-    i = _interval(k, x)
-    x0, x1 = k[i], k[i + 1]
-    h = x1 - x0
-    a = (x1 - x) / h
-    b = (x - x0) / h
-    inside = (x >= k[0]) & (x <= k[-1])
-    # inside: cubic; outside: the end segment's tangent line (natural spline: zero curvature there)
-    c_a = jnp.where(inside, (a**3 - a) * h**2 / 6, 0.0)
-    c_b = jnp.where(inside, (b**3 - b) * h**2 / 6, 0.0)
-    eye = jnp.eye(n)
-    Lj = jnp.asarray(L)
-    w = a[..., None] * eye[i] + b[..., None] * eye[i + 1] + c_a[..., None] * Lj[i] + c_b[..., None] * Lj[i + 1]
-    # linear extrapolation uses the end slope of the cubic: s'(k0) = (y1-y0)/h - h (2 M0 + M1)/6 (M0 = 0)
-    left = x < k[0]
-    right = x > k[-1]
-    h0, hn = k[1] - k[0], k[-1] - k[-2]
-    slope0 = (eye[1] - eye[0]) / h0 - h0 * (2 * Lj[0] + Lj[1]) / 6
-    slopen = (eye[-1] - eye[-2]) / hn + hn * (Lj[-2] + 2 * Lj[-1]) / 6
-    w = jnp.where(left[..., None], eye[0] + (x - k[0])[..., None] * slope0, w)
-    w = jnp.where(right[..., None], eye[-1] + (x - k[-1])[..., None] * slopen, w)
-    return w
+    """Weights w(x) (..., n) of the natural cubic spline: s(x) = w(x) @ y (``L`` from
+    :func:`second_derivative_map`): the spline of the unit vectors, whose second derivatives are L."""
+    n = np.shape(knots)[0]
+    return spline_eval(knots, jnp.eye(n), jnp.asarray(L), x)
 
 
 def spline_eval(knots: np.ndarray, y: Any, M: Any, x: Any) -> jnp.ndarray:
-    """Natural cubic spline through ``y`` with knot second derivatives ``M`` (= L y), at ``x``:
-    four gathered numbers per point (cheap inside ODE right-hand sides); linear beyond the ends."""
+    """Natural cubic spline through ``y`` (n, ...) with knot second derivatives ``M`` (= L y), at ``x``:
+    four gathered values per point (cheap inside ODE right-hand sides); linear beyond the ends.
+    Result shape: x.shape + y.shape[1:]."""
     k = jnp.asarray(knots)
-    n = k.shape[0]
     x = jnp.asarray(x, dtype=jnp.float64)
+    y, M = jnp.asarray(y), jnp.asarray(M)
     i = _interval(k, x)
     x0, x1 = k[i], k[i + 1]
     h = x1 - x0
     xc = jnp.clip(x, k[0], k[-1])
-    a = (x1 - xc) / h
-    b = (xc - x0) / h
+    e = lambda v: v.reshape(v.shape + (1,) * (y.ndim - 1))  # noqa: E731  (broadcast over value dims)
+    a, b, h = e((x1 - xc) / h), e((xc - x0) / h), e(h)
     y0, y1, M0, M1 = y[i], y[i + 1], M[i], M[i + 1]
     s = a * y0 + b * y1 + ((a**3 - a) * M0 + (b**3 - b) * M1) * h**2 / 6
     slope = (y1 - y0) / h + (-(3 * a**2 - 1) * M0 + (3 * b**2 - 1) * M1) * h / 6
-    return s + slope * (x - xc)  # linear continuation outside [k_0, k_-1] (slope of the end segment there)
+    return s + slope * e(x - xc)  # linear continuation outside [k_0, k_-1] (slope of the end segment there)
 
 
 class Spline1D:

@@ -100,7 +100,6 @@ def test_every_promised_file_exists_and_is_not_empty(quick_report):
         if n.endswith(".png"):
             assert f"({n})" in md, f"report.md does not show {n}"
     assert json.loads((out / "summary.json").read_text())["quick"] is True
-    assert summary["total_wall_s"] > 0
 
 
 @pytest.mark.slow
