@@ -431,8 +431,8 @@ def _spheroid(run: _Run) -> None:
         "",
         "![accuracy spheroid](accuracy_spheroid.png)",
         "",
-        "error = max over t in {0.2 s, 1500 s} of |sigma~/sigma~_ref - 1|; reduced = the lumped Maxwell ODE "
-        "(diffrax Kvaerno5, jitted). The calibrated reduced model uses "
+        "error = max over t in {0.2 s, 1500 s} of |sigma~/sigma~_ref - 1|; reduced = the lumped Maxwell model "
+        "(reduced.spheroid, exact-kernel quadrature path, jitted). The calibrated reduced model uses "
         f"an equilibrium table from one static FE run on the reference mesh ({calib_wall:.1f} s, not counted "
         "in its wall time), so its error measures the lumped-relaxation assumption alone; 'shipped FE table' "
         "uses the package's master curves (reduced/data, their own mesh and alpha interpolation) when present.",
