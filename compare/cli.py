@@ -119,7 +119,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
             run_cli(args)
     except (ValueError, CLIError, OSError) as exc:
-        print(f"tissuemech {args.command}: error: {exc}", file=sys.stderr)
+        msg = str(exc).replace("Use equilibrium='hertz'", "Use --equilibrium hertz")
+        print(f"tissuemech {args.command}: error: {msg}", file=sys.stderr)
         return 2
     return 0
 
