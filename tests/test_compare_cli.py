@@ -1,0 +1,47 @@
+"""The `tissuemech` command: tables with the right physics, PNGs written, one-line errors."""
+
+import re
+
+import pytest
+
+from compare import cli
+
+
+def test_blastula_table_and_plot(tmp_path, capsys):
+    out = tmp_path / "b.png"
+    assert cli.main(["blastula", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert out.stat().st_size > 10_000
+    # neo-Hookean limit for A = 50 um, B = 75 um, C = 200 Pa (exact shell): 197.41 Pa at lambda_a ~ 1.603
+    assert re.search(r"a=1e-05, B=75 um: p_max = 197\.41 Pa at lambda_a = 1\.603", text)
+    # alpha = 0.2, B = 75 um at 1 kPa: inner stretch 3.01223 (exact), outer 2.06471
+    row = [ln for ln in text.splitlines() if ln.strip().startswith("1000.0")][0]
+    assert "3.01223 / 2.06471" in row
+    assert "burst" in [ln for ln in text.splitlines() if ln.strip().startswith("300.0")][0]
+
+
+def test_spheroid_table_and_plot(tmp_path, capsys):
+    out = tmp_path / "s.png"
+    assert cli.main(["spheroid", "--out", str(out), "--equilibrium", "hertz"]) == 0
+    text = capsys.readouterr().out
+    assert out.stat().st_size > 10_000
+    # Hertz, Fig. 10 case: F(1500 s) ~ F_eq (1 + 0.4 e^-7.5) = 4.4731 uN
+    row = [ln for ln in text.splitlines() if ln.strip().startswith("1500.00")][0]
+    assert float(row.split()[1]) == pytest.approx(4.47314, abs=1e-4)  # printed with 4 decimals
+
+
+@pytest.mark.parametrize("argv, match", [
+    (["blastula", "--inner-radius-um", "80"], "inner_radius must be smaller than outer_radius"),
+    (["spheroid", "--displacement-um", "400"], "--equilibrium hertz"),
+])
+def test_bad_input_gives_one_line_error(tmp_path, capsys, argv, match):
+    assert cli.main(argv + ["--out", str(tmp_path / "x.png")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and match in err[0] and "Traceback" not in err[0]
+
+
+def test_argparse_rejects_negative_modulus(capsys):
+    with pytest.raises(SystemExit) as e:
+        cli.main(["spheroid", "--C", "-5"])
+    assert e.value.code == 2
+    assert "must be positive" in capsys.readouterr().err
