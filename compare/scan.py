@@ -19,6 +19,7 @@ FE outputs at that point; NaN where no FE run was made), so each scan says how f
 
 from __future__ import annotations
 
+import functools
 import itertools
 from typing import Any, Callable, Mapping, Sequence
 
@@ -251,37 +252,22 @@ def spheroid(
         times = default_times(float(pts["ramp_time"].iloc[0]), end_time)
     t = jnp.asarray(np.asarray(times, dtype=float))
     if model is None:
-        import functools
-
-        import diffrax
-
-        from reduced import spheroid as red
-
         # the design is known here. Non-stiff (ramp_time / tau <= 10 everywhere): the explicit Tsit5 ODE
         # path at rtol (1e-6: curves within ~1e-6, 2x faster than the quadrature with a spline table);
         # stiff: the exact-kernel quadrature (any tau, ~1e-10)
-        stiff = float(np.max(pts["ramp_time"].to_numpy() / pts["tau"].to_numpy()))
-        if stiff <= 10.0:
-            model = functools.partial(red.nominal_stress, method="ode", solver=diffrax.Tsit5(), rtol=rtol, atol=rtol)
-        else:
-            model = functools.partial(red.nominal_stress, method="quadrature")
+        stiff = float(np.max(pts["ramp_time"].to_numpy() / pts["tau"].to_numpy())) > 10.0
+        model = _default_spheroid_model(stiff, float(rtol))
 
     # parameters that do not vary enter as Python floats (models may branch on geometry), the rest vmapped
-    fixed = {k: float(pts[k].iloc[0]) for k in SPHEROID_PARAMS if pts[k].nunique() == 1}
-    varying = [k for k in SPHEROID_PARAMS if k not in fixed]
+    fixed = tuple((k, float(pts[k].iloc[0])) for k in SPHEROID_PARAMS if pts[k].nunique() == 1)
+    varying = tuple(k for k in SPHEROID_PARAMS if k not in dict(fixed))
+    try:  # compiled once per (model, law, fixed values, output shape): repeated scans reuse it
+        jitted = _spheroid_evaluator(model, equilibrium, fixed, varying, bool(curves))
+    except TypeError:  # an unhashable equilibrium (arrays): compile for this call only
+        jitted = _spheroid_evaluator.__wrapped__(model, equilibrium, fixed, varying, bool(curves))
 
-    def one(**kw):
-        p = {**fixed, **kw}
-        return model(t, radius=p["radius"], C=p["C"], alpha=p["alpha"], branches=[(p["beta"], p["tau"])],
-                     displacement=p["displacement"], ramp_time=p["ramp_time"], equilibrium=equilibrium)
-
-    @jax.jit
     def evaluate(**kw):
-        s = jax.vmap(one)(**kw) if kw else one()[None, :]
-        out = _summaries(t, s)
-        if curves:
-            out["sigma"] = s
-        return out
+        return jitted(t, kw)
 
     if varying:
         res = _batched(evaluate, {k: pts[k].to_numpy() for k in varying}, batch_size)
@@ -309,6 +295,54 @@ def spheroid(
             df.loc[i, _col("deviation")] = max(abs(res["sigma_peak"][i] / peak - 1.0),
                                                abs(res["sigma_end"][i] / end - 1.0))
     return df
+
+
+@functools.lru_cache(maxsize=8)
+def _default_spheroid_model(stiff: bool, rtol: float) -> Callable:
+    """reduced.spheroid.nominal_stress configured for scans (one object per setting, so compiled
+    evaluators are reused)."""
+    import diffrax
+
+    from reduced import spheroid as red
+
+    if stiff:
+        return functools.partial(red.nominal_stress, method="quadrature")
+    return functools.partial(red.nominal_stress, method="ode", solver=diffrax.Tsit5(), rtol=rtol, atol=rtol)
+
+
+@functools.lru_cache(maxsize=16)
+def _spheroid_evaluator(model: Callable, equilibrium: Any, fixed: tuple, varying: tuple, curves: bool) -> Callable:
+    """jit(t, {varying: arrays}) -> summaries (and curves) of vmapped reduced spheroid curves."""
+    fixed_d = dict(fixed)
+
+    def one(t, **kw):
+        p = {**fixed_d, **kw}
+        return model(t, radius=p["radius"], C=p["C"], alpha=p["alpha"], branches=[(p["beta"], p["tau"])],
+                     displacement=p["displacement"], ramp_time=p["ramp_time"], equilibrium=equilibrium)
+
+    @jax.jit
+    def evaluate(t, kw):
+        s = jax.vmap(lambda k: one(t, **k))(kw) if kw else one(t)[None, :]
+        out = _summaries(t, s)
+        if curves:
+            out["sigma"] = s
+        return out
+
+    return evaluate
+
+
+def _blastula_one(inner_radius, outer_radius, C, alpha, pressure):
+    """Exact shell at one point: inner/outer stretch (NaN where it bursts) and the limit pressure."""
+    from reduced import blastula as red
+
+    geo = dict(inner_radius=inner_radius, outer_radius=outer_radius)
+    la, _ = red.inner_stretch_solve(pressure, **geo, C=C, alpha=alpha)
+    lb = red.outer_stretch(jnp.where(jnp.isnan(la), 1.0, la), **geo)
+    lim = red.limit_point(**geo, C=C, alpha=alpha)
+    return dict(inner_stretch=la, outer_stretch=jnp.where(jnp.isnan(la), jnp.nan, lb), p_limit=lim.pressure)
+
+
+_blastula_evaluate = jax.jit(jax.vmap(_blastula_one))  # compiled once per batch shape, reused by every scan
 
 
 def _run_fe(function, points, executor, store):
@@ -362,23 +396,13 @@ def blastula(
     (relative difference of the inner stretch) from ``fem.blastula.inflate`` at k spread points.
     ``points``: a ready design (DataFrame or dict of arrays), as in :func:`spheroid`.
     """
-    from reduced import blastula as red
-
     params = dict(inner_radius=inner_radius, outer_radius=outer_radius, C=C, alpha=alpha, pressure=pressure)
     pts = _points(params, points, n, design_method, seed, log)
     validate_radii(pts["inner_radius"].to_numpy(), pts["outer_radius"].to_numpy())
     validate_material(pts["C"].to_numpy(), pts["alpha"].to_numpy())
 
-    def one(inner_radius, outer_radius, C, alpha, pressure):
-        geo = dict(inner_radius=inner_radius, outer_radius=outer_radius)
-        la, _ = red.inner_stretch_solve(pressure, **geo, C=C, alpha=alpha)
-        lb = red.outer_stretch(jnp.where(jnp.isnan(la), 1.0, la), **geo)
-        lim = red.limit_point(**geo, C=C, alpha=alpha)
-        return dict(inner_stretch=la, outer_stretch=jnp.where(jnp.isnan(la), jnp.nan, lb),
-                    p_limit=lim.pressure)
-
-    evaluate = jax.jit(jax.vmap(one))
-    res = _batched(lambda **kw: evaluate(**kw), {k: pts[k].to_numpy() for k in BLASTULA_PARAMS}, batch_size)
+    res = _batched(lambda **kw: _blastula_evaluate(**kw), {k: pts[k].to_numpy() for k in BLASTULA_PARAMS},
+                   batch_size)
     df = pts.rename(columns={k: _col(k) for k in pts.columns})
     for k in ("inner_stretch", "outer_stretch", "p_limit"):
         df[_col(k)] = res[k]

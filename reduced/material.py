@@ -139,11 +139,11 @@ def validate_positive(name: str, value: Any, unit: str = "") -> None:
     v = _concrete(value)
     if v is None:
         return
-    u = f" {unit}" if unit else ""
+    u = f" (in {unit})" if unit else ""
     if not np.all(np.isfinite(v)):
         raise ValueError(f"{name} must be a finite number{u}; got {value!r}")
     if np.any(v <= 0):
-        raise ValueError(f"{name} must be positive{u}; got {np.min(v):g}")
+        raise ValueError(f"{name} must be positive{u}; got {np.min(v):g}{' ' + unit if unit else ''}")
 
 
 def validate_nonnegative(name: str, value: Any, unit: str = "") -> None:
@@ -151,11 +151,11 @@ def validate_nonnegative(name: str, value: Any, unit: str = "") -> None:
     v = _concrete(value)
     if v is None:
         return
-    u = f" {unit}" if unit else ""
+    u = f" (in {unit})" if unit else ""
     if not np.all(np.isfinite(v)):
         raise ValueError(f"{name} must be a finite number{u}; got {value!r}")
     if np.any(v < 0):
-        raise ValueError(f"{name} must not be negative{u}; got {np.min(v):g}")
+        raise ValueError(f"{name} must not be negative{u}; got {np.min(v):g}{' ' + unit if unit else ''}")
 
 
 def validate_material(C: Any, alpha: Any, kappa: Any = None) -> None:

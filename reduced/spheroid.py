@@ -206,7 +206,7 @@ def _equilibrium_law(equilibrium: Any, radius, C, alpha) -> tuple[Callable, Any]
     if isinstance(equilibrium, MasterCurve):
         return equilibrium.f_curve(alpha), equilibrium
     if isinstance(equilibrium, tuple) and len(equilibrium) == 2:
-        mc = MasterCurve(*equilibrium)
+        mc = _table_object(equilibrium, "f")
         return (lambda x: mc.f(x)), mc
     if callable(equilibrium):
         return (lambda x: equilibrium(2.0 * radius * x, radius=radius, C=C, alpha=alpha) / (C * radius**2)), None
@@ -229,7 +229,7 @@ def _midplane_law(midplane: Any, equilibrium: Any, radius, alpha) -> tuple[Calla
     if isinstance(midplane, Spline1D):
         return midplane, None
     if isinstance(midplane, tuple) and len(midplane) == 2:
-        s = Spline1D(*midplane)
+        s = _table_object(midplane, "g")
         return s, None
     if callable(midplane):
         return (lambda x: midplane(2.0 * radius * x, radius=radius, alpha=alpha) / radius), None
@@ -260,6 +260,23 @@ def _adjoint(kind: Any):
 
 class _Midplane1D(Spline1D):
     """A user (x, g) midplane table (a hashable spline object, so compiled code is reused)."""
+
+
+def _content_key(table: tuple) -> tuple:
+    arrs = [np.ascontiguousarray(np.asarray(a, dtype=float)) for a in table]
+    return tuple((a.shape, a.tobytes()) for a in arrs)
+
+
+@functools.lru_cache(maxsize=32)
+def _cached_table(kind: str, key: tuple):
+    arrays = [np.frombuffer(b, dtype=float).reshape(shape) for shape, b in key]
+    return MasterCurve(*arrays) if kind == "f" else _Midplane1D(*arrays)
+
+
+def _table_object(table: tuple, kind: str):
+    """One spline object per table content: a user's (x, f) or (x, g) arrays passed again in a later call
+    reuse the compiled code instead of re-tracing (the object is a static argument of the jitted core)."""
+    return _cached_table(kind, _content_key(table))
 
 
 @functools.partial(jax.jit, static_argnums=(4,))
@@ -478,8 +495,8 @@ def _evaluate(t, *, radius, C, alpha, branches, displacement, ramp_time, equilib
         if tv is not None and rv is not None:
             n_ramp = int(np.sum(tv.ravel() <= np.max(rv)))
     o = _Opts(float(rtol), float(atol), int(max_steps), solver, _adjoint(adjoint), method, n_ramp)
-    law = equilibrium if not (isinstance(equilibrium, tuple)) else MasterCurve(*equilibrium)
-    mid = midplane if not (isinstance(midplane, tuple)) else _Midplane1D(*midplane)
+    law = _table_object(equilibrium, "f") if isinstance(equilibrium, tuple) else equilibrium
+    mid = _table_object(midplane, "g") if isinstance(midplane, tuple) else midplane
     static = (law, mid, displacement if callable(displacement) else None,
               None if jump_times is None else tuple(float(j) for j in jump_times), o, stress, shape)
     out, ok = _run(t_arr.reshape(-1), params, betas, taus, static)
@@ -497,7 +514,7 @@ def _table_of(law):
     if isinstance(law, str) and law == "fem":
         return master_curve()
     if isinstance(law, tuple) and len(law) == 2:
-        return MasterCurve(*law)
+        return _table_object(law, "f")
     return None
 
 
