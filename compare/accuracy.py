@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import contextlib
 import time
-from typing import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 
 import numpy as np
 import pandas as pd
@@ -65,7 +65,7 @@ def _ode_rtol(rtol: float) -> Iterator[None]:
     The path reads the module constant ``_ODE_RTOL`` when it is traced (each eager call), so a
     different value takes effect at once and the default is restored afterwards.
     """
-    from reduced import blastula
+    from tissuemech.reduced import blastula
 
     old = blastula._ODE_RTOL
     blastula._ODE_RTOL = float(rtol)
@@ -76,7 +76,7 @@ def _ode_rtol(rtol: float) -> Iterator[None]:
 
 
 def _pressure_error(stretch: Sequence[float], pressure: Sequence[float], alpha: float = ALPHA) -> float:
-    from compare.bench.fem_blastula import p_exact
+    from tissuemech.compare.bench.fem_blastula import p_exact
 
     return float(max(abs(p_exact(float(l), B, alpha) / float(p) - 1.0) for l, p in zip(stretch, pressure)))
 
@@ -90,9 +90,9 @@ def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
     """
     import jax
 
-    from compare.bench.fem_blastula import la_exact
-    from fem.blastula import inflate
-    from reduced import blastula as bl
+    from tissuemech.compare.bench.fem_blastula import la_exact
+    from tissuemech.fem.blastula import inflate
+    from tissuemech.reduced import blastula as bl
 
     ps = np.asarray(PRESSURES)
     la_ex = np.array([la_exact(p, B, ALPHA) for p in ps])
@@ -102,23 +102,46 @@ def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
     inv = jax.jit(lambda q: bl.inner_stretch(q, **geo))
     first, wall, la = timed(lambda: jax.block_until_ready(inv(ps)), max(repeats, 20))
     la = np.asarray(la)
-    rows.append(dict(method="reduced quadrature", setting="20-pt Gauss-Legendre", wall_s=wall, first_s=first,
-                     error=_pressure_error(la, ps), stretch_error=float(np.max(np.abs(la / la_ex - 1)))))
+    rows.append(
+        dict(
+            method="reduced quadrature",
+            setting="20-pt Gauss-Legendre",
+            wall_s=wall,
+            first_s=first,
+            error=_pressure_error(la, ps),
+            stretch_error=float(np.max(np.abs(la / la_ex - 1))),
+        )
+    )
 
     for rtol in ODE_RTOLS:
         fwd = jax.jit(lambda x: bl.pressure(x, **geo, method="ode"))
         with _ode_rtol(rtol):  # the tolerance is read when the call is traced (first call, in the block)
             first, wall, p = timed(lambda: jax.block_until_ready(fwd(la_ex)), max(repeats, 20))
         p = np.asarray(p)
-        rows.append(dict(method="reduced diffrax (Dopri8)", setting=f"rtol={rtol:.0e}", wall_s=wall, first_s=first,
-                         error=float(np.max(np.abs(ps / p - 1))), stretch_error=np.nan))
+        rows.append(
+            dict(
+                method="reduced diffrax (Dopri8)",
+                setting=f"rtol={rtol:.0e}",
+                wall_s=wall,
+                first_s=first,
+                error=float(np.max(np.abs(ps / p - 1))),
+                stretch_error=np.nan,
+            )
+        )
 
-    for m in (FE_MESHES_QUICK if quick else FE_MESHES):
-        run = lambda m=m: inflate(inner_radius=A, outer_radius=B, C=C, alpha=ALPHA, pressures=ps, mesh=m)  # noqa: E731
+    for m in FE_MESHES_QUICK if quick else FE_MESHES:
+        run = lambda m=m: inflate(inner_radius=A, outer_radius=B, C=C, alpha=ALPHA, pressures=ps, mesh=m)
         first, wall, r = timed(run, 1 if m[0] >= 8 else repeats)
-        rows.append(dict(method="FE Q2/P1 mixed", setting=f"mesh {m[0]}x{m[1]}", wall_s=wall, first_s=first,
-                         error=_pressure_error(r.inner_stretch, r.pressure),
-                         stretch_error=float(np.max(np.abs(r.inner_stretch / la_ex - 1)))))
+        rows.append(
+            dict(
+                method="FE Q2/P1 mixed",
+                setting=f"mesh {m[0]}x{m[1]}",
+                wall_s=wall,
+                first_s=first,
+                error=_pressure_error(r.inner_stretch, r.pressure),
+                stretch_error=float(np.max(np.abs(r.inner_stretch / la_ex - 1))),
+            )
+        )
     df = pd.DataFrame(rows)
     df["pareto"] = pareto(df)
     return df
@@ -146,15 +169,16 @@ SPHEROID_TIMES = (0.2, 1500.0)
 def spheroid_available() -> str | None:
     """None when both spheroid modules import, else the reason (shown as 'not available')."""
     try:
-        import fem.spheroid  # noqa: F401
-        import reduced.spheroid  # noqa: F401
+        import tissuemech.fem.spheroid
+        import tissuemech.reduced.spheroid  # noqa: F401
     except Exception as exc:  # ImportError, or a module that is still being written
         return f"{type(exc).__name__}: {exc}"
     return None
 
 
-def spheroid_accuracy(quick: bool = False, meshes: Sequence | None = None,
-                      equilibria: dict | None = None) -> tuple[pd.DataFrame, dict]:
+def spheroid_accuracy(
+    quick: bool = False, meshes: Sequence | None = None, equilibria: dict | None = None
+) -> tuple[pd.DataFrame, dict]:
     """Error of sigma~ at t = 0.2 s and 1500 s against the finest FE mesh, with wall times (Fig. 10 case).
 
     ``meshes``: FE mesh levels from coarsest to finest (the last is the reference); default (0, 1, 2, 3)
@@ -164,8 +188,8 @@ def spheroid_accuracy(quick: bool = False, meshes: Sequence | None = None,
     """
     import jax
 
-    from fem import spheroid as fes
-    from reduced import spheroid as rs
+    from tissuemech.fem import spheroid as fes
+    from tissuemech.reduced import spheroid as rs
 
     meshes = list(meshes or ((0, 1, 2) if quick else (0, 1, 2, 3)))
     equilibria = equilibria or {"hertz": dict(equilibrium="hertz")}
@@ -181,15 +205,31 @@ def spheroid_accuracy(quick: bool = False, meshes: Sequence | None = None,
     for m in meshes:
         wall, r = fe[m]
         s = np.interp(ts, r.time, r.nominal_stress)
-        rows.append(dict(method="FE Q2/P1 mixed", setting=f"level {m}" + (" (reference)" if m == meshes[-1] else ""),
-                         wall_s=wall, first_s=wall,
-                         error=float(np.max(np.abs(s / s_ref - 1))) if m != meshes[-1] else np.nan,
-                         sigma_0_2s=s[0], sigma_1500s=s[1]))
+        rows.append(
+            dict(
+                method="FE Q2/P1 mixed",
+                setting=f"level {m}" + (" (reference)" if m == meshes[-1] else ""),
+                wall_s=wall,
+                first_s=wall,
+                error=float(np.max(np.abs(s / s_ref - 1))) if m != meshes[-1] else np.nan,
+                sigma_0_2s=s[0],
+                sigma_1500s=s[1],
+            )
+        )
     for name, kw in equilibria.items():
         fn = jax.jit(lambda tt, kw=kw: rs.nominal_stress(tt, **FIG10, **kw))  # tables become constants
         first, wall, s = timed(lambda fn=fn: np.asarray(jax.block_until_ready(fn(ts))), 3)
-        rows.append(dict(method=f"reduced ({name})", setting="jit", wall_s=wall,
-                         first_s=first, error=float(np.max(np.abs(s / s_ref - 1))), sigma_0_2s=s[0], sigma_1500s=s[1]))
+        rows.append(
+            dict(
+                method=f"reduced ({name})",
+                setting="jit",
+                wall_s=wall,
+                first_s=first,
+                error=float(np.max(np.abs(s / s_ref - 1))),
+                sigma_0_2s=s[0],
+                sigma_1500s=s[1],
+            )
+        )
     df = pd.DataFrame(rows)
     df["pareto"] = pareto(df)
     return df, {m: r for m, (_, r) in fe.items()}

@@ -24,8 +24,9 @@ import hashlib
 import json
 import multiprocessing
 import os
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
-from typing import Any, Callable, Iterable, Mapping
+from typing import Any
 
 import numpy as np
 
@@ -87,7 +88,7 @@ def _to_fields(result: Any) -> dict[str, np.ndarray]:
     for k, v in d.items():
         try:
             a = np.asarray(v)
-        except Exception:  # noqa: BLE001  (unstorable field, e.g. a mesh object)
+        except Exception:
             continue
         if a.dtype == object:
             continue
@@ -146,8 +147,10 @@ def _executor(executor: Any) -> tuple[Any, bool]:
         return executor.get_executor(), False
     if isinstance(executor, cf.Executor):
         return executor, False
-    raise ValueError("executor must be None (2 local processes), 'serial', a concurrent.futures.Executor "
-                     f"or a dask.distributed.Client; got {executor!r}")
+    raise ValueError(
+        "executor must be None (2 local processes), 'serial', a concurrent.futures.Executor "
+        f"or a dask.distributed.Client; got {executor!r}"
+    )
 
 
 def run(
@@ -193,7 +196,7 @@ def run(
                 i = futures[fut]
                 try:
                     fields = fut.result()
-                except Exception as e:  # noqa: BLE001
+                except Exception as e:
                     failures[i] = f"{type(e).__name__}: {e}"
                     bar.update(1)
                     continue

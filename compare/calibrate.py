@@ -13,7 +13,7 @@ onto a grid ``x`` in ``[0, x_max]`` (default 0.3). The table is written to
 ``f``, whose x-derivative is singular at 0), and ``metadata`` (JSON: mesh, command, kappa/C, the
 estimated discretisation error = max relative difference of f between the mesh and a coarser one).
 
-``python -m compare.calibrate [--out PATH] [--store DIR] [--n-x N] [--alphas a,b,..] [--mesh M]
+``python -m tissuemech.compare.calibrate [--out PATH] [--store DIR] [--n-x N] [--alphas a,b,..] [--mesh M]
 [--error-mesh M]`` regenerates it through ``compare.batch`` (resumable with ``--store``).
 """
 
@@ -22,8 +22,9 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any, Callable, NamedTuple, Sequence
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -48,15 +49,31 @@ def hertz_f(x: np.ndarray) -> np.ndarray:
     return (32.0 / 3.0) * np.asarray(x, dtype=float) ** 1.5
 
 
-def static_curve(*, alpha: float, x_max: float, mesh: Any = "default", radius: float = RADIUS,
-                 C: float = C_REF, kappa: float = KAPPA) -> dict:
+def static_curve(
+    *, alpha: float, x_max: float, mesh: Any = "default", radius: float = RADIUS, C: float = C_REF, kappa: float = KAPPA
+) -> dict:
     """One static FE run (module level, picklable): approach (m), force (N), midplane radius (m)."""
-    from fem import spheroid as fem_spheroid
+    from tissuemech.fem import spheroid as fem_spheroid
 
-    r = fem_spheroid.compress(radius=radius, C=C, alpha=alpha, branches=(), displacement=2 * radius * x_max,
-                              ramp_time=1.0, end_time=1.0, kappa=kappa, mesh=mesh, static=True)
-    return {"approach": np.asarray(r.approach), "force": np.asarray(r.force),
-            "midplane_radius": np.asarray(r.midplane_radius), "radius": radius, "C": C}
+    r = fem_spheroid.compress(
+        radius=radius,
+        C=C,
+        alpha=alpha,
+        branches=(),
+        displacement=2 * radius * x_max,
+        ramp_time=1.0,
+        end_time=1.0,
+        kappa=kappa,
+        mesh=mesh,
+        static=True,
+    )
+    return {
+        "approach": np.asarray(r.approach),
+        "force": np.asarray(r.force),
+        "midplane_radius": np.asarray(r.midplane_radius),
+        "radius": radius,
+        "C": C,
+    }
 
 
 def _to_master(run: Any, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -65,8 +82,10 @@ def _to_master(run: Any, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     order = np.argsort(xs)
     xs = xs[order]
     if xs[-1] < x[-1] * (1 - 1e-9):
-        raise RuntimeError(f"the static FE run stopped at x = delta/(2 a0) = {xs[-1]:.4g} before the "
-                           f"table end {x[-1]:.4g}. Hint: reduce x_max or refine the load stepping.")
+        raise RuntimeError(
+            f"the static FE run stopped at x = delta/(2 a0) = {xs[-1]:.4g} before the "
+            f"table end {x[-1]:.4g}. Hint: reduce x_max or refine the load stepping."
+        )
     f = np.interp(x, np.r_[0.0, xs], np.r_[0.0, np.asarray(run["force"])[order] / (C * a0**2)])
     g = np.interp(x, np.r_[0.0, xs], np.r_[1.0, np.asarray(run["midplane_radius"])[order] / a0])
     return f, g
@@ -83,15 +102,16 @@ def tabulate(
     curve: Callable[..., Any] = static_curve,
 ) -> MasterCurves:
     """Run one static FE curve per alpha (through ``compare.batch``) and tabulate f, g on x in [0, x_max]."""
-    from compare import batch
+    from tissuemech.compare import batch
 
     if not 0 < x_max < 0.5:
         raise ValueError(f"x_max = delta/(2 a0) must be in (0, 0.5); got {x_max}")
     if any(a < 0 for a in alphas):
         raise ValueError("alpha must be >= 0 (0 is neo-Hookean)")
     x = np.linspace(0.0, x_max, n_x)
-    runs = batch.run(curve, [dict(alpha=float(a), x_max=float(x_max), mesh=mesh) for a in alphas],
-                     executor=executor, store=store)
+    runs = batch.run(
+        curve, [dict(alpha=float(a), x_max=float(x_max), mesh=mesh) for a in alphas], executor=executor, store=store
+    )
     fg = [_to_master(r, x) for r in runs]
     return MasterCurves(x, np.asarray(alphas, dtype=float), np.array([a for a, _ in fg]), np.array([b for _, b in fg]))
 
@@ -135,8 +155,16 @@ def write(path: str | Path, curves: MasterCurves, metadata: dict, raw: MasterCur
         ratio[:, 0] = 2 * ratio[:, 1] - ratio[:, 2]
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     extra = {} if raw is None else dict(f_raw=raw.f, g_raw=raw.g)
-    np.savez(path, x=x, alpha=curves.alpha, f=curves.f, g=curves.g, f_over_hertz=ratio,
-             metadata=np.asarray(json.dumps(metadata)), **extra)
+    np.savez(
+        path,
+        x=x,
+        alpha=curves.alpha,
+        f=curves.f,
+        g=curves.g,
+        f_over_hertz=ratio,
+        metadata=np.asarray(json.dumps(metadata)),
+        **extra,
+    )
 
 
 def load(path: str | Path = DEFAULT_OUT) -> tuple[MasterCurves, dict]:
@@ -146,15 +174,18 @@ def load(path: str | Path = DEFAULT_OUT) -> tuple[MasterCurves, dict]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m compare.calibrate", description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog="python -m tissuemech.compare.calibrate", description=__doc__.split("\n")[0])
     ap.add_argument("--out", default=str(DEFAULT_OUT))
     ap.add_argument("--store", default=None, help="folder for per-run results (resume)")
     ap.add_argument("--n-x", type=int, default=31)
     ap.add_argument("--x-max", type=float, default=0.3)
     ap.add_argument("--alphas", default=",".join(str(a) for a in DEFAULT_ALPHAS))
-    ap.add_argument("--mesh", default="3", help="FE mesh of the table: a fem.spheroid level or name (default: %(default)s)")
-    ap.add_argument("--error-mesh", default="fine",
-                    help="coarser mesh for the error estimate ('' to skip; default: %(default)s)")
+    ap.add_argument(
+        "--mesh", default="3", help="FE mesh of the table: a fem.spheroid level or name (default: %(default)s)"
+    )
+    ap.add_argument(
+        "--error-mesh", default="fine", help="coarser mesh for the error estimate ('' to skip; default: %(default)s)"
+    )
     ap.add_argument("--degree", type=int, default=3, help="degree of the smoothing polynomials in x (0: none)")
     a = ap.parse_args(list(sys.argv[1:] if argv is None else argv))
     alphas = [float(v) for v in a.alphas.split(",")]
@@ -167,15 +198,24 @@ def main(argv: Sequence[str] | None = None) -> int:
     if a.error_mesh:
         coarse = tabulate(mesh=a.error_mesh, store=a.store, **kw)
         err = float(np.max(np.abs(coarse.f[:, 1:] / raw.f[:, 1:] - 1.0)))
-    meta = dict(mesh=a.mesh, error_mesh=a.error_mesh or None, discretisation_error_f=err,
-                smoothing_degree=a.degree, smoothing_max_change_f=change,
-                command="python -m compare.calibrate " + " ".join(sys.argv[1:] if argv is None else argv),
-                radius_m=RADIUS, C_Pa=C_REF, kappa_Pa=KAPPA,
-                definition="f = F_eq/(C a0^2), g = r_mid/a0, x = delta/(2 a0) (total approach delta)")
+    meta = dict(
+        mesh=a.mesh,
+        error_mesh=a.error_mesh or None,
+        discretisation_error_f=err,
+        smoothing_degree=a.degree,
+        smoothing_max_change_f=change,
+        command="python -m tissuemech.compare.calibrate " + " ".join(sys.argv[1:] if argv is None else argv),
+        radius_m=RADIUS,
+        C_Pa=C_REF,
+        kappa_Pa=KAPPA,
+        definition="f = F_eq/(C a0^2), g = r_mid/a0, x = delta/(2 a0) (total approach delta)",
+    )
     write(a.out, curves, meta, raw=raw)
-    print(f"wrote {a.out}: {len(curves.alpha)} alphas x {len(curves.x)} points; "
-          f"estimated discretisation error of f: {err if err is not None else 'not estimated'}; "
-          f"smoothing changed f by at most {change:.2e}")
+    print(
+        f"wrote {a.out}: {len(curves.alpha)} alphas x {len(curves.x)} points; "
+        f"estimated discretisation error of f: {err if err is not None else 'not estimated'}; "
+        f"smoothing changed f by at most {change:.2e}"
+    )
     return 0
 
 

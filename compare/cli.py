@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import Sequence
+from collections.abc import Sequence
 
 UM = 1e-6
 
@@ -93,7 +93,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     s.add_argument("--fem", action="store_true", help="also run the finite-element model (slower) and compare")
 
-    from compare.report import add_parser as add_report_parser
+    from tissuemech.compare.report import add_parser as add_report_parser
 
     add_report_parser(sub)
     return p
@@ -107,15 +107,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     try:
         if args.command == "blastula":
-            from compare.scenes import blastula_table
+            from tissuemech.compare.scenes import blastula_table
 
             blastula_table(args)
         elif args.command == "spheroid":
-            from compare.scenes import spheroid_table
+            from tissuemech.compare.scenes import spheroid_table
 
             spheroid_table(args)
         elif args.command == "report":
-            from compare.report import run_cli
+            from tissuemech.compare.report import run_cli
 
             run_cli(args)
     except (ValueError, CLIError, OSError) as exc:

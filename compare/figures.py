@@ -15,15 +15,24 @@ to a synthetic record). Charts: ``accuracy_chart`` (log-log error vs wall time, 
 
 from __future__ import annotations
 
-from typing import Any, Mapping, Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
 UM = 1e-6
 
-__all__ = ["fig3", "fig_stretch_pressure", "fig8", "fig9", "fig10", "accuracy_chart", "stability_charts",
-           "element_radius"]
+__all__ = [
+    "fig3",
+    "fig_stretch_pressure",
+    "fig8",
+    "fig9",
+    "fig10",
+    "accuracy_chart",
+    "stability_charts",
+    "element_radius",
+]
 
 
 def _plt():
@@ -45,6 +54,7 @@ def element_radius(mesh) -> np.ndarray:
 # Blastula
 # ---------------------------------------------------------------------------------------------
 
+
 def fig3(result: Any, profile: Any, *, pressure: float, alpha: float, outer_radius: float):
     """Seed Fig. 3: von Mises on the deformed wall (left) and the exact through-wall profile vs FE (right).
 
@@ -57,8 +67,14 @@ def fig3(result: Any, profile: Any, *, pressure: float, alpha: float, outer_radi
     a0.set_title(f"FE von Mises, p = {pressure / 1e3:g} kPa, alpha = {alpha:g}, B = {outer_radius / UM:g} um")
     R = np.asarray(profile.R).ravel() / UM
     a1.plot(R, np.asarray(profile.von_mises).ravel(), "k-", label="exact (incompressible shell)")
-    a1.plot(element_radius(result.mesh) / UM, result.von_mises, "o", ms=4, mfc="none",
-            label="FE element means (all elements)")
+    a1.plot(
+        element_radius(result.mesh) / UM,
+        result.von_mises,
+        "o",
+        ms=4,
+        mfc="none",
+        label="FE element means (all elements)",
+    )
     a1.set_xlabel("reference radius R (um)")
     a1.set_ylabel("von Mises stress |sigma_theta - sigma_r| (Pa)")
     a1.set_title("through-wall profile (not in the seed)")
@@ -68,8 +84,9 @@ def fig3(result: Any, profile: Any, *, pressure: float, alpha: float, outer_radi
     return fig
 
 
-def fig_stretch_pressure(sets: Sequence[Mapping[str, Any]], *, title: str, limit_trace: Any = None,
-                         limit: tuple[float, float] | None = None):
+def fig_stretch_pressure(
+    sets: Sequence[Mapping[str, Any]], *, title: str, limit_trace: Any = None, limit: tuple[float, float] | None = None
+):
     """Seed Figs 4/5: inner and outer stretch vs pressure; FE lines, exact markers.
 
     sets         dicts with label, fe (FE result: pressure, inner_stretch, outer_stretch),
@@ -85,8 +102,7 @@ def fig_stretch_pressure(sets: Sequence[Mapping[str, Any]], *, title: str, limit
         axes[1].plot(s["fe"].outer_stretch, s["fe"].pressure, "-", color=ln.get_color(), label=f"{s['label']} FE")
         axes[1].plot(s["exact_outer"], s["exact_p"], "o", color=ln.get_color(), ms=4, mfc="none")
     if limit_trace is not None:
-        axes[0].plot(limit_trace.inner_stretch, limit_trace.pressure, "k-", lw=1.2,
-                     label="neo-Hookean FE arc-length")
+        axes[0].plot(limit_trace.inner_stretch, limit_trace.pressure, "k-", lw=1.2, label="neo-Hookean FE arc-length")
         axes[1].plot(limit_trace.outer_stretch, limit_trace.pressure, "k-", lw=1.2)
     if limit is not None:
         axes[0].plot(limit[1], limit[0], "r*", ms=12, label=f"limit point {limit[0]:.2f} Pa (exact)")
@@ -104,6 +120,7 @@ def fig_stretch_pressure(sets: Sequence[Mapping[str, Any]], *, title: str, limit
 # ---------------------------------------------------------------------------------------------
 # Spheroid
 # ---------------------------------------------------------------------------------------------
+
 
 def fig8(result: Any, times: Sequence[float]):
     """Seed Fig. 8: von Mises on the deformed quarter section at the stored field times (one panel each)."""
@@ -173,6 +190,7 @@ def fig10(curves: Sequence[Mapping[str, Any]], synthetic: Mapping[str, Any] | No
 # Charts
 # ---------------------------------------------------------------------------------------------
 
+
 def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16):
     """Log-log error vs wall time, one marker style per method family, Pareto front joined in red."""
     plt = _plt()
@@ -183,8 +201,13 @@ def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16):
     for method, g in d.groupby("method", sort=False):
         ax.plot(g.wall_s, g.err_plot, next(markers), ms=7, mfc="none", label=method)
         for _, r in g.iterrows():
-            ax.annotate(str(r.setting).replace("mesh ", ""), (r.wall_s, r.err_plot), textcoords="offset points",
-                        xytext=(4, 3), fontsize=6)
+            ax.annotate(
+                str(r.setting).replace("mesh ", ""),
+                (r.wall_s, r.err_plot),
+                textcoords="offset points",
+                xytext=(4, 3),
+                fontsize=6,
+            )
     front = d[d.pareto.astype(bool)].sort_values("wall_s")
     ax.plot(front.wall_s, front.err_plot, "r-", lw=1, alpha=0.7, label="Pareto front")
     ax.set_xscale("log")
@@ -198,8 +221,15 @@ def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16):
     return fig
 
 
-def stability_charts(*, limit: pd.DataFrame, kappa: pd.DataFrame, viscous: pd.DataFrame, stiff: pd.DataFrame,
-                     compression: pd.DataFrame | None = None, tolerance: float = 1e-3):
+def stability_charts(
+    *,
+    limit: pd.DataFrame,
+    kappa: pd.DataFrame,
+    viscous: pd.DataFrame,
+    stiff: pd.DataFrame,
+    compression: pd.DataFrame | None = None,
+    tolerance: float = 1e-3,
+):
     """The stability map: limit point, locking vs kappa/C, viscous step, stiff solvers, compression depth."""
     plt = _plt()
     fig, axes = plt.subplots(2, 3, figsize=(16, 9))
@@ -218,11 +248,22 @@ def stability_charts(*, limit: pd.DataFrame, kappa: pd.DataFrame, viscous: pd.Da
         ok = ~g.failed.astype(bool)
         (ln,) = ax.loglog(g.kappa_over_C[ok], g.error[ok], "o-", label=form)
         if (~ok).any():
-            ax.plot(g.kappa_over_C[~ok], np.full((~ok).sum(), 1.0), "x", color=ln.get_color(), ms=10,
-                    label=f"{form}: Newton failed")
+            ax.plot(
+                g.kappa_over_C[~ok],
+                np.full((~ok).sum(), 1.0),
+                "x",
+                color=ln.get_color(),
+                ms=10,
+                label=f"{form}: Newton failed",
+            )
     k = np.geomspace(kappa.kappa_over_C.min(), kappa.kappa_over_C.max(), 50)
-    ax.loglog(k, 1.0 / k * kappa.error[kappa.formulation == "mixed"].iloc[0] * kappa.kappa_over_C.iloc[0], "k:",
-              lw=0.8, label="~ C/kappa")
+    ax.loglog(
+        k,
+        1.0 / k * kappa.error[kappa.formulation == "mixed"].iloc[0] * kappa.kappa_over_C.iloc[0],
+        "k:",
+        lw=0.8,
+        label="~ C/kappa",
+    )
     ax.set_xlabel("kappa / C")
     ax.set_ylabel("inner-stretch error vs incompressible exact")
     ax.set_title("locking: displacement-only vs mixed u-p")
@@ -245,8 +286,14 @@ def stability_charts(*, limit: pd.DataFrame, kappa: pd.DataFrame, viscous: pd.Da
         ok = ~g.failed.astype(bool)
         (ln,) = ax.loglog(g.tau_over_ramp[ok], g.steps[ok] + g.rejected[ok], "o-", label=f"{s}")
         if (~ok).any():
-            ax.plot(g.tau_over_ramp[~ok], g.steps[~ok] + g.rejected[~ok], "x", color=ln.get_color(), ms=10,
-                    label=f"{s}: failed (max_steps)")
+            ax.plot(
+                g.tau_over_ramp[~ok],
+                g.steps[~ok] + g.rejected[~ok],
+                "x",
+                color=ln.get_color(),
+                ms=10,
+                label=f"{s}: failed (max_steps)",
+            )
     ax.set_xlabel("tau / ramp time")
     ax.set_ylabel("solver steps (accepted + rejected)")
     ax.set_title("stiffness: explicit vs implicit diffrax")

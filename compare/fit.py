@@ -28,19 +28,18 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Callable, NamedTuple, Sequence
+from typing import Any, NamedTuple
 
-import numpy as np
-
-import reduced  # noqa: F401  (enables float64 in JAX)
 import jax
 import jax.numpy as jnp
+import numpy as np
 
-from reduced.material import validate_positive
+import tissuemech.reduced  # noqa: F401  (enables float64 in JAX)
+from tissuemech.reduced.material import validate_positive
 
-__all__ = ["Record", "FitResult", "Identifiability", "relaxation", "read_csv", "parameter_names",
-           "Z95"]
+__all__ = ["Record", "FitResult", "Identifiability", "relaxation", "read_csv", "parameter_names", "Z95"]
 
 Z95 = 1.959963984540054  # two-sided 95 % normal quantile
 ALPHA_BOUNDS = (1e-6, 10.0)
@@ -94,7 +93,7 @@ class Identifiability:
         and the weakest direction carries weight on both (|v| >= 0.01)."""
         ia, ib = self.names.index(a), self.names.index(b)
         v = self.eigenvectors[:, 0]
-        return (abs(self.correlation()[ia, ib]) >= threshold and abs(v[ia]) >= 0.01 and abs(v[ib]) >= 0.01)
+        return abs(self.correlation()[ia, ib]) >= threshold and abs(v[ia]) >= 0.01 and abs(v[ib]) >= 0.01
 
 
 @dataclass
@@ -142,15 +141,18 @@ def parameter_names(n_branches: int = 1) -> tuple[str, ...]:
         raise ValueError(f"n_branches must be at least 1; got {n_branches}")
     if n_branches == 1:
         return ("C", "alpha", "beta", "tau")
-    return (("C", "alpha") + tuple(f"beta_{m}" for m in range(1, n_branches + 1))
-            + tuple(f"tau_{m}" for m in range(1, n_branches + 1)))
+    return (
+        ("C", "alpha")
+        + tuple(f"beta_{m}" for m in range(1, n_branches + 1))
+        + tuple(f"tau_{m}" for m in range(1, n_branches + 1))
+    )
 
 
 @functools.lru_cache(maxsize=1)
 def _default_model() -> Callable:
     """reduced.spheroid.nominal_stress with forward-mode sensitivities (the fit uses jax.jacfwd);
     cached, so compiled residuals are reused between fits."""
-    from reduced import spheroid
+    from tissuemech.reduced import spheroid
 
     return functools.partial(spheroid.nominal_stress, adjoint="forward")
 
@@ -167,8 +169,9 @@ def _as_records(records: Sequence[Any]) -> list[Record]:
         t = np.asarray(t, dtype=float).ravel()
         s = np.asarray(s, dtype=float).ravel()
         if t.shape != s.shape or t.size < 2:
-            raise ValueError(f"record {k}: time and nominal_stress need the same length (>= 2); "
-                             f"got {t.size} and {s.size}")
+            raise ValueError(
+                f"record {k}: time and nominal_stress need the same length (>= 2); got {t.size} and {s.size}"
+            )
         if not (np.all(np.isfinite(t)) and np.all(np.isfinite(s))):
             raise ValueError(f"record {k}: time and stress must be finite numbers (found NaN or inf)")
         if np.any(t < 0):
@@ -189,7 +192,7 @@ def initial_guess(records: Sequence[Record], radius: float, ramp_time: float, n_
     ends, peaks, spans = [], [], []
     for r in records:
         hertz = (32.0 / 3.0) * math.sqrt(radius) * (r.displacement / 2.0) ** 1.5 / (math.pi * radius**2)
-        tail = r.nominal_stress[-max(1, r.time.size // 20):]
+        tail = r.nominal_stress[-max(1, r.time.size // 20) :]
         ends.append(np.mean(tail) / hertz)
         peaks.append(np.max(r.nominal_stress) / max(np.mean(tail), 1e-300))
         spans.append(r.time.max())
@@ -204,8 +207,19 @@ def initial_guess(records: Sequence[Record], radius: float, ramp_time: float, n_
 def _predict(theta, ts, ds, radius, ramp_time, model, equilibrium, nb):
     p = jnp.exp(theta)
     branches = [(p[2 + m], p[2 + nb + m]) for m in range(nb)]
-    return [model(t, radius=radius, C=p[0], alpha=p[1], branches=branches, displacement=d,
-                  ramp_time=ramp_time, equilibrium=equilibrium) for t, d in zip(ts, ds)]
+    return [
+        model(
+            t,
+            radius=radius,
+            C=p[0],
+            alpha=p[1],
+            branches=branches,
+            displacement=d,
+            ramp_time=ramp_time,
+            equilibrium=equilibrium,
+        )
+        for t, d in zip(ts, ds)
+    ]
 
 
 def _residual(theta, ts, ys, ds, scale, radius, ramp_time, model, equilibrium, nb):
@@ -222,17 +236,23 @@ def _builder(records, radius, ramp_time, n_branches, equilibrium, model):
     """residual(theta) and its jacfwd Jacobian (theta = log params), jit-compiled once per model,
     equilibrium and record shapes (records enter as arguments, so a refit of new data of the same
     shape does not recompile). Unhashable equilibria (arrays) are closed over instead."""
-    args = (tuple(jnp.asarray(r.time) for r in records), tuple(jnp.asarray(r.nominal_stress) for r in records),
-            tuple(jnp.asarray(r.displacement) for r in records))
+    args = (
+        tuple(jnp.asarray(r.time) for r in records),
+        tuple(jnp.asarray(r.nominal_stress) for r in records),
+        tuple(jnp.asarray(r.displacement) for r in records),
+    )
     scale = float(max(np.max(np.abs(r.nominal_stress)) for r in records)) or 1.0
     rest = (jnp.asarray(scale), float(radius), float(ramp_time))  # geometry static (Python floats)
     try:
         hash(equilibrium)
         kw = dict(model=model, equilibrium=equilibrium, nb=n_branches)
-        return (lambda th: _residual_jit(th, *args, *rest, **kw),
-                lambda th: _jacobian_jit(th, *args, *rest, **kw), scale)
+        return (
+            lambda th: _residual_jit(th, *args, *rest, **kw),
+            lambda th: _jacobian_jit(th, *args, *rest, **kw),
+            scale,
+        )
     except TypeError:
-        f = lambda th: _residual(th, *args, *rest, model, equilibrium, n_branches)  # noqa: E731
+        f = lambda th: _residual(th, *args, *rest, model, equilibrium, n_branches)
         return jax.jit(f), jax.jit(jax.jacfwd(f)), scale
 
 
@@ -260,9 +280,11 @@ def _identifiability(J: np.ndarray, s2: float, names: tuple[str, ...]) -> Identi
         weak = [ident.combination(i) for i in poorly]
         lines.append("  -> the data cannot separate the parameters along: " + "; ".join(weak) + ".")
         if "C" in names and "alpha" in names and ident.mixes("C", "alpha"):
-            lines.append("  -> C and alpha trade off: one compression level only fixes the equilibrium force "
-                         "F_eq(delta) (a single combination of C and alpha). Add records at two or more "
-                         "compression levels (or resolve the loading ramp) to identify them separately.")
+            lines.append(
+                "  -> C and alpha trade off: one compression level only fixes the equilibrium force "
+                "F_eq(delta) (a single combination of C and alpha). Add records at two or more "
+                "compression levels (or resolve the loading ramp) to identify them separately."
+            )
     else:
         lines.append("  -> all parameters are identified by these records.")
     ident.report = "\n".join(lines)
@@ -313,7 +335,7 @@ def relaxation(
     lo = np.full(len(names), -np.inf)
     hi = np.full(len(names), np.inf)
     lo[1], hi[1] = np.log(ALPHA_BOUNDS[0]), np.log(ALPHA_BOUNDS[1])
-    lo[2:2 + n_branches], hi[2:2 + n_branches] = np.log(BETA_BOUNDS[0]), np.log(BETA_BOUNDS[1])
+    lo[2 : 2 + n_branches], hi[2 : 2 + n_branches] = np.log(BETA_BOUNDS[0]), np.log(BETA_BOUNDS[1])
     theta0 = np.clip(np.log(p0), lo + 1e-9, hi - 1e-9)
 
     res_fn, jac_fn, scale = _builder(recs, float(radius), float(ramp_time), n_branches, equilibrium, model)
@@ -329,10 +351,22 @@ def relaxation(
         return np.asarray(jac_fn(jnp.asarray(th)))
 
     if not np.all(np.isfinite(np.asarray(res_fn(jnp.asarray(theta0))))):
-        raise RuntimeError(f"the model returned NaN/inf at the starting point {dict(zip(names, p0))}. "
-                           "Hint: give initial=... closer to the data, or check units (m, Pa, s).")
-    sol = least_squares(fun, theta0, jac=jac, bounds=(lo, hi), method="trf", x_scale="jac",
-                        xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=max_nfev)
+        raise RuntimeError(
+            f"the model returned NaN/inf at the starting point {dict(zip(names, p0))}. "
+            "Hint: give initial=... closer to the data, or check units (m, Pa, s)."
+        )
+    sol = least_squares(
+        fun,
+        theta0,
+        jac=jac,
+        bounds=(lo, hi),
+        method="trf",
+        x_scale="jac",
+        xtol=1e-12,
+        ftol=1e-12,
+        gtol=1e-12,
+        max_nfev=max_nfev,
+    )
     theta = sol.x
     r = sol.fun * scale
     J = jac(theta) * scale
@@ -342,9 +376,12 @@ def relaxation(
     ident = _identifiability(J, s2, names)
     at_bound = [nm for nm, th, a, b in zip(names, theta, lo, hi) if min(th - a, b - th) < 1e-6]
     if at_bound:
-        ident.report += ("\n  -> at a bound of the search: " + ", ".join(at_bound)
-                         + f" (alpha in {ALPHA_BOUNDS}, beta in {BETA_BOUNDS}); e.g. alpha at 1e-6 means the "
-                         "data are consistent with a neo-Hookean law (alpha = 0).")
+        ident.report += (
+            "\n  -> at a bound of the search: "
+            + ", ".join(at_bound)
+            + f" (alpha in {ALPHA_BOUNDS}, beta in {BETA_BOUNDS}); e.g. alpha at 1e-6 means the "
+            "data are consistent with a neo-Hookean law (alpha = 0)."
+        )
     if not sol.success:
         ident.report += f"\n  -> the optimizer did not converge: {sol.message}"
     lam, V = ident.eigenvalues, ident.eigenvectors
@@ -352,8 +389,9 @@ def relaxation(
     with np.errstate(over="ignore", invalid="ignore"):
         sd = np.sqrt(np.abs(np.diag(cov)))
         p = np.exp(theta)
-        intervals = {nm: (float(p[i] * np.exp(-Z95 * sd[i])), float(p[i] * np.exp(Z95 * sd[i])))
-                     for i, nm in enumerate(names)}
+        intervals = {
+            nm: (float(p[i] * np.exp(-Z95 * sd[i])), float(p[i] * np.exp(Z95 * sd[i]))) for i, nm in enumerate(names)
+        }
     return FitResult(
         params={nm: float(v) for nm, v in zip(names, p)},
         intervals=intervals,
@@ -367,8 +405,7 @@ def relaxation(
     )
 
 
-def read_csv(path: str, *, displacement: float, time_column: str | int = 0,
-             stress_column: str | int = 1) -> Record:
+def read_csv(path: str, *, displacement: float, time_column: str | int = 0, stress_column: str | int = 1) -> Record:
     """Read a relaxation record from a CSV file: a time column (s) and a nominal-stress column (Pa).
 
     A header line is optional (columns may then be chosen by name); ``displacement`` is the total
@@ -389,7 +426,9 @@ def read_csv(path: str, *, displacement: float, time_column: str | int = 0,
         t = df[time_column] if not isinstance(time_column, int) else df.iloc[:, time_column]
         s = df[stress_column] if not isinstance(stress_column, int) else df.iloc[:, stress_column]
     except (KeyError, IndexError):
-        raise ValueError(f"{path}: columns {time_column!r}/{stress_column!r} not found; it has {list(df.columns)}") from None
+        raise ValueError(
+            f"{path}: columns {time_column!r}/{stress_column!r} not found; it has {list(df.columns)}"
+        ) from None
     try:
         t = np.asarray(t, dtype=float)
         s = np.asarray(s, dtype=float)

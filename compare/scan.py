@@ -21,25 +21,42 @@ from __future__ import annotations
 
 import functools
 import itertools
-from typing import Any, Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 import pandas as pd
 
-import reduced  # noqa: F401  (float64)
-import jax
-import jax.numpy as jnp
-
-from reduced.material import validate_material, validate_nonnegative, validate_positive, validate_radii
+import tissuemech.reduced  # noqa: F401  (float64)
+from tissuemech.reduced.material import validate_material, validate_nonnegative, validate_positive, validate_radii
 
 __all__ = ["design", "spheroid", "blastula", "spread_indices"]
 
 UNITS = {
-    "radius": "m", "C": "Pa", "alpha": "-", "beta": "-", "tau": "s", "displacement": "m",
-    "ramp_time": "s", "inner_radius": "m", "outer_radius": "m", "pressure": "Pa",
-    "sigma_peak": "Pa", "sigma_end": "Pa", "relaxed_fraction": "-", "t_half": "s",
-    "inner_stretch": "-", "outer_stretch": "-", "p_limit": "Pa", "bursts": "-",
-    "fe_sigma_peak": "Pa", "fe_sigma_end": "Pa", "fe_inner_stretch": "-", "deviation": "-",
+    "radius": "m",
+    "C": "Pa",
+    "alpha": "-",
+    "beta": "-",
+    "tau": "s",
+    "displacement": "m",
+    "ramp_time": "s",
+    "inner_radius": "m",
+    "outer_radius": "m",
+    "pressure": "Pa",
+    "sigma_peak": "Pa",
+    "sigma_end": "Pa",
+    "relaxed_fraction": "-",
+    "t_half": "s",
+    "inner_stretch": "-",
+    "outer_stretch": "-",
+    "p_limit": "Pa",
+    "bursts": "-",
+    "fe_sigma_peak": "Pa",
+    "fe_sigma_end": "Pa",
+    "fe_inner_stretch": "-",
+    "deviation": "-",
 }
 
 
@@ -68,8 +85,9 @@ def _is_range(v: Any) -> bool:
     return isinstance(v, tuple) and len(v) == 2
 
 
-def design(params: Mapping[str, Any], *, n: int, method: str = "lhs", seed: int = 0,
-           log: Sequence[str] = ()) -> pd.DataFrame:
+def design(
+    params: Mapping[str, Any], *, n: int, method: str = "lhs", seed: int = 0, log: Sequence[str] = ()
+) -> pd.DataFrame:
     """Points of a design as a DataFrame (plain parameter names, SI values).
 
     params  name -> number (fixed), (lo, hi) (range) or list of values (grid only).
@@ -144,7 +162,7 @@ def _batched(fn: Callable, arrays: dict[str, np.ndarray], batch_size: int) -> di
     n = len(next(iter(arrays.values())))
     outs: dict[str, list] = {}
     for s in range(0, n, batch_size):
-        chunk = {k: v[s:s + batch_size] for k, v in arrays.items()}
+        chunk = {k: v[s : s + batch_size] for k, v in arrays.items()}
         m = len(next(iter(chunk.values())))
         if m < batch_size and n > batch_size:  # keep one compiled shape
             chunk = {k: np.concatenate([v, np.repeat(v[:1], batch_size - m)]) for k, v in chunk.items()}
@@ -187,10 +205,17 @@ def _summaries(t, s):
 
 def _fe_spheroid(*, radius, C, alpha, beta, tau, displacement, ramp_time, end_time):
     """One FE spheroid run (module level, so process pools can pickle it): time and nominal stress."""
-    from fem import spheroid as fem_spheroid
+    from tissuemech.fem import spheroid as fem_spheroid
 
-    r = fem_spheroid.compress(radius=radius, C=C, alpha=alpha, branches=[(beta, tau)],
-                              displacement=displacement, ramp_time=ramp_time, end_time=end_time)
+    r = fem_spheroid.compress(
+        radius=radius,
+        C=C,
+        alpha=alpha,
+        branches=[(beta, tau)],
+        displacement=displacement,
+        ramp_time=ramp_time,
+        end_time=end_time,
+    )
     return {"time": np.asarray(r.time), "nominal_stress": np.asarray(r.nominal_stress)}
 
 
@@ -237,8 +262,7 @@ def spheroid(
     ``points``: a ready design (DataFrame or dict of arrays, plain or unit-labelled column names);
     parameters it lacks come from the keyword values (numbers).
     """
-    params = dict(radius=radius, C=C, alpha=alpha, beta=beta, tau=tau, displacement=displacement,
-                  ramp_time=ramp_time)
+    params = dict(radius=radius, C=C, alpha=alpha, beta=beta, tau=tau, displacement=displacement, ramp_time=ramp_time)
     pts = _points(params, points, n, design_method, seed, log)
     validate_positive("radius", pts["radius"].to_numpy(), "m")
     validate_material(pts["C"].to_numpy(), pts["alpha"].to_numpy())
@@ -292,8 +316,9 @@ def spheroid(
             peak, end = float(np.max(s_fe)), float(s_fe[-1])
             df.loc[i, _col("fe_sigma_peak")] = peak
             df.loc[i, _col("fe_sigma_end")] = end
-            df.loc[i, _col("deviation")] = max(abs(res["sigma_peak"][i] / peak - 1.0),
-                                               abs(res["sigma_end"][i] / end - 1.0))
+            df.loc[i, _col("deviation")] = max(
+                abs(res["sigma_peak"][i] / peak - 1.0), abs(res["sigma_end"][i] / end - 1.0)
+            )
     return df
 
 
@@ -303,7 +328,7 @@ def _default_spheroid_model(stiff: bool, rtol: float) -> Callable:
     evaluators are reused)."""
     import diffrax
 
-    from reduced import spheroid as red
+    from tissuemech.reduced import spheroid as red
 
     if stiff:
         return functools.partial(red.nominal_stress, method="quadrature")
@@ -317,8 +342,16 @@ def _spheroid_evaluator(model: Callable, equilibrium: Any, fixed: tuple, varying
 
     def one(t, **kw):
         p = {**fixed_d, **kw}
-        return model(t, radius=p["radius"], C=p["C"], alpha=p["alpha"], branches=[(p["beta"], p["tau"])],
-                     displacement=p["displacement"], ramp_time=p["ramp_time"], equilibrium=equilibrium)
+        return model(
+            t,
+            radius=p["radius"],
+            C=p["C"],
+            alpha=p["alpha"],
+            branches=[(p["beta"], p["tau"])],
+            displacement=p["displacement"],
+            ramp_time=p["ramp_time"],
+            equilibrium=equilibrium,
+        )
 
     @jax.jit
     def evaluate(t, kw):
@@ -333,7 +366,7 @@ def _spheroid_evaluator(model: Callable, equilibrium: Any, fixed: tuple, varying
 
 def _blastula_one(inner_radius, outer_radius, C, alpha, pressure):
     """Exact shell at one point: inner/outer stretch (NaN where it bursts) and the limit pressure."""
-    from reduced import blastula as red
+    from tissuemech.reduced import blastula as red
 
     geo = dict(inner_radius=inner_radius, outer_radius=outer_radius)
     la, _ = red.inner_stretch_solve(pressure, **geo, C=C, alpha=alpha)
@@ -346,7 +379,7 @@ _blastula_evaluate = jax.jit(jax.vmap(_blastula_one))  # compiled once per batch
 
 
 def _run_fe(function, points, executor, store):
-    from compare import batch
+    from tissuemech.compare import batch
 
     return batch.run(function, points, executor=executor, store=store, raise_on_error=False)
 
@@ -360,11 +393,10 @@ BLASTULA_PARAMS = ("inner_radius", "outer_radius", "C", "alpha", "pressure")
 
 def _fe_blastula(*, inner_radius, outer_radius, C, alpha, pressure):
     """One FE blastula run to ``pressure`` (module level for process pools): final inner stretch."""
-    from fem import blastula as fem_blastula
+    from tissuemech.fem import blastula as fem_blastula
 
     ps = np.linspace(0.0, pressure, 11)[1:]
-    r = fem_blastula.inflate(inner_radius=inner_radius, outer_radius=outer_radius, C=C, alpha=alpha,
-                             pressures=ps)
+    r = fem_blastula.inflate(inner_radius=inner_radius, outer_radius=outer_radius, C=C, alpha=alpha, pressures=ps)
     return {"inner_stretch": float(np.asarray(r.inner_stretch)[-1])}
 
 
@@ -401,8 +433,7 @@ def blastula(
     validate_radii(pts["inner_radius"].to_numpy(), pts["outer_radius"].to_numpy())
     validate_material(pts["C"].to_numpy(), pts["alpha"].to_numpy())
 
-    res = _batched(lambda **kw: _blastula_evaluate(**kw), {k: pts[k].to_numpy() for k in BLASTULA_PARAMS},
-                   batch_size)
+    res = _batched(lambda **kw: _blastula_evaluate(**kw), {k: pts[k].to_numpy() for k in BLASTULA_PARAMS}, batch_size)
     df = pts.rename(columns={k: _col(k) for k in pts.columns})
     for k in ("inner_stretch", "outer_stretch", "p_limit"):
         df[_col(k)] = res[k]

@@ -31,7 +31,7 @@ def blastula_curves(C: float, inner_radius: float, max_pressure: float, step: fl
     Returns one dict per set with keys figure, alpha, outer_radius (m), pressure (Pa),
     inner_stretch, outer_stretch (NaN past the limit point), limit (p_max, stretch) or None.
     """
-    from reduced import blastula
+    from tissuemech.reduced import blastula
 
     pressures = np.arange(0.0, max_pressure + 0.5 * step, step)
     out = []
@@ -44,8 +44,15 @@ def blastula_curves(C: float, inner_radius: float, max_pressure: float, step: fl
             la[ok] = np.asarray(blastula.inner_stretch(pressures[ok], **geo, C=C, alpha=alpha))
         lb = np.where(ok, np.asarray(blastula.outer_stretch(np.where(ok, la, 1.0), **geo)), np.nan)
         out.append(
-            dict(figure=fig, alpha=alpha, outer_radius=b_um * UM, pressure=pressures,
-                 inner_stretch=la, outer_stretch=lb, limit=lim)
+            dict(
+                figure=fig,
+                alpha=alpha,
+                outer_radius=b_um * UM,
+                pressure=pressures,
+                inner_stretch=la,
+                outer_stretch=lb,
+                limit=lim,
+            )
         )
     return out
 
@@ -74,7 +81,7 @@ def _print_blastula(curves: list[dict[str, Any]]) -> None:
 
 def blastula_table(args: Namespace) -> None:
     """``tissuemech blastula``: table of the Fig. 4/5 sets, limit pressures, PNG plot."""
-    from reduced import blastula
+    from tissuemech.reduced import blastula
 
     A = args.inner_radius_um * UM
     curves = blastula_curves(args.C, A, args.max_pressure, args.step)
@@ -97,8 +104,13 @@ def blastula_table(args: Namespace) -> None:
             ax.plot(lb[keep], p[keep], "--", color=line.get_color(), lw=1)
             if lim is not None:
                 ax.plot(float(lim[1]), float(lim[0]), "kx", ms=8)
-                ax.annotate(f"limit {float(lim[0]):.0f} Pa", (float(lim[1]), float(lim[0])),
-                            textcoords="offset points", xytext=(5, 5), fontsize=8)
+                ax.annotate(
+                    f"limit {float(lim[0]):.0f} Pa",
+                    (float(lim[1]), float(lim[0])),
+                    textcoords="offset points",
+                    xytext=(5, 5),
+                    fontsize=8,
+                )
             run = fem_runs.get((c["alpha"], c["outer_radius"]))
             if run is not None:
                 ax.plot(run.inner_stretch, run.pressure, "o", color=line.get_color(), ms=3, mfc="none")
@@ -116,7 +128,7 @@ def blastula_table(args: Namespace) -> None:
 
 def _blastula_fem(curves: list[dict[str, Any]], C: float, A: float) -> dict:
     """Run the FE blastula for every set (load control to the table's pressures below any limit)."""
-    from fem import blastula as fem_blastula
+    from tissuemech.fem import blastula as fem_blastula
 
     runs = {}
     print("\nFE check (fem.blastula.inflate, default mesh, kappa = 2.2 GPa):")
@@ -124,13 +136,14 @@ def _blastula_fem(curves: list[dict[str, Any]], C: float, A: float) -> dict:
         ok = ~np.isnan(c["inner_stretch"])
         ps = c["pressure"][ok][1:]
         t0 = time.perf_counter()
-        run = fem_blastula.inflate(inner_radius=A, outer_radius=c["outer_radius"], C=C,
-                                   alpha=c["alpha"], pressures=ps)
+        run = fem_blastula.inflate(inner_radius=A, outer_radius=c["outer_radius"], C=C, alpha=c["alpha"], pressures=ps)
         wall = time.perf_counter() - t0
         exact = np.interp(run.pressure, c["pressure"][ok], c["inner_stretch"][ok])
         err = np.max(np.abs(run.inner_stretch / exact - 1.0))
-        print(f"  alpha={c['alpha']:g}, B={c['outer_radius'] / UM:g} um: {len(run.pressure)} steps in "
-              f"{wall:.2f} s, max |FE/exact - 1| of inner stretch = {err:.1e}")
+        print(
+            f"  alpha={c['alpha']:g}, B={c['outer_radius'] / UM:g} um: {len(run.pressure)} steps in "
+            f"{wall:.2f} s, max |FE/exact - 1| of inner stretch = {err:.1e}"
+        )
         runs[(c["alpha"], c["outer_radius"])] = run
     return runs
 
@@ -144,29 +157,42 @@ def spheroid_times(ramp_time: float, end_time: float, n: int = 200) -> np.ndarra
 
 def spheroid_table(args: Namespace) -> None:
     """``tissuemech spheroid``: force and nominal stress over time, PNG of the relaxation curve."""
-    from reduced import spheroid
+    from tissuemech.reduced import spheroid
 
-    kw = dict(radius=args.radius_um * UM, C=args.C, alpha=args.alpha,
-              branches=[(args.beta, args.tau)], displacement=args.displacement_um * UM,
-              ramp_time=args.ramp_time, equilibrium=args.equilibrium)
+    kw = dict(
+        radius=args.radius_um * UM,
+        C=args.C,
+        alpha=args.alpha,
+        branches=[(args.beta, args.tau)],
+        displacement=args.displacement_um * UM,
+        ramp_time=args.ramp_time,
+        equilibrium=args.equilibrium,
+    )
     t = spheroid_times(args.ramp_time, args.end_time)
     force = np.asarray(spheroid.force(t, **kw))
     sigma = np.asarray(spheroid.nominal_stress(t, **kw))
     fe = None
     if getattr(args, "fem", False):
-        from fem import spheroid as fem_spheroid
+        from tissuemech.fem import spheroid as fem_spheroid
 
         t0 = time.perf_counter()
-        fe = fem_spheroid.compress(radius=kw["radius"], C=args.C, alpha=args.alpha,
-                                   branches=kw["branches"], displacement=kw["displacement"],
-                                   ramp_time=args.ramp_time, end_time=args.end_time)
+        fe = fem_spheroid.compress(
+            radius=kw["radius"],
+            C=args.C,
+            alpha=args.alpha,
+            branches=kw["branches"],
+            displacement=kw["displacement"],
+            ramp_time=args.ramp_time,
+            end_time=args.end_time,
+        )
         print(f"FE run: {len(fe.time)} steps in {time.perf_counter() - t0:.1f} s")
 
-    print(f"Spheroid a0 = {args.radius_um:g} um, C = {args.C:g} Pa, alpha = {args.alpha:g}, "
-          f"beta = {args.beta:g}, tau = {args.tau:g} s; approach {args.displacement_um:g} um in "
-          f"{args.ramp_time:g} s, held to {args.end_time:g} s; equilibrium: {args.equilibrium}")
-    show = [t_ for t_ in (0.05, 0.1, 0.2, 1, 10, 50, 100, 200, 400, 800, 1200, args.end_time)
-            if t_ <= args.end_time]
+    print(
+        f"Spheroid a0 = {args.radius_um:g} um, C = {args.C:g} Pa, alpha = {args.alpha:g}, "
+        f"beta = {args.beta:g}, tau = {args.tau:g} s; approach {args.displacement_um:g} um in "
+        f"{args.ramp_time:g} s, held to {args.end_time:g} s; equilibrium: {args.equilibrium}"
+    )
+    show = [t_ for t_ in (0.05, 0.1, 0.2, 1, 10, 50, 100, 200, 400, 800, 1200, args.end_time) if t_ <= args.end_time]
     head = f"{'t [s]':>8} {'F [uN]':>10} {'sigma~ [Pa]':>12}"
     print(head + (f" {'FE sigma~ [Pa]':>15}" if fe is not None else ""))
     for ts in show:

@@ -30,13 +30,14 @@ and ``compare.report`` writes as CSV:
 from __future__ import annotations
 
 import time
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
 
 UM = 1e-6
 A, C = 50e-6, 200.0
+
 
 def _positive_list(name: str, values: Sequence[float], unit: str = "") -> np.ndarray:
     v = np.atleast_1d(np.asarray(values, dtype=float))
@@ -45,8 +46,15 @@ def _positive_list(name: str, values: Sequence[float], unit: str = "") -> np.nda
     return v
 
 
-__all__ = ["limit_point_map", "kappa_map", "compression_map", "viscous_step_map", "stiff_solver_map",
-           "exact_lumped_force", "TOLERANCE"]
+__all__ = [
+    "limit_point_map",
+    "kappa_map",
+    "compression_map",
+    "viscous_step_map",
+    "stiff_solver_map",
+    "exact_lumped_force",
+    "TOLERANCE",
+]
 
 TOLERANCE = 1e-3  # the accuracy a viscoelastic step must keep
 
@@ -55,8 +63,10 @@ TOLERANCE = 1e-3  # the accuracy a viscoelastic step must keep
 # Blastula: limit point
 # ---------------------------------------------------------------------------------------------
 
-def limit_point_map(outer_um: Sequence[float] = (52.0, 60.0, 75.0), mesh="default",
-                    n_load_steps: int = 40) -> tuple[pd.DataFrame, dict]:
+
+def limit_point_map(
+    outer_um: Sequence[float] = (52.0, 60.0, 75.0), mesh="default", n_load_steps: int = 40
+) -> tuple[pd.DataFrame, dict]:
     """Load control vs arc-length vs reduced at the neo-Hookean limit point (alpha = 1e-5).
 
     Returns (table, arc-length results keyed by B in um). Table columns: B_um, method, p_reached_Pa
@@ -64,8 +74,8 @@ def limit_point_map(outer_um: Sequence[float] = (52.0, 60.0, 75.0), mesh="defaul
     (largest inner stretch reached), p_max_exact_Pa, stretch_limit_exact, rel_err_p (p_reached /
     p_max - 1), passed_limit (bool), wall_s, note.
     """
-    from fem.blastula import LimitPointError, inflate
-    from reduced import blastula as bl
+    from tissuemech.fem.blastula import LimitPointError, inflate
+    from tissuemech.reduced import blastula as bl
 
     _positive_list("outer_um (outer radii)", outer_um, " in um")
     if any(b <= A / UM for b in outer_um):
@@ -88,8 +98,18 @@ def limit_point_map(outer_um: Sequence[float] = (52.0, 60.0, 75.0), mesh="defaul
             pass
         else:  # pragma: no cover - would be a bug in reduced.blastula
             note = "inner_stretch above p_max did NOT raise"
-        rows.append(dict(base, method="reduced (exact)", p_reached_Pa=pmax, stretch_reached=np.inf,
-                         rel_err_p=0.0, passed_limit=True, wall_s=wall, note=note))
+        rows.append(
+            dict(
+                base,
+                method="reduced (exact)",
+                p_reached_Pa=pmax,
+                stretch_reached=np.inf,
+                rel_err_p=0.0,
+                passed_limit=True,
+                wall_s=wall,
+                note=note,
+            )
+        )
 
         t0 = time.perf_counter()
         try:
@@ -100,19 +120,37 @@ def limit_point_map(outer_um: Sequence[float] = (52.0, 60.0, 75.0), mesh="defaul
             note = "LimitPointError: " + str(e).split(" (load level")[0][:160]
         wall = time.perf_counter() - t0
         la_last = float(bl.inner_stretch(min(p_last, pmax * (1 - 1e-12)), **geo))
-        rows.append(dict(base, method="FE load control", p_reached_Pa=p_last, stretch_reached=la_last,
-                         rel_err_p=p_last / pmax - 1, passed_limit=p_last > pmax, wall_s=wall, note=note))
+        rows.append(
+            dict(
+                base,
+                method="FE load control",
+                p_reached_Pa=p_last,
+                stretch_reached=la_last,
+                rel_err_p=p_last / pmax - 1,
+                passed_limit=p_last > pmax,
+                wall_s=wall,
+                note=note,
+            )
+        )
 
         t0 = time.perf_counter()
         r = inflate(**geo, pressures=None, method="arclength", max_inner_stretch=1.3 * lstar, mesh=mesh)
         wall = time.perf_counter() - t0
         traces[b] = r
         p_top, l_top = _parabolic_max(r.inner_stretch, r.pressure)
-        rows.append(dict(base, method="FE arc-length", p_reached_Pa=p_top,
-                         stretch_reached=float(r.inner_stretch[-1]), rel_err_p=p_top / pmax - 1,
-                         passed_limit=bool(r.inner_stretch[-1] > lstar), wall_s=wall,
-                         note=f"{len(r.pressure)} steps; maximum (parabola through the 3 steps around it) "
-                              f"at inner stretch {l_top:.4f}"))
+        rows.append(
+            dict(
+                base,
+                method="FE arc-length",
+                p_reached_Pa=p_top,
+                stretch_reached=float(r.inner_stretch[-1]),
+                rel_err_p=p_top / pmax - 1,
+                passed_limit=bool(r.inner_stretch[-1] > lstar),
+                wall_s=wall,
+                note=f"{len(r.pressure)} steps; maximum (parabola through the 3 steps around it) "
+                f"at inner stretch {l_top:.4f}",
+            )
+        )
     return pd.DataFrame(rows), traces
 
 
@@ -121,7 +159,7 @@ def _parabolic_max(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
     i = int(np.argmax(y))
     if i == 0 or i == len(y) - 1:
         return float(y[i]), float(x[i])
-    c = np.polyfit(x[i - 1:i + 2], y[i - 1:i + 2], 2)
+    c = np.polyfit(x[i - 1 : i + 2], y[i - 1 : i + 2], 2)
     if c[0] >= 0:
         return float(y[i]), float(x[i])
     xm = -c[1] / (2 * c[0])
@@ -132,17 +170,19 @@ def _parabolic_max(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
 # Blastula: locking versus kappa / C
 # ---------------------------------------------------------------------------------------------
 
-def kappa_map(ratios: Sequence[float] = (1e2, 1e3, 1e4, 1e5, 1e6, 1e7), mesh=(4, 8),
-              pressures: Sequence[float] = (250.0, 500.0)) -> pd.DataFrame:
+
+def kappa_map(
+    ratios: Sequence[float] = (1e2, 1e3, 1e4, 1e5, 1e6, 1e7), mesh=(4, 8), pressures: Sequence[float] = (250.0, 500.0)
+) -> pd.DataFrame:
     """Inner-stretch error vs kappa/C for displacement-only and mixed u-p elements (alpha = 0.2, B = 75 um).
 
     error = max_p |lambda_a,FE / lambda_a,exact - 1| against the incompressible exact shell (so it
     contains the physical compressibility error ~ C/kappa as well as locking). A Newton failure is
     recorded (error NaN, failed True, the message).
     """
-    from compare.bench.fem_blastula import la_exact
-    from fem.blastula import inflate
-    from fem.newton import NewtonError
+    from tissuemech.compare.bench.fem_blastula import la_exact
+    from tissuemech.fem.blastula import inflate
+    from tissuemech.fem.newton import NewtonError
 
     _positive_list("ratios (kappa/C)", ratios)
     _positive_list("pressures", pressures, " in Pa")
@@ -155,13 +195,29 @@ def kappa_map(ratios: Sequence[float] = (1e2, 1e3, 1e4, 1e5, 1e6, 1e7), mesh=(4,
             err, failed, note = np.nan, False, ""
             try:
                 with np.errstate(all="ignore"):
-                    r = inflate(inner_radius=A, outer_radius=B, C=C, alpha=alpha, pressures=list(pressures),
-                                mesh=mesh, kappa=k * C, formulation=form)
+                    r = inflate(
+                        inner_radius=A,
+                        outer_radius=B,
+                        C=C,
+                        alpha=alpha,
+                        pressures=list(pressures),
+                        mesh=mesh,
+                        kappa=k * C,
+                        formulation=form,
+                    )
                 err = float(np.max(np.abs(r.inner_stretch / ex - 1)))
             except NewtonError as e:
                 failed, note = True, str(e)[:200]
-            rows.append(dict(formulation=form, kappa_over_C=k, error=err, failed=failed,
-                             wall_s=time.perf_counter() - t0, note=note))
+            rows.append(
+                dict(
+                    formulation=form,
+                    kappa_over_C=k,
+                    error=err,
+                    failed=failed,
+                    wall_s=time.perf_counter() - t0,
+                    note=note,
+                )
+            )
     return pd.DataFrame(rows)
 
 
@@ -169,8 +225,14 @@ def kappa_map(ratios: Sequence[float] = (1e2, 1e3, 1e4, 1e5, 1e6, 1e7), mesh=(4,
 # Spheroid: compression depth (optional)
 # ---------------------------------------------------------------------------------------------
 
-def compression_map(fractions: Sequence[float] = (0.2, 0.3, 0.4, 0.5, 0.6), mesh="default",
-                    radius: float = 500 * UM, C_: float = 200.0, alpha: float = 0.2) -> pd.DataFrame:
+
+def compression_map(
+    fractions: Sequence[float] = (0.2, 0.3, 0.4, 0.5, 0.6),
+    mesh="default",
+    radius: float = 500 * UM,
+    C_: float = 200.0,
+    alpha: float = 0.2,
+) -> pd.DataFrame:
     """Static elastic compression to increasing total approach (fraction of the diameter) until it fails.
 
     Needs ``fem.spheroid``. Columns: fraction, approach_um, converged, force_N, steps, wall_s, note.
@@ -179,19 +241,46 @@ def compression_map(fractions: Sequence[float] = (0.2, 0.3, 0.4, 0.5, 0.6), mesh
     fr = _positive_list("fractions (approach / diameter)", fractions)
     if np.any(fr >= 1):
         raise ValueError(f"fractions are total approach / diameter and must be below 1; got {list(fractions)}")
-    from fem import spheroid as fes
+    from tissuemech.fem import spheroid as fes
 
     rows = []
     for f in fractions:
         t0 = time.perf_counter()
         try:
-            r = fes.compress(radius=radius, C=C_, alpha=alpha, branches=None, displacement=2 * radius * f,
-                             ramp_time=1.0, end_time=1.0, mesh=mesh, static=True)
-            rows.append(dict(fraction=f, approach_um=float(r.approach[-1]) / UM, converged=True,
-                             force_N=float(r.force[-1]), steps=len(r.force), wall_s=time.perf_counter() - t0, note=""))
+            r = fes.compress(
+                radius=radius,
+                C=C_,
+                alpha=alpha,
+                branches=None,
+                displacement=2 * radius * f,
+                ramp_time=1.0,
+                end_time=1.0,
+                mesh=mesh,
+                static=True,
+            )
+            rows.append(
+                dict(
+                    fraction=f,
+                    approach_um=float(r.approach[-1]) / UM,
+                    converged=True,
+                    force_N=float(r.force[-1]),
+                    steps=len(r.force),
+                    wall_s=time.perf_counter() - t0,
+                    note="",
+                )
+            )
         except Exception as e:  # NewtonError or a contact failure: the boundary
-            rows.append(dict(fraction=f, approach_um=2 * radius * f / UM, converged=False, force_N=np.nan,
-                             steps=0, wall_s=time.perf_counter() - t0, note=f"{type(e).__name__}: {str(e)[:160]}"))
+            rows.append(
+                dict(
+                    fraction=f,
+                    approach_um=2 * radius * f / UM,
+                    converged=False,
+                    force_N=np.nan,
+                    steps=0,
+                    wall_s=time.perf_counter() - t0,
+                    note=f"{type(e).__name__}: {str(e)[:160]}",
+                )
+            )
             break
     return pd.DataFrame(rows)
 
@@ -199,6 +288,7 @@ def compression_map(fractions: Sequence[float] = (0.2, 0.3, 0.4, 0.5, 0.6), mesh
 # ---------------------------------------------------------------------------------------------
 # Viscoelastic update formulas: the largest step that keeps 1e-3
 # ---------------------------------------------------------------------------------------------
+
 
 def _feq(t, ramp_time):
     return np.clip(np.asarray(t, float) / ramp_time, 0.0, 1.0) ** 1.5
@@ -263,20 +353,31 @@ def _lumped_steps(t: np.ndarray, update: str, beta: float, tau: float, ramp_time
     cuts = np.flatnonzero(np.abs(np.diff(x)) > 1e-9 * x[:-1]) + 1
     for start, stop in zip(np.r_[0, cuts], np.r_[cuts, x.size]):
         seg = lfilter([b[start]], [1.0, -a[start]], dF[start:stop], zi=[a[start] * q[start]])[0]
-        q[start + 1:stop + 1] = seg
+        q[start + 1 : stop + 1] = seg
     return F + q
 
 
-def viscous_step_map(steps: Sequence[float] | None = None, *, beta: float = 1.2, tau: float = 200.0,
-                     ramp_time: float = 0.2, end_time: float = 1500.0,
-                     updates: Sequence[str] = ("exact-linear", "backward Euler", "forward Euler")) -> tuple[pd.DataFrame, pd.DataFrame]:
+def viscous_step_map(
+    steps: Sequence[float] | None = None,
+    *,
+    beta: float = 1.2,
+    tau: float = 200.0,
+    ramp_time: float = 0.2,
+    end_time: float = 1500.0,
+    updates: Sequence[str] = ("exact-linear", "backward Euler", "forward Euler"),
+) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Error of each update formula vs the step h; returns (all rows, boundary per update).
 
     Rows: update, step_s, error, n_steps, ok (error <= TOLERANCE and finite). Boundary: update,
     largest_ok_step_s (largest h such that every tested h' <= h keeps the tolerance), its error,
     and whether that is simply the largest step tried (then the true boundary lies beyond).
     """
-    for name, v, unit in (("beta", beta, ""), ("tau", tau, " s"), ("ramp_time", ramp_time, " s"), ("end_time", end_time, " s")):
+    for name, v, unit in (
+        ("beta", beta, ""),
+        ("tau", tau, " s"),
+        ("ramp_time", ramp_time, " s"),
+        ("end_time", end_time, " s"),
+    ):
         if not (np.isfinite(v) and v > 0):
             raise ValueError(f"{name} must be a positive number{unit}; got {v!r}")
     if end_time <= ramp_time:
@@ -291,8 +392,15 @@ def viscous_step_map(steps: Sequence[float] | None = None, *, beta: float = 1.2,
             with np.errstate(all="ignore"):
                 F = _lumped_steps(t, u, beta, tau, ramp_time)
                 err = float(np.max(np.abs(F - ref)) / scale)
-            rows.append(dict(update=u, step_s=float(h), error=err, n_steps=t.size - 1,
-                             ok=bool(np.isfinite(err) and err <= TOLERANCE)))
+            rows.append(
+                dict(
+                    update=u,
+                    step_s=float(h),
+                    error=err,
+                    n_steps=t.size - 1,
+                    ok=bool(np.isfinite(err) and err <= TOLERANCE),
+                )
+            )
     df = pd.DataFrame(rows)
     bounds = []
     for u in updates:
@@ -300,12 +408,26 @@ def viscous_step_map(steps: Sequence[float] | None = None, *, beta: float = 1.2,
         bad = np.flatnonzero(~d.ok.to_numpy())
         last = (bad[0] - 1) if bad.size else len(d) - 1
         if last < 0:
-            bounds.append(dict(update=u, largest_ok_step_s=np.nan, error_at_boundary=np.nan, step_over_tau=np.nan,
-                               limited_by_range=False))
+            bounds.append(
+                dict(
+                    update=u,
+                    largest_ok_step_s=np.nan,
+                    error_at_boundary=np.nan,
+                    step_over_tau=np.nan,
+                    limited_by_range=False,
+                )
+            )
             continue
         row = d.iloc[last]
-        bounds.append(dict(update=u, largest_ok_step_s=row.step_s, error_at_boundary=row.error,
-                           step_over_tau=row.step_s / tau, limited_by_range=not bad.size))
+        bounds.append(
+            dict(
+                update=u,
+                largest_ok_step_s=row.step_s,
+                error_at_boundary=row.error,
+                step_over_tau=row.step_s / tau,
+                limited_by_range=not bad.size,
+            )
+        )
     return df, pd.DataFrame(bounds)
 
 
@@ -313,9 +435,17 @@ def viscous_step_map(steps: Sequence[float] | None = None, *, beta: float = 1.2,
 # Explicit vs implicit diffrax on the stiff lumped ODE
 # ---------------------------------------------------------------------------------------------
 
-def stiff_solver_map(tau_over_ramp: Sequence[float] = (1e-1, 1e-2, 1e-3, 1e-4, 1e-5), *, beta: float = 1.2,
-                     ramp_time: float = 0.2, end_time: float = 2.0, rtol: float = 1e-8,
-                     max_steps: int = 20_000, solvers: Sequence[str] = ("Tsit5", "Dopri5", "Kvaerno5")) -> pd.DataFrame:
+
+def stiff_solver_map(
+    tau_over_ramp: Sequence[float] = (1e-1, 1e-2, 1e-3, 1e-4, 1e-5),
+    *,
+    beta: float = 1.2,
+    ramp_time: float = 0.2,
+    end_time: float = 2.0,
+    rtol: float = 1e-8,
+    max_steps: int = 20_000,
+    solvers: Sequence[str] = ("Tsit5", "Dopri5", "Kvaerno5"),
+) -> pd.DataFrame:
     """Steps, rejections and failures of diffrax solvers on dq/dt = -q/tau + beta F_eq'(t), tau << t_r.
 
     The ramp end is a jump time of the step-size controller. Error = max |q - q_exact| / beta at
@@ -327,11 +457,13 @@ def stiff_solver_map(tau_over_ramp: Sequence[float] = (1e-1, 1e-2, 1e-3, 1e-4, 1
     import jax
     import jax.numpy as jnp
 
-    import reduced  # noqa: F401  (enables float64)
+    import tissuemech.reduced  # noqa: F401  (enables float64)
 
     _positive_list("tau_over_ramp", tau_over_ramp)
     if not end_time > 2 * ramp_time:
-        raise ValueError(f"end_time ({end_time} s) must exceed twice the ramp time ({ramp_time} s): errors are read at 2 t_r")
+        raise ValueError(
+            f"end_time ({end_time} s) must exceed twice the ramp time ({ramp_time} s): errors are read at 2 t_r"
+        )
     ts_out = np.array([0.5 * ramp_time, ramp_time, 2 * ramp_time])
 
     def rhs(t, q, tau):
@@ -345,11 +477,22 @@ def stiff_solver_map(tau_over_ramp: Sequence[float] = (1e-1, 1e-2, 1e-3, 1e-4, 1
 
         @eqx.filter_jit
         def solve(tau, solver=solver):
-            ctrl = diffrax.ClipStepSizeController(diffrax.PIDController(rtol=rtol, atol=rtol),
-                                                  jump_ts=jnp.asarray([ramp_time]))
-            return diffrax.diffeqsolve(diffrax.ODETerm(rhs), solver, t0=0.0, t1=end_time, dt0=None,
-                                       y0=jnp.asarray(0.0), args=tau, saveat=diffrax.SaveAt(ts=jnp.asarray(ts_out)),
-                                       stepsize_controller=ctrl, max_steps=max_steps, throw=False)
+            ctrl = diffrax.ClipStepSizeController(
+                diffrax.PIDController(rtol=rtol, atol=rtol), jump_ts=jnp.asarray([ramp_time])
+            )
+            return diffrax.diffeqsolve(
+                diffrax.ODETerm(rhs),
+                solver,
+                t0=0.0,
+                t1=end_time,
+                dt0=None,
+                y0=jnp.asarray(0.0),
+                args=tau,
+                saveat=diffrax.SaveAt(ts=jnp.asarray(ts_out)),
+                stepsize_controller=ctrl,
+                max_steps=max_steps,
+                throw=False,
+            )
 
         for r in tau_over_ramp:
             tau = float(r) * ramp_time
@@ -365,7 +508,18 @@ def stiff_solver_map(tau_over_ramp: Sequence[float] = (1e-1, 1e-2, 1e-3, 1e-4, 1
                 err = float(np.max(np.abs(np.asarray(sol.ys) - ex)) / beta)
             else:
                 note = f"failed: {sol.result} (max_steps = {max_steps})"
-            rows.append(dict(solver=name, implicit=name.startswith("Kvaerno"), tau_over_ramp=float(r), tau_s=tau,
-                             steps=int(sol.stats["num_accepted_steps"]), rejected=int(sol.stats["num_rejected_steps"]),
-                             failed=not ok, error=err, wall_s=wall, note=note))
+            rows.append(
+                dict(
+                    solver=name,
+                    implicit=name.startswith("Kvaerno"),
+                    tau_over_ramp=float(r),
+                    tau_s=tau,
+                    steps=int(sol.stats["num_accepted_steps"]),
+                    rejected=int(sol.stats["num_rejected_steps"]),
+                    failed=not ok,
+                    error=err,
+                    wall_s=wall,
+                    note=note,
+                )
+            )
     return pd.DataFrame(rows)

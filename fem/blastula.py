@@ -31,21 +31,21 @@ the time. No branches (or beta = 0) is the elastic shell at every step.
 
 from __future__ import annotations
 
-import time
-from typing import NamedTuple, Sequence, Union
+from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 
-from reduced.material import validate_branches, validate_material, validate_positive, validate_radii
-from fem import constitutive as cm
-from fem import viscoelastic as ve
-from fem.continuation import LimitPointError, arc_length, load_control
-from fem.forms import Assembler, Material
-from fem.kinematics import invariants
-from fem.mesh import AxiMesh, shell_section
-from fem.newton import NewtonError, newton, sparse_solve
-from fem.output import BlastulaResult
-from fem.timestepping import march, ramp_hold_schedule
+from tissuemech.fem import constitutive as cm
+from tissuemech.fem import viscoelastic as ve
+from tissuemech.fem.continuation import LimitPointError, arc_length, load_control
+from tissuemech.fem.forms import Assembler, Material
+from tissuemech.fem.kinematics import invariants
+from tissuemech.fem.mesh import AxiMesh, shell_section
+from tissuemech.fem.newton import NewtonError, newton, sparse_solve
+from tissuemech.fem.output import BlastulaResult
+from tissuemech.fem.timestepping import march, ramp_hold_schedule
+from tissuemech.reduced.material import validate_branches, validate_material, validate_positive, validate_radii
 
 __all__ = ["inflate", "creep", "MESHES", "LimitPointError", "NewtonError"]
 
@@ -59,10 +59,15 @@ def _make_mesh(mesh, A: float, B: float) -> AxiMesh:
         return mesh
     if isinstance(mesh, str):
         if mesh not in MESHES:
-            raise ValueError(f"mesh must be 'coarse', 'default', 'fine', a tuple (n_radial, n_circ) or a mesh object, got {mesh!r}")
+            raise ValueError(
+                f"mesh must be 'coarse', 'default', 'fine', a tuple (n_radial, n_circ) or a mesh object, got {mesh!r}"
+            )
         mesh = MESHES[mesh]
-    if (not isinstance(mesh, (tuple, list)) or len(mesh) != 2
-            or not all(isinstance(n, (int, np.integer)) and n >= 1 for n in mesh)):
+    if (
+        not isinstance(mesh, (tuple, list))
+        or len(mesh) != 2
+        or not all(isinstance(n, (int, np.integer)) and n >= 1 for n in mesh)
+    ):
         raise ValueError(f"mesh divisions must be two positive integers (n_radial, n_circ), got {mesh!r}")
     return shell_section(A, B, int(mesh[0]), int(mesh[1]))
 
@@ -100,9 +105,16 @@ class _Problem:
 
     def solve(self, lam, guess, rtol, load, iso_scale: float = 1.0, extra_S=None):
         """Newton for the equilibrium at scaled pressure lam (raises NewtonError naming ``load``)."""
-        return newton(lambda x: self.rk(x, lam, iso_scale=iso_scale, extra_S=extra_S)[:2], guess,
-                      ref_norm=self.ref * max(lam, 1e-3), rtol=rtol, xtol=1e-9, atol=self.floor * (1 + lam),
-                      admissible=self.admissible, load=load)
+        return newton(
+            lambda x: self.rk(x, lam, iso_scale=iso_scale, extra_S=extra_S)[:2],
+            guess,
+            ref_norm=self.ref * max(lam, 1e-3),
+            rtol=rtol,
+            xtol=1e-9,
+            atol=self.floor * (1 + lam),
+            admissible=self.admissible,
+            load=load,
+        )
 
     def admissible(self, uf):
         f = self.asm.f_at(self.full(uf))
@@ -115,8 +127,10 @@ class _Problem:
 
     def stretches(self, uf):
         u = self.full(uf)
-        return (self.asm.surface_mean_stretch(u, self.m.edges["inner"]),
-                self.asm.surface_mean_stretch(u, self.m.edges["outer"]))
+        return (
+            self.asm.surface_mean_stretch(u, self.m.edges["inner"]),
+            self.asm.surface_mean_stretch(u, self.m.edges["outer"]),
+        )
 
     def result(self, lam, xs, its, wall, C, method, iso_scale: float = 1.0, extra_S=None, **extra) -> BlastulaResult:
         """BlastulaResult (SI) from the scaled states ``xs`` (free dofs) at scaled pressures ``lam``;
@@ -124,15 +138,24 @@ class _Problem:
         A = self.m.length_scale
         st = np.array([self.stretches(x) for x in xs])
         x_end = self.full(xs[-1])
-        u = x_end[:self.asm.n_u].reshape(-1, 2) * A
+        u = x_end[: self.asm.n_u].reshape(-1, 2) * A
         f, P, _, q = self.asm.stress(x_end, self.mat, extra_S, iso_scale)
         vm = cm.von_mises(cm.cauchy(f, P)) * C
         wq = self.asm.w
-        return BlastulaResult(pressure=np.asarray(lam, float) * C, inner_stretch=st[:, 0], outer_stretch=st[:, 1],
-                              newton_iterations=np.asarray(its, int), wall_time=np.asarray(wall, float),
-                              mesh=self.m, displacement=u, deformed_nodes=self.m.X.T * A + u,
-                              hydrostatic_pressure=-(q * wq).sum(1) / wq.sum(1) * C,
-                              von_mises=(vm * wq).sum(1) / wq.sum(1), method=method, **extra)
+        return BlastulaResult(
+            pressure=np.asarray(lam, float) * C,
+            inner_stretch=st[:, 0],
+            outer_stretch=st[:, 1],
+            newton_iterations=np.asarray(its, int),
+            wall_time=np.asarray(wall, float),
+            mesh=self.m,
+            displacement=u,
+            deformed_nodes=self.m.X.T * A + u,
+            hydrostatic_pressure=-(q * wq).sum(1) / wq.sum(1) * C,
+            von_mises=(vm * wq).sum(1) / wq.sum(1),
+            method=method,
+            **extra,
+        )
 
 
 def _setup(inner_radius, outer_radius, C, alpha, kappa, mesh, formulation: str = "mixed") -> _Problem:
@@ -144,10 +167,20 @@ def _setup(inner_radius, outer_radius, C, alpha, kappa, mesh, formulation: str =
     return _Problem(m, Material(1.0, float(alpha), float(kappa) / float(C)), formulation)
 
 
-def inflate(*, inner_radius: float, outer_radius: float, C: float, alpha: float,
-            pressures: Union[Sequence[float], np.ndarray, None], kappa: float = 2.2e9,
-            mesh="default", method: str = "load", max_inner_stretch: float | None = None,
-            rtol: float = 1e-10, formulation: str = "mixed") -> BlastulaResult:
+def inflate(
+    *,
+    inner_radius: float,
+    outer_radius: float,
+    C: float,
+    alpha: float,
+    pressures: Sequence[float] | np.ndarray | None,
+    kappa: float = 2.2e9,
+    mesh="default",
+    method: str = "load",
+    max_inner_stretch: float | None = None,
+    rtol: float = 1e-10,
+    formulation: str = "mixed",
+) -> BlastulaResult:
     """Inflate the hollow sphere; see the module docstring. SI units (m, Pa)."""
     if method not in ("load", "arclength"):
         raise ValueError(f"method must be 'load' or 'arclength', got {method!r}")
@@ -186,9 +219,18 @@ def inflate(*, inner_radius: float, outer_radius: float, C: float, alpha: float,
             t = sparse_solve(K0, -rl0)
             dp = 0.02 / max((prob.stretches(1e-6 * t)[0] - 1.0) / 1e-6, 1e-12)
         ds = np.sqrt(2.0) * dp  # the first tangent has equal parts in |x|/c and the load
-        steps = arc_length(lambda x, l: prob.rk(x, l), u0, 0.0, ds,
-                           stop=lambda x, l: prob.stretches(x)[0] >= max_inner_stretch,
-                           admissible=prob.admissible, ref_norm=ref, rtol=rtol, atol=floor, ds_max=2 * ds)
+        steps = arc_length(
+            lambda x, l: prob.rk(x, l),
+            u0,
+            0.0,
+            ds,
+            stop=lambda x, l: prob.stretches(x)[0] >= max_inner_stretch,
+            admissible=prob.admissible,
+            ref_norm=ref,
+            rtol=rtol,
+            atol=floor,
+            ds_max=2 * ds,
+        )
         lam = np.array([0.0] + [s[0] for s in steps])
         xs = [u0] + [s[1] for s in steps]
         its = np.array([0] + [s[2] for s in steps])
@@ -204,10 +246,24 @@ class _CreepState(NamedTuple):
     extra_S: object
 
 
-def creep(*, inner_radius: float, outer_radius: float, C: float, alpha: float, branches: Sequence,
-          pressure: float, ramp_time: float, end_time: float, kappa: float = 2.2e9, mesh="default",
-          times: Sequence[float] = (), n_ramp: int = 8, n_hold: int = 60, first_hold: float | None = None,
-          rtol: float = 1e-10) -> BlastulaResult:
+def creep(
+    *,
+    inner_radius: float,
+    outer_radius: float,
+    C: float,
+    alpha: float,
+    branches: Sequence,
+    pressure: float,
+    ramp_time: float,
+    end_time: float,
+    kappa: float = 2.2e9,
+    mesh="default",
+    times: Sequence[float] = (),
+    n_ramp: int = 8,
+    n_hold: int = 60,
+    first_hold: float | None = None,
+    rtol: float = 1e-10,
+) -> BlastulaResult:
     r"""Creep of the viscoelastic shell under p(t) = pressure min(t / ramp_time, 1); see the module docstring.
 
     SI units: radii (m), C, kappa, pressure (Pa), times (s); ``branches`` = [(beta_m, tau_m [s]), ...].
@@ -221,8 +277,10 @@ def creep(*, inner_radius: float, outer_radius: float, C: float, alpha: float, b
     validate_positive("ramp_time", ramp_time, "s")
     validate_positive("end_time", end_time, "s")
     if end_time < ramp_time:
-        raise ValueError(f"end_time ({end_time} s) must be >= ramp_time ({ramp_time} s): the pressure is "
-                         "ramped up over ramp_time, then held until end_time")
+        raise ValueError(
+            f"end_time ({end_time} s) must be >= ramp_time ({ramp_time} s): the pressure is "
+            "ramped up over ramp_time, then held until end_time"
+        )
     for name, n in (("n_ramp", n_ramp), ("n_hold", n_hold)):
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
             raise ValueError(f"{name} (number of time steps) must be a positive integer, got {n!r}")
@@ -235,10 +293,11 @@ def creep(*, inner_radius: float, outer_radius: float, C: float, alpha: float, b
     C, p0, tr = float(C), float(pressure), float(ramp_time)
     beta = np.array([float(b) for b, _ in br])
     tau = np.array([float(t) for _, t in br])
-    schedule = ramp_hold_schedule(tr, float(end_time), n_ramp=int(n_ramp), n_hold=int(n_hold),
-                                  first_hold=first_hold, breakpoints=list(ts))
-    lam_at = lambda t: p0 / C * min(t / tr, 1.0)  # noqa: E731
-    on_ramp = lambda t: t <= tr * (1 + 1e-12)  # noqa: E731
+    schedule = ramp_hold_schedule(
+        tr, float(end_time), n_ramp=int(n_ramp), n_hold=int(n_hold), first_hold=first_hold, breakpoints=list(ts)
+    )
+    lam_at = lambda t: p0 / C * min(t / tr, 1.0)
+    on_ramp = lambda t: t <= tr * (1 + 1e-12)
 
     tried = [0.0]  # the last time a step was tried (for the failure message)
 
@@ -264,21 +323,44 @@ def creep(*, inner_radius: float, outer_radius: float, C: float, alpha: float, b
     except NewtonError as err:
         t_fail = tried[0]
         if t_fail > tr * (1 + 1e-12):
-            why = (f"no equilibrium of the viscoelastic shell under the held pressure {p0:g} Pa near "
-                   f"t = {t_fail:.6g} s: it creeps past its limit point (bursts)")
-            hint = ("compare the held pressure with the limit point of the relaxed shell (C), e.g. "
-                    "reduced.blastula.limit_point; lower the pressure or end the hold earlier")
+            why = (
+                f"no equilibrium of the viscoelastic shell under the held pressure {p0:g} Pa near "
+                f"t = {t_fail:.6g} s: it creeps past its limit point (bursts)"
+            )
+            hint = (
+                "compare the held pressure with the limit point of the relaxed shell (C), e.g. "
+                "reduced.blastula.limit_point; lower the pressure or end the hold earlier"
+            )
         else:
-            why = (f"no equilibrium on the pressure ramp near t = {t_fail:.6g} s (p = {lam_at(t_fail) * C:.6g} Pa): "
-                   "the shell passes its limit point while loading")
-            hint = ("compare the pressure with the limit point of the instantaneous shell ((1 + sum beta) C), "
-                    "e.g. reduced.blastula.limit_point; lower the pressure")
+            why = (
+                f"no equilibrium on the pressure ramp near t = {t_fail:.6g} s (p = {lam_at(t_fail) * C:.6g} Pa): "
+                "the shell passes its limit point while loading"
+            )
+            hint = (
+                "compare the pressure with the limit point of the instantaneous shell ((1 + sum beta) C), "
+                "e.g. reduced.blastula.limit_point; lower the pressure"
+            )
         raise NewtonError(why, load=err.load, residuals=err.residuals, hint=hint) from err
     last = steps[-1].state
-    return prob.result([st.state.lam for st in steps], [st.state.x for st in steps],
-                       [st.iterations for st in steps], [st.wall_s for st in steps], C, "creep",
-                       last.iso_scale, last.extra_S, time=np.array([st.t for st in steps]),
-                       parameters=dict(inner_radius=float(inner_radius), outer_radius=float(outer_radius), C=C,
-                                       alpha=float(alpha), kappa=float(kappa),
-                                       branches=tuple((float(b), float(t)) for b, t in br), pressure=p0,
-                                       ramp_time=tr, end_time=float(end_time)))
+    return prob.result(
+        [st.state.lam for st in steps],
+        [st.state.x for st in steps],
+        [st.iterations for st in steps],
+        [st.wall_s for st in steps],
+        C,
+        "creep",
+        last.iso_scale,
+        last.extra_S,
+        time=np.array([st.t for st in steps]),
+        parameters=dict(
+            inner_radius=float(inner_radius),
+            outer_radius=float(outer_radius),
+            C=C,
+            alpha=float(alpha),
+            kappa=float(kappa),
+            branches=tuple((float(b), float(t)) for b, t in br),
+            pressure=p0,
+            ramp_time=tr,
+            end_time=float(end_time),
+        ),
+    )

@@ -22,8 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from reduced.material import d2W_dI1, dU_dJ, dW_dI1, fung_energy
-from fem.kinematics import d2J, dI1, dJ, full_F, invariants, second_from_first
+from tissuemech.fem.kinematics import d2J, dI1, dJ, full_F, invariants, second_from_first
+from tissuemech.reduced.material import d2W_dI1, dU_dJ, dW_dI1, fung_energy
 
 __all__ = ["iso_stress", "iso_energy", "iso_second_piola", "vol_q", "vol_penalty", "cauchy", "von_mises"]
 
@@ -36,10 +36,14 @@ def _ibar_derivs(f):
     Ib = Jm23 * I1
     dIb = Jm23[..., None] * g1 - (2.0 / 3.0) * (Jm53 * I1)[..., None] * gJ
     eye = np.eye(5)
-    d2Ib = (2.0 * Jm23[..., None, None] * eye
-            - (2.0 / 3.0) * Jm53[..., None, None] * (g1[..., :, None] * gJ[..., None, :] + gJ[..., :, None] * g1[..., None, :])
-            + (10.0 / 9.0) * (Jm53 / J * I1)[..., None, None] * gJ[..., :, None] * gJ[..., None, :]
-            - (2.0 / 3.0) * (Jm53 * I1)[..., None, None] * d2J(f))
+    d2Ib = (
+        2.0 * Jm23[..., None, None] * eye
+        - (2.0 / 3.0)
+        * Jm53[..., None, None]
+        * (g1[..., :, None] * gJ[..., None, :] + gJ[..., :, None] * g1[..., None, :])
+        + (10.0 / 9.0) * (Jm53 / J * I1)[..., None, None] * gJ[..., :, None] * gJ[..., None, :]
+        - (2.0 / 3.0) * (Jm53 * I1)[..., None, None] * d2J(f)
+    )
     return Ib, dIb, d2Ib
 
 

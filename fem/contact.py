@@ -27,11 +27,12 @@ All quantities are in the solver's scaled units (length / a0, force / (C a0^2)).
 
 from __future__ import annotations
 
-from typing import Callable, NamedTuple
+from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 
-from fem.newton import NewtonError, newton
+from tissuemech.fem.newton import NewtonError, newton
 
 __all__ = ["RigidPlane", "ContactSolution", "ContactError"]
 
@@ -77,9 +78,21 @@ class RigidPlane:
     def constrained(self, active: np.ndarray) -> np.ndarray:
         return self.dofs[active]
 
-    def solve(self, fun: Callable, x0: np.ndarray, h: float, active0: np.ndarray, free: np.ndarray, *,
-              gap_tol: float = 1e-10, force_tol: float = 1e-9, max_sets: int = 12, load=None,
-              residual: Callable | None = None, **newton_kw) -> ContactSolution:
+    def solve(
+        self,
+        fun: Callable,
+        x0: np.ndarray,
+        h: float,
+        active0: np.ndarray,
+        free: np.ndarray,
+        *,
+        gap_tol: float = 1e-10,
+        force_tol: float = 1e-9,
+        max_sets: int = 12,
+        load=None,
+        residual: Callable | None = None,
+        **newton_kw,
+    ) -> ContactSolution:
         """Equilibrium with the exact contact conditions at plane height h.
 
         ``fun(x) -> (r, K)`` the residual/tangent without contact; ``free`` the unknowns without
@@ -93,8 +106,9 @@ class RigidPlane:
         for k in range(1, max_sets + 1):
             key = active.tobytes()
             if key in seen:
-                raise ContactError("the contact active set cycles", load=load,
-                                   hint="reduce the load/time step near the contact edge")
+                raise ContactError(
+                    "the contact active set cycles", load=load, hint="reduce the load/time step near the contact edge"
+                )
             seen.add(key)
             x = self.impose(x, h, active)
             fr = np.setdiff1d(free, self.dofs[active], assume_unique=True)
@@ -113,5 +127,6 @@ class RigidPlane:
             if release.any():
                 new[np.flatnonzero(release)[np.argmin(N[release])]] = False
             active = new
-        raise ContactError(f"the contact active set did not settle in {max_sets} passes", load=load,
-                           hint="reduce the load/time step")
+        raise ContactError(
+            f"the contact active set did not settle in {max_sets} passes", load=load, hint="reduce the load/time step"
+        )

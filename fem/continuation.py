@@ -17,12 +17,12 @@ r"""Path following: adaptive load control and Riks arc-length (through limit poi
 from __future__ import annotations
 
 import time
-from typing import Callable, Optional, Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 import scipy.sparse as sp
 
-from fem.newton import NewtonError, NewtonResult, sparse_solve
+from tissuemech.fem.newton import NewtonError, NewtonResult, sparse_solve
 
 __all__ = ["LimitPointError", "load_control", "arc_length"]
 
@@ -36,8 +36,17 @@ class LimitPointError(NewtonError):
     last_converged: float = float("nan")
 
 
-def load_control(solve: Callable, loads: Sequence[float], x0: np.ndarray, *, lam0: float = 0.0,
-                 monitor: Optional[Callable] = None, max_cuts: int = 12, unit: str = "", scale: float = 1.0) -> list:
+def load_control(
+    solve: Callable,
+    loads: Sequence[float],
+    x0: np.ndarray,
+    *,
+    lam0: float = 0.0,
+    monitor: Callable | None = None,
+    max_cuts: int = 12,
+    unit: str = "",
+    scale: float = 1.0,
+) -> list:
     out = []
     x_prev, lam_prev = np.array(x0, float), float(lam0)
     x_old, lam_old = None, None
@@ -65,14 +74,20 @@ def load_control(solve: Callable, loads: Sequence[float], x0: np.ndarray, *, lam
                     if s is not None and slope0 is not None and s < 0.02 * slope0:
                         lpe = LimitPointError(
                             f"load control reached a limit point: no equilibrium just above "
-                            f"{lam_c * scale:.6g}{unit}, the curve is flat there", load=lam_t * scale,
+                            f"{lam_c * scale:.6g}{unit}, the curve is flat there",
+                            load=lam_t * scale,
                             residuals=err.residuals,
                             hint=f"the last converged load {lam_c * scale:.6g}{unit} is (close to) the maximum; "
-                                 "use method='arclength' to pass it")
+                            "use method='arclength' to pass it",
+                        )
                         lpe.last_converged = lam_c * scale
                         raise lpe from None
-                    raise NewtonError(f"load step failed after {max_cuts} cuts", load=lam_t * scale,
-                                      residuals=err.residuals, hint=err.hint) from None
+                    raise NewtonError(
+                        f"load step failed after {max_cuts} cuts",
+                        load=lam_t * scale,
+                        residuals=err.residuals,
+                        hint=err.hint,
+                    ) from None
                 dlam *= 0.5
                 continue
             x_old, lam_old = x_c, lam_c
@@ -92,22 +107,35 @@ def load_control(solve: Callable, loads: Sequence[float], x0: np.ndarray, *, lam
     return out
 
 
-def arc_length(fun: Callable, x0: np.ndarray, lam0: float, ds: float, *, stop: Callable,
-               admissible: Optional[Callable] = None, max_steps: int = 500, rtol: float = 1e-9,
-               ref_norm: float = 1.0, atol: float = 0.0, max_iter: int = 20, target_iter: int = 5, ds_max: float | None = None,
-               ds_min: float | None = None) -> list:
+def arc_length(
+    fun: Callable,
+    x0: np.ndarray,
+    lam0: float,
+    ds: float,
+    *,
+    stop: Callable,
+    admissible: Callable | None = None,
+    max_steps: int = 500,
+    rtol: float = 1e-9,
+    ref_norm: float = 1.0,
+    atol: float = 0.0,
+    max_iter: int = 20,
+    target_iter: int = 5,
+    ds_max: float | None = None,
+    ds_min: float | None = None,
+) -> list:
     """Riks arc-length; returns a list of (lam, x, iterations, wall_s) from the start (excluded)."""
     x, lam = np.array(x0, float), float(lam0)
     r, K, rl = fun(x, lam)
     tx = sparse_solve(K, -rl)
     c = max(np.linalg.norm(tx), 1e-12)
-    nrm = lambda a, b: np.sqrt(a @ a / c**2 + b * b)  # noqa: E731
+    nrm = lambda a, b: np.sqrt(a @ a / c**2 + b * b)
     n0 = nrm(tx, 1.0)
     tx, tl = tx / n0, 1.0 / n0
     ds_max = 8 * ds if ds_max is None else ds_max
     ds_min = ds * 1e-4 if ds_min is None else ds_min
     out = []
-    for step in range(max_steps):
+    for _step in range(max_steps):
         t0 = time.perf_counter()
         while True:
             xp, lp = x + ds * tx, lam + ds * tl
@@ -135,8 +163,12 @@ def arc_length(fun: Callable, x0: np.ndarray, lam0: float, ds: float, *, stop: C
                 break
             ds *= 0.5
             if ds < ds_min:
-                raise NewtonError("arc-length step failed at the minimum step length", load=lam,
-                                  residuals=hist, hint="refine the mesh or start with a smaller step")
+                raise NewtonError(
+                    "arc-length step failed at the minimum step length",
+                    load=lam,
+                    residuals=hist,
+                    hint="refine the mesh or start with a smaller step",
+                )
         dxs, dls = xi - x, li - lam
         n = nrm(dxs, dls)
         tx, tl = dxs / n, dls / n

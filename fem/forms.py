@@ -35,9 +35,9 @@ from typing import NamedTuple
 import numpy as np
 import scipy.sparse as sp
 
-from fem import constitutive as cm
-from fem.kinematics import IDENTITY5, b_matrix, dJ, first_from_second, dfirst_from_second, invariants
-from fem.mesh import AxiMesh
+from tissuemech.fem import constitutive as cm
+from tissuemech.fem.kinematics import IDENTITY5, b_matrix, dfirst_from_second, dJ, first_from_second, invariants
+from tissuemech.fem.mesh import AxiMesh
 
 __all__ = ["Material", "Assembler", "line_shape"]
 
@@ -54,8 +54,7 @@ def line_shape(nn: int, xi: np.ndarray):
     """1D Lagrange shape functions and derivatives on [-1, 1] for 2 or 3 nodes (ends, [mid])."""
     if nn == 2:
         return np.array([(1 - xi) / 2, (1 + xi) / 2]), np.array([-0.5 + 0 * xi, 0.5 + 0 * xi])
-    return (np.array([xi * (xi - 1) / 2, 1 - xi**2, xi * (xi + 1) / 2]),
-            np.array([xi - 0.5, -2 * xi, xi + 0.5]))
+    return (np.array([xi * (xi - 1) / 2, 1 - xi**2, xi * (xi + 1) / 2]), np.array([xi - 0.5, -2 * xi, xi + 0.5]))
 
 
 class _Pattern:
@@ -150,7 +149,10 @@ class Assembler:
         re = np.matmul((P * self.w[..., None]).reshape(ne, 1, nq * 5), self.B.reshape(ne, nq * 5, nd))[:, 0]
         if self.formulation == "mixed":
             _, J = invariants(f)
-            rq = np.einsum("eqa,eq->ea", self.psi, (J - 1.0) * self.w) - np.einsum("eab,eb->ea", self.M, u[self.qdofs]) / mat.kappa
+            rq = (
+                np.einsum("eqa,eq->ea", self.psi, (J - 1.0) * self.w)
+                - np.einsum("eab,eb->ea", self.M, u[self.qdofs]) / mat.kappa
+            )
             re = np.concatenate([re, rq], axis=1)
         r = np.bincount(self.alldofs.ravel(), weights=re.ravel(), minlength=self.ndof)
         if not tangent:
@@ -178,7 +180,7 @@ class Assembler:
         Nl, dNl, wq, dofs = self._edge(edges)
         X = self.mesh.X
         x = X[:, edges] + np.stack([u[dofs[..., 0]], u[dofs[..., 1]]])  # (2, ned, nn)
-        r, z = np.einsum("aq,ea->eq", Nl, x[0]), np.einsum("aq,ea->eq", Nl, x[1])
+        r = np.einsum("aq,ea->eq", Nl, x[0])
         rp, zp = np.einsum("aq,ea->eq", dNl, x[0]), np.einsum("aq,ea->eq", dNl, x[1])
         c = -2 * np.pi * p * wq
         fr = np.einsum("aq,eq->ea", Nl, c * r * zp)
@@ -195,8 +197,9 @@ class Assembler:
         d = dofs.reshape(ned, -1)
         rows = np.repeat(d[:, :, None], 2 * nn, 2)
         cols = np.repeat(d[:, None, :], 2 * nn, 1)
-        Kg = sp.csr_matrix((K.reshape(ned, 2 * nn, 2 * nn).ravel(), (rows.ravel(), cols.ravel())),
-                           shape=(self.ndof, self.ndof))
+        Kg = sp.csr_matrix(
+            (K.reshape(ned, 2 * nn, 2 * nn).ravel(), (rows.ravel(), cols.ravel())), shape=(self.ndof, self.ndof)
+        )
         return F, Kg
 
     def surface_mean_stretch(self, u: np.ndarray, edges: np.ndarray) -> float:

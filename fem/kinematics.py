@@ -19,8 +19,18 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["IDENTITY5", "b_matrix", "invariants", "dI1", "dJ", "d2J", "full_F",
-           "second_from_first", "first_from_second", "dfirst_from_second"]
+__all__ = [
+    "IDENTITY5",
+    "b_matrix",
+    "invariants",
+    "dI1",
+    "dJ",
+    "d2J",
+    "full_F",
+    "second_from_first",
+    "first_from_second",
+    "dfirst_from_second",
+]
 
 IDENTITY5 = np.array([1.0, 0.0, 0.0, 1.0, 1.0])
 
@@ -85,17 +95,31 @@ def second_from_first(f: np.ndarray, P: np.ndarray) -> np.ndarray:
     a, b, c, d, e = (f[..., i] for i in range(5))
     det = a * d - b * c
     i11, i12, i21, i22 = d / det, -b / det, -c / det, a / det
-    return np.stack([i11 * P[..., 0] + i12 * P[..., 2], i11 * P[..., 1] + i12 * P[..., 3],
-                     i21 * P[..., 0] + i22 * P[..., 2], i21 * P[..., 1] + i22 * P[..., 3],
-                     P[..., 4] / e], axis=-1)
+    return np.stack(
+        [
+            i11 * P[..., 0] + i12 * P[..., 2],
+            i11 * P[..., 1] + i12 * P[..., 3],
+            i21 * P[..., 0] + i22 * P[..., 2],
+            i21 * P[..., 1] + i22 * P[..., 3],
+            P[..., 4] / e,
+        ],
+        axis=-1,
+    )
 
 
 def first_from_second(f: np.ndarray, S: np.ndarray) -> np.ndarray:
     """P = F S in 5-comp form."""
     a, b, c, d, e = (f[..., i] for i in range(5))
-    return np.stack([a * S[..., 0] + b * S[..., 2], a * S[..., 1] + b * S[..., 3],
-                     c * S[..., 0] + d * S[..., 2], c * S[..., 1] + d * S[..., 3],
-                     e * S[..., 4]], axis=-1)
+    return np.stack(
+        [
+            a * S[..., 0] + b * S[..., 2],
+            a * S[..., 1] + b * S[..., 3],
+            c * S[..., 0] + d * S[..., 2],
+            c * S[..., 1] + d * S[..., 3],
+            e * S[..., 4],
+        ],
+        axis=-1,
+    )
 
 
 def dfirst_from_second(S: np.ndarray) -> np.ndarray:

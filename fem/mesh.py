@@ -103,8 +103,16 @@ def _finish(mesh1: skfem.Mesh, order: int, mapper, scale: float, tagger) -> AxiM
     return AxiMesh(m, basis, order, float(scale), nodes, edges)
 
 
-def shell_section(inner_radius: float, outer_radius: float, n_radial: int, n_circ: int, *,
-                  grading: float = 1.0, order: int = 2, half: bool = False) -> AxiMesh:
+def shell_section(
+    inner_radius: float,
+    outer_radius: float,
+    n_radial: int,
+    n_circ: int,
+    *,
+    grading: float = 1.0,
+    order: int = 2,
+    half: bool = False,
+) -> AxiMesh:
     """Mapped mesh of the hollow-sphere wall A <= rho <= B (lengths scaled by A).
 
     theta (from the equator Z = 0) spans [0, 90] deg (quarter, with Z-symmetry) or [-90, 90] deg
@@ -126,16 +134,19 @@ def shell_section(inner_radius: float, outer_radius: float, n_radial: int, n_cir
 
     tol = 1e-9
     rad = lambda P: np.hypot(P[0], P[1])
-    tags = {"inner": lambda P: np.abs(rad(P) - 1.0) < tol,
-            "outer": lambda P: np.abs(rad(P) - b) < tol,
-            "axis": lambda P: np.abs(P[0]) < tol}
+    tags = {
+        "inner": lambda P: np.abs(rad(P) - 1.0) < tol,
+        "outer": lambda P: np.abs(rad(P) - b) < tol,
+        "axis": lambda P: np.abs(P[0]) < tol,
+    }
     if not half:
         tags["symmetry"] = lambda P: np.abs(P[1]) < tol
     return _finish(m1, order, mapper, inner_radius, tags)
 
 
-def ball_section(radius: float, n_core: int, n_radial: int, *, grading: float = 1.0,
-                 pole_grading: float = 1.0, order: int = 2) -> AxiMesh:
+def ball_section(
+    radius: float, n_core: int, n_radial: int, *, grading: float = 1.0, pole_grading: float = 1.0, order: int = 2
+) -> AxiMesh:
     """O-grid quarter disk of a solid ball (lengths scaled by ``radius``).
 
     Core square [0, c]^2 (c = 0.55) with ``n_core`` divisions per side, two curved blocks between the
@@ -195,12 +206,14 @@ def ball_section(radius: float, n_core: int, n_radial: int, *, grading: float = 
         t2f = m1.t2f
         cen = nv + nf + np.arange(m1.nelements)
         dl[:, cen] = 0.5 * dl[:, nv + t2f].sum(axis=1) - 0.25 * m1.p[:, m1.t].sum(axis=1)
-        mapper = lambda p, dl=dl: dl  # noqa: E731
+        mapper = lambda p, dl=dl: dl
     else:
-        mapper = lambda p: p  # noqa: E731
+        mapper = lambda p: p
 
     tol = 1e-9
-    tags = {"axis": lambda P: np.abs(P[0]) < tol,
-            "symmetry": lambda P: np.abs(P[1]) < tol,
-            "outer": lambda P: np.abs(np.hypot(P[0], P[1]) - 1.0) < 1e-9}
+    tags = {
+        "axis": lambda P: np.abs(P[0]) < tol,
+        "symmetry": lambda P: np.abs(P[1]) < tol,
+        "outer": lambda P: np.abs(np.hypot(P[0], P[1]) - 1.0) < 1e-9,
+    }
     return _finish(m1, order, mapper, radius, tags)

@@ -20,7 +20,8 @@ Returns ``NewtonResult(x, iterations, residuals)``.
 
 from __future__ import annotations
 
-from typing import Callable, NamedTuple, Optional, Sequence
+from collections.abc import Callable, Sequence
+from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
@@ -84,30 +85,54 @@ def symmetric_solve(K: sp.spmatrix, b: np.ndarray, *, refine: int = 4, rtol: flo
     return x
 
 
-def newton(fun: Callable, x0: np.ndarray, *, free: Optional[np.ndarray] = None, ref_norm: float = 1.0,
-           rtol: float = 1e-9, xtol: float = 1e-9, max_iter: int = 30,
-           admissible: Optional[Callable] = None, load=None, max_backtracks: int = 8,
-           growth: float = 1e3, atol: float = 0.0, solver: Optional[Callable] = None) -> NewtonResult:
+def newton(
+    fun: Callable,
+    x0: np.ndarray,
+    *,
+    free: np.ndarray | None = None,
+    ref_norm: float = 1.0,
+    rtol: float = 1e-9,
+    xtol: float = 1e-9,
+    max_iter: int = 30,
+    admissible: Callable | None = None,
+    load=None,
+    max_backtracks: int = 8,
+    growth: float = 1e3,
+    atol: float = 0.0,
+    solver: Callable | None = None,
+) -> NewtonResult:
     """Solve fun(x)[0] = 0 from x0 (see the module docstring)."""
     x = np.array(x0, dtype=float)
     free = np.arange(x.size) if free is None else np.asarray(free)
     ref = max(float(ref_norm), 1e-300)
     why = admissible(x) if admissible is not None else None
     if why is not None:
-        raise NewtonError(f"inadmissible initial guess ({why})", load=load, residuals=[],
-                          hint="reduce the load step (the predictor overshot)")
+        raise NewtonError(
+            f"inadmissible initial guess ({why})",
+            load=load,
+            residuals=[],
+            hint="reduce the load step (the predictor overshot)",
+        )
     r, K = fun(x)
     res = [float(np.linalg.norm(r[free]))]
     if not np.isfinite(res[0]):
-        raise NewtonError("the residual of the initial guess is not finite", load=load, residuals=res,
-                          hint="check the inputs and the initial state")
+        raise NewtonError(
+            "the residual of the initial guess is not finite",
+            load=load,
+            residuals=res,
+            hint="check the inputs and the initial state",
+        )
     for it in range(1, max_iter + 1):
         try:
             dx = (solver or sparse_solve)(K[free][:, free], -r[free])
         except np.linalg.LinAlgError:
-            raise NewtonError("singular tangent matrix", load=load, residuals=res,
-                              hint="a limit point or a missing constraint (rigid-body motion); "
-                                   "use arc-length continuation or smaller load steps") from None
+            raise NewtonError(
+                "singular tangent matrix",
+                load=load,
+                residuals=res,
+                hint="a limit point or a missing constraint (rigid-body motion); "
+                "use arc-length continuation or smaller load steps",
+            ) from None
         step, why = 1.0, None
         for _ in range(max_backtracks + 1):
             xt = x.copy()
@@ -121,11 +146,19 @@ def newton(fun: Callable, x0: np.ndarray, *, free: Optional[np.ndarray] = None, 
                 why = "non-finite or exploding residual"
             step *= 0.5
         else:
-            raise NewtonError(f"line search failed ({why})", load=load, residuals=res,
-                              hint="reduce the load step; the state may be beyond a limit point")
+            raise NewtonError(
+                f"line search failed ({why})",
+                load=load,
+                residuals=res,
+                hint="reduce the load step; the state may be beyond a limit point",
+            )
         x, r, K = xt, rt, Kt
         res.append(rn)
         if rn <= rtol * ref + atol and step * np.linalg.norm(dx) <= xtol * (1.0 + np.linalg.norm(x[free])):
             return NewtonResult(x, it, res)
-    raise NewtonError(f"no convergence in {max_iter} iterations", load=load, residuals=res,
-                      hint="reduce the load step or loosen rtol/xtol")
+    raise NewtonError(
+        f"no convergence in {max_iter} iterations",
+        load=load,
+        residuals=res,
+        hint="reduce the load step or loosen rtol/xtol",
+    )

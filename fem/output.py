@@ -12,7 +12,6 @@ API: ``SpheroidResult`` (spheroid compression, see its docstring), ``SpheroidFie
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Optional
 
 import numpy as np
 
@@ -32,13 +31,17 @@ class BlastulaResult:
     hydrostatic_pressure: np.ndarray
     von_mises: np.ndarray
     method: str = "load"
-    time: Optional[np.ndarray] = None
-    parameters: Optional[dict] = None
+    time: np.ndarray | None = None
+    parameters: dict | None = None
 
     def to_vtu(self, path: str) -> None:
         """Write the final deformed state (ParaView) with displacement and element fields."""
-        write_vtu(path, self.mesh, self.displacement,
-                  {"von_mises_Pa": self.von_mises, "hydrostatic_pressure_Pa": self.hydrostatic_pressure})
+        write_vtu(
+            path,
+            self.mesh,
+            self.displacement,
+            {"von_mises_Pa": self.von_mises, "hydrostatic_pressure_Pa": self.hydrostatic_pressure},
+        )
 
     def plot(self, ax=None):
         """Von Mises stress on the deformed section (seed Fig. 3)."""
@@ -49,7 +52,7 @@ def _quads(mesh) -> np.ndarray:
     return mesh.mesh.t[:4].T  # corner nodes (counterclockwise) of each element
 
 
-def write_vtu(path: str, mesh, displacement: np.ndarray, cell_data: Optional[dict] = None) -> None:
+def write_vtu(path: str, mesh, displacement: np.ndarray, cell_data: dict | None = None) -> None:
     """VTU of the reference section (x, y = R, Z in m) with point data 'displacement'."""
     import meshio
 
@@ -131,21 +134,25 @@ class SpheroidResult:
     mesh: object
     fields: list
     static: bool = False
-    parameters: Optional[dict] = None
+    parameters: dict | None = None
 
-    def field_at(self, time: Optional[float] = None) -> SpheroidField:
+    def field_at(self, time: float | None = None) -> SpheroidField:
         """The stored field closest to ``time`` (s; None: the last)."""
         if time is None:
             return self.fields[-1]
         return min(self.fields, key=lambda f: abs(f.time - float(time)))
 
-    def to_vtu(self, path: str, time: Optional[float] = None) -> None:
+    def to_vtu(self, path: str, time: float | None = None) -> None:
         """Write the stored state closest to ``time`` (default: the last) as VTU (ParaView)."""
         f = self.field_at(time)
-        write_vtu(path, self.mesh, f.displacement,
-                  {"von_mises_Pa": f.von_mises, "hydrostatic_pressure_Pa": f.hydrostatic_pressure})
+        write_vtu(
+            path,
+            self.mesh,
+            f.displacement,
+            {"von_mises_Pa": f.von_mises, "hydrostatic_pressure_Pa": f.hydrostatic_pressure},
+        )
 
-    def plot_von_mises(self, time: Optional[float] = None, ax=None):
+    def plot_von_mises(self, time: float | None = None, ax=None):
         """Von Mises stress on the deformed quarter section (seed Fig. 8)."""
         f = self.field_at(time)
         ax = plot_von_mises(self.mesh, f.displacement, f.von_mises, ax=ax)
@@ -159,8 +166,11 @@ class SpheroidResult:
         if axes is None:
             _, axes = plt.subplots(1, 2, figsize=(10, 4))
         t = self.time
-        for ax, y, lab in zip(axes, (self.nominal_stress, self.mean_von_mises),
-                              ("nominal stress F / A_mid (Pa)", "mean von Mises stress (Pa)")):
+        for ax, y, lab in zip(
+            axes,
+            (self.nominal_stress, self.mean_von_mises),
+            ("nominal stress F / A_mid (Pa)", "mean von Mises stress (Pa)"),
+        ):
             ax.plot(t, y, "o-", ms=3)
             ax.set_xlabel("pseudo-time" if self.static else "time t (s)")
             ax.set_ylabel(lab)

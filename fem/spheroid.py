@@ -37,30 +37,29 @@ from the gaps of the first free nodes; ``contact_radius_node``: the outermost ac
 
 from __future__ import annotations
 
-import time as _time
-from typing import Callable, NamedTuple, Sequence, Union
+from collections.abc import Callable, Sequence
+from typing import NamedTuple
 
 import numpy as np
 import skfem
 
-from reduced.material import validate_branches, validate_material, validate_positive
-from fem import constitutive as cm
-from fem import viscoelastic as ve
-from fem.contact import RigidPlane
-from fem.forms import Assembler, Material
-from fem.kinematics import invariants
-from fem.mesh import AxiMesh, ball_section
-from fem.newton import symmetric_solve
-from fem.output import SpheroidField, SpheroidResult
-from fem.timestepping import march, ramp_hold_schedule
+from tissuemech.fem import constitutive as cm
+from tissuemech.fem import viscoelastic as ve
+from tissuemech.fem.contact import RigidPlane
+from tissuemech.fem.forms import Assembler, Material
+from tissuemech.fem.kinematics import invariants
+from tissuemech.fem.mesh import AxiMesh, ball_section
+from tissuemech.fem.newton import symmetric_solve
+from tissuemech.fem.output import SpheroidField, SpheroidResult
+from tissuemech.fem.timestepping import march, ramp_hold_schedule
+from tissuemech.reduced.material import validate_branches, validate_material, validate_positive
 
 __all__ = ["compress", "make_mesh", "MESHES", "LEVELS", "hertz_force"]
 
 # level -> (n_core, n_radial, surface grading, pole grading). Nodal contact quantizes the contact edge:
 # the force carries a ~0.3 % jitter that falls slowly with the surface node spacing. Default (level 1):
 # static F(delta) within ~0.6 % of levels 2-3 for delta/(2 a0) in [0.005, 0.3] (compare.bench fem-spheroid).
-LEVELS = {0: (4, 3, 2.0, 3.0), 1: (12, 4, 2.0, 3.0), 2: (16, 8, 2.0, 4.0), 3: (24, 10, 2.0, 4.0),
-          4: (32, 12, 2.0, 4.0)}
+LEVELS = {0: (4, 3, 2.0, 3.0), 1: (12, 4, 2.0, 3.0), 2: (16, 8, 2.0, 4.0), 3: (24, 10, 2.0, 4.0), 4: (32, 12, 2.0, 4.0)}
 MESHES = {"coarse": 0, "default": 1, "fine": 2}
 FORCE_CHECK = 1e-6  # |F_contact - F_reaction| / F
 
@@ -78,15 +77,18 @@ def make_mesh(mesh, radius: float) -> AxiMesh:
         return mesh
     if isinstance(mesh, str):
         if mesh not in MESHES:
-            raise ValueError(f"mesh must be 'coarse', 'default', 'fine', a level 0..4 or a ball_section mesh, got {mesh!r}")
+            raise ValueError(
+                f"mesh must be 'coarse', 'default', 'fine', a level 0..4 or a ball_section mesh, got {mesh!r}"
+            )
         mesh = MESHES[mesh]
     if isinstance(mesh, (bool, np.bool_)) or not isinstance(mesh, (int, np.integer)) or int(mesh) not in LEVELS:
         raise ValueError(f"mesh level must be an integer 0..4 (0 coarse, 1 default, 2 fine), got {mesh!r}")
     nc, nr, gr, pg = LEVELS[int(mesh)]
     m = ball_section(radius, nc, nr, grading=gr, pole_grading=pg)
     # 3 x 3 Gauss points (exact enough for Q2: forces change < 1e-5 relative vs 4 x 4), 1.8x cheaper
-    return AxiMesh(m.mesh, skfem.CellBasis(m.mesh, skfem.ElementQuad2(), intorder=4), 2, m.length_scale,
-                   m.nodes, m.edges)
+    return AxiMesh(
+        m.mesh, skfem.CellBasis(m.mesh, skfem.ElementQuad2(), intorder=4), 2, m.length_scale, m.nodes, m.edges
+    )
 
 
 class _State(NamedTuple):
@@ -130,13 +132,25 @@ class _Problem:
 
     def solve(self, s0: _State, d1: float, iso_scale, extra, guess, load):
         h = 1.0 - d1
-        fun = lambda x: self.asm.internal(x, self.mat, extra_S=extra, iso_scale=iso_scale)  # noqa: E731
+        fun = lambda x: self.asm.internal(x, self.mat, extra_S=extra, iso_scale=iso_scale)
         ref = max(32.0 / 3.0 * max(d1, 1e-6) ** 1.5 * iso_scale, 1e-12)
-        res = lambda x: self.asm.internal(x, self.mat, extra_S=extra, iso_scale=iso_scale, tangent=False)[0]  # noqa: E731
-        sol = self.plane.solve(fun, guess, h, s0.active, self.free, load=load, ref_norm=ref, rtol=self.rtol,
-                               residual=res,
-                               xtol=1e-9, atol=self.floor, admissible=self.admissible, max_iter=25,
-                               solver=symmetric_solve)
+        res = lambda x: self.asm.internal(x, self.mat, extra_S=extra, iso_scale=iso_scale, tangent=False)[0]
+        sol = self.plane.solve(
+            fun,
+            guess,
+            h,
+            s0.active,
+            self.free,
+            load=load,
+            ref_norm=ref,
+            rtol=self.rtol,
+            residual=res,
+            xtol=1e-9,
+            atol=self.floor,
+            admissible=self.admissible,
+            max_iter=25,
+            solver=symmetric_solve,
+        )
         return sol
 
     def step(self, s0: _State, d1: float, dt: float | None, prev, load):
@@ -150,7 +164,9 @@ class _Problem:
             guess = s0.x + (s0.x - prev.x) * (d1 - s0.delta) / (s0.delta - prev.delta)
         sol = self.solve(s0, d1, iso_scale, extra, guess, load)
         S_new = self.asm.iso_S(sol.x, self.mat)
-        visco = ve.update(s0.visco, self.beta, self.tau, dt, S_new) if dt is not None else s0.visco._replace(S_iso=S_new)
+        visco = (
+            ve.update(s0.visco, self.beta, self.tau, dt, S_new) if dt is not None else s0.visco._replace(S_iso=S_new)
+        )
         return _State(sol.x, sol.active, visco, d1, sol.residual, iso_scale, extra, sol.sets), sol.iterations
 
     # ---- observables (scaled) --------------------------------------------------------------
@@ -193,11 +209,24 @@ def _contact_radius(pl: RigidPlane, x: np.ndarray, active: np.ndarray, h: float)
     return float(np.clip(a, rk, r1)), rk
 
 
-def compress(*, radius: float, C: float, alpha: float, branches: Sequence = (),
-             displacement: Union[float, Callable[[float], float]], ramp_time: float, end_time: float,
-             kappa: float = 2.2e9, mesh="default", static: bool = False, field_times: Sequence[float] = (),
-             n_ramp: int | None = None, n_hold: int | None = None, n_static: int | None = None,
-             rtol: float = 1e-10) -> SpheroidResult:
+def compress(
+    *,
+    radius: float,
+    C: float,
+    alpha: float,
+    branches: Sequence = (),
+    displacement: float | Callable[[float], float],
+    ramp_time: float,
+    end_time: float,
+    kappa: float = 2.2e9,
+    mesh="default",
+    static: bool = False,
+    field_times: Sequence[float] = (),
+    n_ramp: int | None = None,
+    n_hold: int | None = None,
+    n_static: int | None = None,
+    rtol: float = 1e-10,
+) -> SpheroidResult:
     """Compress the Fung ball between frictionless plates; see the module docstring. SI units (m, Pa, s, N)."""
     validate_positive("radius (the spheroid radius a0)", radius, "m")
     validate_material(C, alpha, kappa)
@@ -216,8 +245,10 @@ def compress(*, radius: float, C: float, alpha: float, branches: Sequence = (),
         validate_positive("displacement (the total approach of the plates)", displacement, "m")
         d_max = float(displacement)
         if d_max >= 1.6 * a0:
-            raise ValueError(f"displacement {d_max:g} m would squeeze the ball (diameter {2 * a0:g} m) to less "
-                             "than 20 % of its height; the model is not meant for that")
+            raise ValueError(
+                f"displacement {d_max:g} m would squeeze the ball (diameter {2 * a0:g} m) to less "
+                "than 20 % of its height; the model is not meant for that"
+            )
     if not static:
         validate_positive("ramp_time", ramp_time, "s")
         validate_positive("end_time", end_time, "s")
@@ -225,12 +256,13 @@ def compress(*, radius: float, C: float, alpha: float, branches: Sequence = (),
             raise ValueError(f"end_time ({end_time} s) must be >= ramp_time ({ramp_time} s)")
         if d_max is not None:
             tr = float(ramp_time)
-            delta_fn = lambda t: d_max * min(float(t) / tr, 1.0)  # noqa: E731
+            delta_fn = lambda t: d_max * min(float(t) / tr, 1.0)
     ft = np.atleast_1d(np.asarray(field_times, float)) if len(np.atleast_1d(field_times)) else np.array([])
     t_max = 1.0 if static else float(end_time)
     if ft.size and (not np.all(np.isfinite(ft)) or np.any(ft <= 0) or np.any(ft > t_max * (1 + 1e-12))):
-        raise ValueError("field_times must be finite times in (0, end_time] (s); for static=True load "
-                         "fractions in (0, 1]")
+        raise ValueError(
+            "field_times must be finite times in (0, end_time] (s); for static=True load fractions in (0, 1]"
+        )
 
     m = make_mesh(mesh, a0)
     prob = _Problem(m, Material(1.0, float(alpha), float(kappa) / C), beta, tau, rtol)
@@ -238,18 +270,20 @@ def compress(*, radius: float, C: float, alpha: float, branches: Sequence = (),
     pole = np.argmin(np.hypot(prob.plane.R, prob.plane.Z - 1.0))
     active0 = np.zeros(prob.plane.nodes.size, bool)
     active0[pole] = True
-    s0 = _State(np.zeros(n0), active0, ve.initial_state(beta.size, prob.asm.w.shape + (5,)), 0.0,
-                np.zeros(n0), 1.0, None, 0)
+    s0 = _State(
+        np.zeros(n0), active0, ve.initial_state(beta.size, prob.asm.w.shape + (5,)), 0.0, np.zeros(n0), 1.0, None, 0
+    )
 
     if static:
         n = n_static or max(8, int(np.ceil(d_max / a0 / 0.02)))
         times = np.linspace(0.0, 1.0, n + 1)[1:]
-        dfun = lambda t: d_max * t  # noqa: E731
+        dfun = lambda t: d_max * t
         too_large = None
     else:
         breaks = list(ft)
-        times = ramp_hold_schedule(float(ramp_time), float(end_time), n_ramp=n_ramp or 6, n_hold=n_hold or 20,
-                                   breakpoints=breaks)
+        times = ramp_hold_schedule(
+            float(ramp_time), float(end_time), n_ramp=n_ramp or 6, n_hold=n_hold or 20, breakpoints=breaks
+        )
         dfun = delta_fn
         too_large = None
         if d_max is None:
@@ -258,7 +292,7 @@ def compress(*, radius: float, C: float, alpha: float, branches: Sequence = (),
                 raise ValueError(f"the displacement history must start at 0 (delta(0) = {d0:g} m)")
             dd = max(abs(float(delta_fn(t))) for t in np.linspace(0, ramp_time, 7)) / (n_ramp or 6)
             dd = max(dd, 1e-3 * a0)
-            too_large = lambda t0, t1: abs(float(delta_fn(t1)) - float(delta_fn(t0))) > dd  # noqa: E731
+            too_large = lambda t0, t1: abs(float(delta_fn(t1)) - float(delta_fn(t0))) > dd
 
     def dscaled(t):
         d = float(dfun(t))
@@ -267,7 +301,7 @@ def compress(*, radius: float, C: float, alpha: float, branches: Sequence = (),
         return d / (2 * a0)
 
     def step(t0, s_old, t1, prev):
-        load = (f"delta = {dfun(t1) * 1e6:.4g} um" if static else f"t = {t1:.6g} s, delta = {dfun(t1) * 1e6:.4g} um")
+        load = f"delta = {dfun(t1) * 1e6:.4g} um" if static else f"t = {t1:.6g} s, delta = {dfun(t1) * 1e6:.4g} um"
         return prob.step(s_old, dscaled(t1), None if static else t1 - t0, prev[1] if prev is not None else None, load)
 
     steps = march(step, s0, times, too_large=too_large)
@@ -282,27 +316,69 @@ def compress(*, radius: float, C: float, alpha: float, branches: Sequence = (),
         s = st.state
         F, Fr, rm, rc, rcn, vmm, vm, q, N, gmin, nmin = prob.observe(s)
         if F > 0 and abs(F - Fr) > FORCE_CHECK * abs(F) + 1e3 * prob.floor:
-            raise RuntimeError(f"contact force {F * L2:.6g} N and midplane reaction {Fr * L2:.6g} N differ by "
-                               f"{abs(F - Fr) / F:.2e} (relative) at t = {st.t:.6g} s: equilibrium not reached. "
-                               "Hint: tighten rtol")
-        rows.append((st.t, 2 * a0 * s.delta, F * L2, Fr * L2, rm * a0, rc * a0, vmm * C, st.iterations,
-                     s.passes, st.wall_s, rcn * a0, gmin * a0, nmin * L2))
+            raise RuntimeError(
+                f"contact force {F * L2:.6g} N and midplane reaction {Fr * L2:.6g} N differ by "
+                f"{abs(F - Fr) / F:.2e} (relative) at t = {st.t:.6g} s: equilibrium not reached. "
+                "Hint: tighten rtol"
+            )
+        rows.append(
+            (
+                st.t,
+                2 * a0 * s.delta,
+                F * L2,
+                Fr * L2,
+                rm * a0,
+                rc * a0,
+                vmm * C,
+                st.iterations,
+                s.passes,
+                st.wall_s,
+                rcn * a0,
+                gmin * a0,
+                nmin * L2,
+            )
+        )
         if k in want:
             w = prob.asm.w
-            u = s.x[:prob.asm.n_u].reshape(-1, 2) * a0
-            fields.append(SpheroidField(time=st.t, displacement=u, deformed_nodes=m.X.T * a0 + u,
-                                        von_mises=(vm * w).sum(1) / w.sum(1) * C,
-                                        hydrostatic_pressure=-(q * w).sum(1) / w.sum(1) * C,
-                                        contact_nodal_force=N * L2))
+            u = s.x[: prob.asm.n_u].reshape(-1, 2) * a0
+            fields.append(
+                SpheroidField(
+                    time=st.t,
+                    displacement=u,
+                    deformed_nodes=m.X.T * a0 + u,
+                    von_mises=(vm * w).sum(1) / w.sum(1) * C,
+                    hydrostatic_pressure=-(q * w).sum(1) / w.sum(1) * C,
+                    contact_nodal_force=N * L2,
+                )
+            )
     a = np.array(rows, float)
     area = np.pi * a[:, 4] ** 2
-    return SpheroidResult(time=a[:, 0], approach=a[:, 1], force=a[:, 2], reaction_force=a[:, 3],
-                          midplane_radius=a[:, 4], midplane_area=area, nominal_stress=a[:, 2] / area,
-                          mean_von_mises=a[:, 6], contact_radius=a[:, 5], contact_radius_node=a[:, 10],
-                          min_gap=a[:, 11], min_contact_force=a[:, 12], newton_iterations=a[:, 7].astype(int),
-                          contact_passes=a[:, 8].astype(int), wall_time=a[:, 9], mesh=m, fields=fields,
-                          static=bool(static),
-                          parameters=dict(radius=a0, C=C, alpha=float(alpha), kappa=float(kappa),
-                                          branches=tuple((float(b), float(t)) for b, t in br),
-                                          ramp_time=None if static else float(ramp_time),
-                                          end_time=None if static else float(end_time)))
+    return SpheroidResult(
+        time=a[:, 0],
+        approach=a[:, 1],
+        force=a[:, 2],
+        reaction_force=a[:, 3],
+        midplane_radius=a[:, 4],
+        midplane_area=area,
+        nominal_stress=a[:, 2] / area,
+        mean_von_mises=a[:, 6],
+        contact_radius=a[:, 5],
+        contact_radius_node=a[:, 10],
+        min_gap=a[:, 11],
+        min_contact_force=a[:, 12],
+        newton_iterations=a[:, 7].astype(int),
+        contact_passes=a[:, 8].astype(int),
+        wall_time=a[:, 9],
+        mesh=m,
+        fields=fields,
+        static=bool(static),
+        parameters=dict(
+            radius=a0,
+            C=C,
+            alpha=float(alpha),
+            kappa=float(kappa),
+            branches=tuple((float(b), float(t)) for b, t in br),
+            ramp_time=None if static else float(ramp_time),
+            end_time=None if static else float(end_time),
+        ),
+    )

@@ -24,11 +24,12 @@ with ``step(t_old, state_old, t_new, previous) -> (state_new, newton_iterations)
 from __future__ import annotations
 
 import time
-from typing import Callable, NamedTuple, Optional, Sequence
+from collections.abc import Callable, Sequence
+from typing import NamedTuple
 
 import numpy as np
 
-from fem.newton import NewtonError
+from tissuemech.fem.newton import NewtonError
 
 __all__ = ["Step", "ramp_hold_schedule", "march"]
 
@@ -40,8 +41,15 @@ class Step(NamedTuple):
     wall_s: float
 
 
-def ramp_hold_schedule(ramp_time: float, end_time: float, *, n_ramp: int = 6, n_hold: int = 20,
-                       first_hold: Optional[float] = None, breakpoints: Sequence[float] = ()) -> np.ndarray:
+def ramp_hold_schedule(
+    ramp_time: float,
+    end_time: float,
+    *,
+    n_ramp: int = 6,
+    n_hold: int = 20,
+    first_hold: float | None = None,
+    breakpoints: Sequence[float] = (),
+) -> np.ndarray:
     """Step end times (s): n_ramp equal steps to ramp_time, then n_hold geometric steps to end_time.
 
     ``first_hold`` is the first hold step (default ramp_time / 2, so the start of the relaxation is
@@ -63,7 +71,7 @@ def ramp_hold_schedule(ramp_time: float, end_time: float, *, n_ramp: int = 6, n_
             # geometric steps h0 q^k (k < n_hold) summing to span: solve for q by bisection
             # the largest step h0 q^(n_hold - 1) < span bounds q (and keeps q^n_hold finite)
             lo, hi = 1.0, min(1e3, (span / h0) ** (1.0 / (n_hold - 1)))
-            f = lambda q: h0 * (q**n_hold - 1) / (q - 1) - span if q > 1 else h0 * n_hold - span  # noqa: E731
+            f = lambda q: h0 * (q**n_hold - 1) / (q - 1) - span if q > 1 else h0 * n_hold - span
             if f(1.0 + 1e-12) >= 0:  # even equal steps overshoot: use equal steps
                 t += list(ramp_time + np.linspace(0, span, n_hold + 1)[1:])
             else:
@@ -81,8 +89,16 @@ def ramp_hold_schedule(ramp_time: float, end_time: float, *, n_ramp: int = 6, n_
     return t
 
 
-def march(step: Callable, state0, times: Sequence[float], *, t0: float = 0.0, max_cuts: int = 10,
-          growth: float = 1.5, too_large: Optional[Callable] = None) -> list:
+def march(
+    step: Callable,
+    state0,
+    times: Sequence[float],
+    *,
+    t0: float = 0.0,
+    max_cuts: int = 10,
+    growth: float = 1.5,
+    too_large: Callable | None = None,
+) -> list:
     """Advance from (t0, state0) through every time in ``times`` (see the module docstring)."""
     out: list = []
     t_c, s_c, prev = float(t0), state0, None
@@ -105,9 +121,13 @@ def march(step: Callable, state0, times: Sequence[float], *, t0: float = 0.0, ma
             except NewtonError as err:
                 cuts += 1
                 if cuts > max_cuts:
-                    raise NewtonError(f"time step {t_c:.6g} s -> {t_new:.6g} s failed after {max_cuts} cuts "
-                                      f"({err.args[0].split(' (load level')[0]})", load=f"t = {t_new:.6g} s",
-                                      residuals=err.residuals, hint=err.hint) from None
+                    raise NewtonError(
+                        f"time step {t_c:.6g} s -> {t_new:.6g} s failed after {max_cuts} cuts "
+                        f"({err.args[0].split(' (load level')[0]})",
+                        load=f"t = {t_new:.6g} s",
+                        residuals=err.residuals,
+                        hint=err.hint,
+                    ) from None
                 dt *= 0.5
                 continue
             out.append(Step(t_new, s_new, int(its), time.perf_counter() - w0))

@@ -65,8 +65,7 @@ def algorithmic(state: MaxwellState, beta: np.ndarray, tau: np.ndarray, dt: floa
     return 1.0 + float(bg.sum()), extra
 
 
-def update(state: MaxwellState, beta: np.ndarray, tau: np.ndarray, dt: float,
-           S_iso_new: np.ndarray) -> MaxwellState:
+def update(state: MaxwellState, beta: np.ndarray, tau: np.ndarray, dt: float, S_iso_new: np.ndarray) -> MaxwellState:
     """Branch stresses at t_{n+1} from the converged S_iso^{n+1}."""
     beta = np.asarray(beta, float)
     if beta.size == 0:

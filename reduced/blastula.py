@@ -48,11 +48,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from reduced.material import (
+from tissuemech.reduced.material import (
     dW_dI1,
     is_traced,
     validate_material,
-    validate_positive,
     validate_radii,
 )
 
@@ -87,8 +86,7 @@ def _check_stretch(name: str, value: Any) -> None:
         raise ValueError(f"{name} must be a finite number (a/A, dimensionless); got {value!r}")
     if np.any(v <= 0):
         raise ValueError(
-            f"{name} must be positive (a/A > 0; values below 1 mean the cavity shrinks); "
-            f"got {np.min(v):g}"
+            f"{name} must be positive (a/A > 0; values below 1 mean the cavity shrinks); got {np.min(v):g}"
         )
 
 
@@ -293,9 +291,7 @@ def _limit_stretch(k, alpha):
     return jnp.where(exists, la, jnp.nan)
 
 
-def limit_point(
-    *, inner_radius: Array, outer_radius: Array, C: Array, alpha: Array
-) -> LimitPoint | None:
+def limit_point(*, inner_radius: Array, outer_radius: Array, C: Array, alpha: Array) -> LimitPoint | None:
     r"""Limit point of the inflation curve: ``(p_max [Pa], lambda_a at the maximum)``, or ``None``.
 
     The maximum is the first root of the closed-form slope (Leibniz rule)
@@ -467,14 +463,12 @@ def _inverse_jvp(primals, tangents):
     pt, k, omk, alpha = primals
     dpt, dk, domk, dalpha = tangents
     la = _inverse(pt, k, omk, alpha)
-    f = lambda k_, o_, a_: _p_over_C_quad(*jnp.broadcast_arrays(la, k_, o_, a_))  # noqa: E731
+    f = lambda k_, o_, a_: _p_over_C_quad(*jnp.broadcast_arrays(la, k_, o_, a_))
     _, dP = jax.jvp(f, (k, omk, alpha), (dk, domk, dalpha))
     return la, (dpt - dP) / _dp_over_C(la, k, alpha)
 
 
-def inner_stretch(
-    pressure: Array, *, inner_radius: Array, outer_radius: Array, C: Array, alpha: Array
-) -> Array:
+def inner_stretch(pressure: Array, *, inner_radius: Array, outer_radius: Array, C: Array, alpha: Array) -> Array:
     r"""Inner stretch lambda_a = a/A at internal pressure ``pressure`` (Pa): the inverse of :func:`pressure`.
 
     The stable (rising) branch of p(lambda_a) is returned, found by safeguarded Newton (see
@@ -500,8 +494,12 @@ def inner_stretch(
 
 def _raise_no_solution(pressure, conv, inner_radius, outer_radius, C, alpha) -> None:
     p, A, B, C_, al, cv = np.broadcast_arrays(
-        np.asarray(pressure, float), np.asarray(inner_radius, float), np.asarray(outer_radius, float),
-        np.asarray(C, float), np.asarray(alpha, float), np.asarray(conv),
+        np.asarray(pressure, float),
+        np.asarray(inner_radius, float),
+        np.asarray(outer_radius, float),
+        np.asarray(C, float),
+        np.asarray(alpha, float),
+        np.asarray(conv),
     )
     i = np.unravel_index(np.argmin(cv), cv.shape)
     pi, Ai, Bi, Ci, ai = (float(v[i]) for v in (p, A, B, C_, al))

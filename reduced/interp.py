@@ -66,7 +66,7 @@ def spline_eval(knots: np.ndarray, y: Any, M: Any, x: Any) -> jnp.ndarray:
     x0, x1 = k[i], k[i + 1]
     h = x1 - x0
     xc = jnp.clip(x, k[0], k[-1])
-    e = lambda v: v.reshape(v.shape + (1,) * (y.ndim - 1))  # noqa: E731  (broadcast over value dims)
+    e = lambda v: v.reshape(v.shape + (1,) * (y.ndim - 1))
     a, b, h = e((x1 - xc) / h), e((xc - x0) / h), e(h)
     y0, y1, M0, M1 = y[i], y[i + 1], M[i], M[i + 1]
     s = a * y0 + b * y1 + ((a**3 - a) * M0 + (b**3 - b) * M1) * h**2 / 6
@@ -99,8 +99,9 @@ class Spline2D:
         self.alpha = np.asarray(alpha_knots, dtype=float)
         self.values = np.asarray(values, dtype=float)
         if self.values.shape != (self.alpha.size, self.x.size):
-            raise ValueError(f"table values need shape (n_alpha, n_x) = ({self.alpha.size}, {self.x.size}); "
-                             f"got {self.values.shape}")
+            raise ValueError(
+                f"table values need shape (n_alpha, n_x) = ({self.alpha.size}, {self.x.size}); got {self.values.shape}"
+            )
         self.Lx = second_derivative_map(self.x)
         self.Mx = self.values @ self.Lx.T  # knot second derivatives in x of every alpha row
         self.La = second_derivative_map(self.alpha) if self.alpha.size > 1 else None

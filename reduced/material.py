@@ -17,7 +17,8 @@ and ``jax.numpy`` for JAX arrays and tracers (jit/vmap/grad work).
 
 from __future__ import annotations
 
-from typing import Any, Iterable, Sequence
+from collections.abc import Iterable, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -166,10 +167,7 @@ def validate_material(C: Any, alpha: Any, kappa: Any = None) -> None:
         if not np.all(np.isfinite(v)):
             raise ValueError(f"alpha (the Fung stiffening exponent) must be finite; got {alpha!r}")
         if np.any(v < 0):
-            raise ValueError(
-                "alpha (the Fung stiffening exponent) must be >= 0 "
-                f"(0 is neo-Hookean); got {np.min(v):g}"
-            )
+            raise ValueError(f"alpha (the Fung stiffening exponent) must be >= 0 (0 is neo-Hookean); got {np.min(v):g}")
     if kappa is not None:
         validate_positive("kappa (the bulk modulus)", kappa, "Pa")
 
@@ -199,9 +197,7 @@ def validate_branches(branches: Iterable[Sequence[float]] | None) -> tuple[tuple
         try:
             beta, tau = br
         except (TypeError, ValueError):
-            raise ValueError(
-                f"branch {k}: each viscoelastic branch is a pair (beta, tau); got {br!r}"
-            ) from None
+            raise ValueError(f"branch {k}: each viscoelastic branch is a pair (beta, tau); got {br!r}") from None
         validate_nonnegative(f"beta (energy factor of branch {k})", beta)
         validate_positive(f"tau (relaxation time of branch {k})", tau, "s")
         out.append((beta, tau))

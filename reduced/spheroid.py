@@ -8,7 +8,7 @@ frictionless plates; ``delta(t)`` is the total approach (m). The plate force (N)
 (physics.md; beta_m energy factors, tau_m relaxation times in s), q_m(0) = 0. The equilibrium law
 F_eq is pluggable (``equilibrium=``):
 
-* ``"fem"`` (default): the master curves f(x; alpha) tabulated by the FE (``python -m compare.calibrate``,
+* ``"fem"`` (default): the master curves f(x; alpha) tabulated by the FE (``python -m tissuemech.compare.calibrate``,
   shipped as ``reduced/data/spheroid_master.npz``; x = delta/(2 a0) in [0, 0.3], alpha in [0, 1]),
   interpolated by C^2 splines of f / f_Hertz in x and alpha (differentiable in both);
 * ``"hertz"``: small-strain Hertz for two plates, F = (4/3) E* sqrt(a0) (delta/2)^(3/2) with
@@ -52,16 +52,17 @@ from __future__ import annotations
 
 import functools
 import json
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any, Callable, NamedTuple, Sequence, Union
+from typing import Any, NamedTuple, Union
 
 import diffrax
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from reduced.interp import Spline1D, Spline2D
-from reduced.material import is_traced, validate_branches, validate_material, validate_positive
+from tissuemech.reduced.interp import Spline1D, Spline2D
+from tissuemech.reduced.material import is_traced, validate_branches, validate_material, validate_positive
 
 __all__ = [
     "force",
@@ -97,8 +98,14 @@ class MasterCurve:
     spline (h -> 1 at x = 0 for a ball), and g directly. ``x_max``/``alpha_range`` bound the table.
     """
 
-    def __init__(self, x: np.ndarray, f: np.ndarray, g: np.ndarray | None = None,
-                 alpha: np.ndarray | None = None, metadata: dict | None = None):
+    def __init__(
+        self,
+        x: np.ndarray,
+        f: np.ndarray,
+        g: np.ndarray | None = None,
+        alpha: np.ndarray | None = None,
+        metadata: dict | None = None,
+    ):
         x = np.asarray(x, dtype=float)
         f = np.asarray(f, dtype=float)
         if x.ndim != 1 or x.size < 3 or x[0] < 0 or np.any(np.diff(x) <= 0):
@@ -127,7 +134,9 @@ class MasterCurve:
         else:
             alpha = np.atleast_1d(np.asarray(alpha, dtype=float))
             if f.shape != (alpha.size, x.size):
-                raise ValueError(f"master curve: f needs shape (n_alpha, n_x) = ({alpha.size}, {x.size}); got {f.shape}")
+                raise ValueError(
+                    f"master curve: f needs shape (n_alpha, n_x) = ({alpha.size}, {x.size}); got {f.shape}"
+                )
             self.alpha = alpha
             self._h = Spline2D(x, alpha, np.stack([ratio(fr) for fr in f]))
             self._g = None if g is None else Spline2D(x, alpha, np.asarray(g, dtype=float))
@@ -162,12 +171,15 @@ class MasterCurve:
             raise ValueError(
                 f"compression delta/(2 a0) = {np.max(xv):.4g} is beyond the calibrated table (up to "
                 f"{self.x_max:.4g}, i.e. {100 * self.x_max:.3g} % of the diameter). Use equilibrium='hertz' "
-                "or a callable, or extend the table with `python -m compare.calibrate --x-max ...`.")
+                "or a callable, or extend the table with `python -m tissuemech.compare.calibrate --x-max ...`."
+            )
         if av is not None and self.alpha is not None:
             lo, hi = self.alpha_range
             if np.min(av) < lo - 1e-12 or np.max(av) > hi + 1e-12:
-                raise ValueError(f"alpha = {np.min(av):g}..{np.max(av):g} is outside the calibrated table "
-                                 f"(alpha in [{lo:g}, {hi:g}]); use equilibrium='hertz' or extend the table.")
+                raise ValueError(
+                    f"alpha = {np.min(av):g}..{np.max(av):g} is outside the calibrated table "
+                    f"(alpha in [{lo:g}, {hi:g}]); use equilibrium='hertz' or extend the table."
+                )
 
 
 def _concrete(v):
@@ -185,14 +197,16 @@ def master_curve(path: str | None = None) -> MasterCurve:
     p = Path(path) if path is not None else DATA_FILE
     if not p.exists():
         raise FileNotFoundError(
-            f"no calibrated spheroid table at {p}. Generate it with `python -m compare.calibrate`, "
-            "or use equilibrium='hertz'.")
+            f"no calibrated spheroid table at {p}. Generate it with `python -m tissuemech.compare.calibrate`, "
+            "or use equilibrium='hertz'."
+        )
     with np.load(p, allow_pickle=False) as z:
         meta = json.loads(str(z["metadata"])) if "metadata" in z.files else {}
         return MasterCurve(z["x"], z["f"], z["g"] if "g" in z.files else None, alpha=z["alpha"], metadata=meta)
 
 
 # ---------------------------------------------------------------- equilibrium laws (dimensionless)
+
 
 def _equilibrium_law(equilibrium: Any, radius, C, alpha) -> tuple[Callable, Any]:
     """(f(x) dimensionless F_eq/(C a0^2), table-or-None) for a spec; x = delta/(2 a0)."""
@@ -238,6 +252,7 @@ def _midplane_law(midplane: Any, equilibrium: Any, radius, alpha) -> tuple[Calla
 
 # ---------------------------------------------------------------- the lumped ODE
 
+
 class _Opts(NamedTuple):
     rtol: float
     atol: float
@@ -255,7 +270,9 @@ def _adjoint(kind: Any):
         return diffrax.ForwardMode()
     if isinstance(kind, diffrax.AbstractAdjoint):
         return kind
-    raise ValueError(f"adjoint must be 'reverse' (jax.grad/jacrev), 'forward' (jax.jacfwd/jvp) or a diffrax adjoint; got {kind!r}")
+    raise ValueError(
+        f"adjoint must be 'reverse' (jax.grad/jacrev), 'forward' (jax.jacfwd/jvp) or a diffrax adjoint; got {kind!r}"
+    )
 
 
 class _Midplane1D(Spline1D):
@@ -287,16 +304,29 @@ def _run(flat_t, params, betas, taus, static):
     def one(p, bs, ts):
         b = jnp.stack(bs) if bs else jnp.zeros(0)
         tau = jnp.stack(ts) if ts else jnp.ones(0)
-        return _curve(flat_t, p["radius"], p["C"], p["alpha"], b, tau,
-                      disp if disp is not None else p["displacement"], p.get("ramp_time"),
-                      law, mid, jumps, o, stress)
+        return _curve(
+            flat_t,
+            p["radius"],
+            p["C"],
+            p["alpha"],
+            b,
+            tau,
+            disp if disp is not None else p["displacement"],
+            p.get("ramp_time"),
+            law,
+            mid,
+            jumps,
+            o,
+            stress,
+        )
 
     if shape == ():
         out, ok = one(params, betas, taus)
     else:
-        bc = lambda v: jnp.broadcast_to(v, shape).reshape(-1)  # noqa: E731
-        out, ok = jax.vmap(one)({k: bc(v) for k, v in params.items()}, tuple(bc(b) for b in betas),
-                                tuple(bc(tau) for tau in taus))
+        bc = lambda v: jnp.broadcast_to(v, shape).reshape(-1)
+        out, ok = jax.vmap(one)(
+            {k: bc(v) for k, v in params.items()}, tuple(bc(b) for b in betas), tuple(bc(tau) for tau in taus)
+        )
     return out.reshape(shape + flat_t.shape[:0] + (-1,)) if shape else out, ok
 
 
@@ -382,12 +412,21 @@ def _ramp_hold(t, f, X, tr, betas, taus, o: _Opts):
     vs = jnp.sqrt(s)
     order = jnp.argsort(vs)
     sol = diffrax.diffeqsolve(
-        diffrax.ODETerm(rhs), o.solver, t0=0.0, t1=1.0, dt0=1e-3, y0=jnp.zeros(n),
+        diffrax.ODETerm(rhs),
+        o.solver,
+        t0=0.0,
+        t1=1.0,
+        dt0=1e-3,
+        y0=jnp.zeros(n),
         saveat=diffrax.SaveAt(ts=vs[order], t1=True),
         # steps land on the output times: saved values are step values, not the (lower-order) interpolant
-        stepsize_controller=diffrax.ClipStepSizeController(diffrax.PIDController(rtol=o.rtol, atol=o.atol),
-                                                           step_ts=vs[order]),
-        max_steps=o.max_steps, adjoint=o.adjoint, throw=False)
+        stepsize_controller=diffrax.ClipStepSizeController(
+            diffrax.PIDController(rtol=o.rtol, atol=o.atol), step_ts=vs[order]
+        ),
+        max_steps=o.max_steps,
+        adjoint=o.adjoint,
+        throw=False,
+    )
     q_ramp = jnp.zeros((t.shape[0], n)).at[order].set(sol.ys[:-1])
     q_end = sol.ys[-1]
     hold = q_end * jnp.exp(-jnp.maximum(t - tr, 0.0)[:, None] / taus)
@@ -410,18 +449,28 @@ def _history(t, f, x_of_t, betas, taus, jumps, o: _Opts):
 
     order = jnp.argsort(t)
     controller = diffrax.ClipStepSizeController(
-        diffrax.PIDController(rtol=o.rtol, atol=o.atol), step_ts=t[order],
-        jump_ts=None if jumps is None else jnp.asarray(jumps, dtype=jnp.float64))
+        diffrax.PIDController(rtol=o.rtol, atol=o.atol),
+        step_ts=t[order],
+        jump_ts=None if jumps is None else jnp.asarray(jumps, dtype=jnp.float64),
+    )
     sol = diffrax.diffeqsolve(
-        diffrax.ODETerm(rhs), o.solver, t0=0.0, t1=T, dt0=T * 1e-4, y0=jnp.zeros(n),
-        saveat=diffrax.SaveAt(ts=t[order]), stepsize_controller=controller,
-        max_steps=o.max_steps, adjoint=o.adjoint, throw=False)
+        diffrax.ODETerm(rhs),
+        o.solver,
+        t0=0.0,
+        t1=T,
+        dt0=T * 1e-4,
+        y0=jnp.zeros(n),
+        saveat=diffrax.SaveAt(ts=t[order]),
+        stepsize_controller=controller,
+        max_steps=o.max_steps,
+        adjoint=o.adjoint,
+        throw=False,
+    )
     q = jnp.zeros((t.shape[0], n)).at[order].set(sol.ys) * scale
     return feq + jnp.sum(q, axis=-1), sol.result == diffrax.RESULTS.successful
 
 
-def _curve(t, radius, C, alpha, betas, taus, displacement, ramp_time, equilibrium, midplane, jumps, o,
-           stress: bool):
+def _curve(t, radius, C, alpha, betas, taus, displacement, ramp_time, equilibrium, midplane, jumps, o, stress: bool):
     """Force (N) or nominal stress (Pa) at flat times t for scalar parameters."""
     f, table = _equilibrium_law(equilibrium, radius, C, alpha)
     if table is not None:
@@ -431,8 +480,10 @@ def _curve(t, radius, C, alpha, betas, taus, displacement, ramp_time, equilibriu
     else:  # a user callable: smoothness unknown, 16 even sub-intervals of the ramp
         knots = None if callable(displacement) else np.linspace(0.0, 1.0, 17)[1:-1] * displacement / (2.0 * radius)
     if callable(displacement):
+
         def x_of_t(tt):
             return displacement(tt) / (2.0 * radius)
+
         fhat, ok = _history(t, f, x_of_t, betas, taus, jumps, o)
         x_t = x_of_t(t)
     else:
@@ -449,12 +500,37 @@ def _curve(t, radius, C, alpha, betas, taus, displacement, ramp_time, equilibriu
     return jnp.where(ok, out, jnp.nan), ok
 
 
-def _evaluate(t, *, radius, C, alpha, branches, displacement, ramp_time, equilibrium, midplane,
-              jump_times, rtol, atol, max_steps, solver, adjoint, method, stress):
+def _evaluate(
+    t,
+    *,
+    radius,
+    C,
+    alpha,
+    branches,
+    displacement,
+    ramp_time,
+    equilibrium,
+    midplane,
+    jump_times,
+    rtol,
+    atol,
+    max_steps,
+    solver,
+    adjoint,
+    method,
+    stress,
+):
     br = validate_branches(branches)
     t_arr = jnp.asarray(t, dtype=jnp.float64)
-    eager = not is_traced(t, radius, C, alpha, ramp_time, *(v for b in br for v in b),
-                          *(() if callable(displacement) else (displacement,)))
+    eager = not is_traced(
+        t,
+        radius,
+        C,
+        alpha,
+        ramp_time,
+        *(v for b in br for v in b),
+        *(() if callable(displacement) else (displacement,)),
+    )
     if eager:
         tn = np.asarray(t, dtype=float)
         if tn.size == 0 or not np.all(np.isfinite(tn)) or np.min(tn) < 0:
@@ -479,16 +555,21 @@ def _evaluate(t, *, radius, C, alpha, branches, displacement, ramp_time, equilib
     if not callable(displacement):
         params.update(displacement=displacement, ramp_time=ramp_time)
     params = {k: jnp.asarray(v, dtype=jnp.float64) for k, v in params.items()}
-    shape = jnp.broadcast_shapes(*(v.shape for v in params.values()), *(b.shape for b in betas),
-                                 *(tau.shape for tau in taus))
+    shape = jnp.broadcast_shapes(
+        *(v.shape for v in params.values()), *(b.shape for b in betas), *(tau.shape for tau in taus)
+    )
     if solver is None:
         solver = diffrax.Kvaerno5()  # L-stable: safe for any tau / ramp ratio
         if eager and br and not callable(displacement):
-            stiff = np.max(np.asarray(ramp_time, dtype=float) / np.min([np.min(np.asarray(tau, dtype=float)) for _, tau in br]))
+            stiff = np.max(
+                np.asarray(ramp_time, dtype=float) / np.min([np.min(np.asarray(tau, dtype=float)) for _, tau in br])
+            )
             if stiff <= 10.0:
                 solver = diffrax.Tsit5()  # non-stiff: the explicit solver is ~4x faster
     if method not in ("quadrature", "ode"):
-        raise ValueError(f"method must be 'quadrature' (fast default for a ramp-and-hold) or 'ode' (diffrax); got {method!r}")
+        raise ValueError(
+            f"method must be 'quadrature' (fast default for a ramp-and-hold) or 'ode' (diffrax); got {method!r}"
+        )
     n_ramp = None
     if not callable(displacement):
         tv, rv = _concrete(t), _concrete(ramp_time)
@@ -497,14 +578,22 @@ def _evaluate(t, *, radius, C, alpha, branches, displacement, ramp_time, equilib
     o = _Opts(float(rtol), float(atol), int(max_steps), solver, _adjoint(adjoint), method, n_ramp)
     law = _table_object(equilibrium, "f") if isinstance(equilibrium, tuple) else equilibrium
     mid = _table_object(midplane, "g") if isinstance(midplane, tuple) else midplane
-    static = (law, mid, displacement if callable(displacement) else None,
-              None if jump_times is None else tuple(float(j) for j in jump_times), o, stress, shape)
+    static = (
+        law,
+        mid,
+        displacement if callable(displacement) else None,
+        None if jump_times is None else tuple(float(j) for j in jump_times),
+        o,
+        stress,
+        shape,
+    )
     out, ok = _run(t_arr.reshape(-1), params, betas, taus, static)
     if eager and not bool(np.all(np.asarray(ok))):
         raise RuntimeError(
             f"the lumped viscoelastic ODE failed for {int(np.size(ok) - np.sum(np.asarray(ok)))} of "
             f"{int(np.size(ok))} parameter sets. Hint: raise max_steps (now {max_steps}), loosen rtol/atol, "
-            "or check that the relaxation times are not absurdly short compared with the ramp.")
+            "or check that the relaxation times are not absurdly short compared with the ramp."
+        )
     return out.reshape(shape + t_arr.shape)
 
 
@@ -518,11 +607,24 @@ def _table_of(law):
     return None
 
 
-def force(t: Any, *, radius: Any, C: Any, alpha: Any, branches: Sequence[tuple[Any, Any]] = (),
-          displacement: Any, ramp_time: Any = None, equilibrium: Equilibrium = "fem",
-          jump_times: Sequence[float] | None = None, rtol: float = 1e-10, atol: float = 1e-10,
-          max_steps: int = 16384, solver: Any = None, adjoint: Any = "reverse",
-          method: str = "quadrature") -> jnp.ndarray:
+def force(
+    t: Any,
+    *,
+    radius: Any,
+    C: Any,
+    alpha: Any,
+    branches: Sequence[tuple[Any, Any]] = (),
+    displacement: Any,
+    ramp_time: Any = None,
+    equilibrium: Equilibrium = "fem",
+    jump_times: Sequence[float] | None = None,
+    rtol: float = 1e-10,
+    atol: float = 1e-10,
+    max_steps: int = 16384,
+    solver: Any = None,
+    adjoint: Any = "reverse",
+    method: str = "quadrature",
+) -> jnp.ndarray:
     r"""Plate force F(t) in N of the lumped generalized-Maxwell spheroid.
 
     F = F_eq(delta) + sum_m q_m,  dq_m/dt = -q_m/tau_m + beta_m dF_eq/dt,  q_m(0) = 0.
@@ -535,28 +637,75 @@ def force(t: Any, *, radius: Any, C: Any, alpha: Any, branches: Sequence[tuple[A
     equilibrium  "hertz", "fem" (FE-calibrated table), an (x, f) table or a callable (module doc).
     Parameters broadcast: the result has shape ``broadcast(params).shape + t.shape``.
     """
-    return _evaluate(t, radius=radius, C=C, alpha=alpha, branches=branches, displacement=displacement,
-                     ramp_time=ramp_time, equilibrium=equilibrium, midplane=None, jump_times=jump_times,
-                     rtol=rtol, atol=atol, max_steps=max_steps, solver=solver, adjoint=adjoint, method=method, stress=False)
+    return _evaluate(
+        t,
+        radius=radius,
+        C=C,
+        alpha=alpha,
+        branches=branches,
+        displacement=displacement,
+        ramp_time=ramp_time,
+        equilibrium=equilibrium,
+        midplane=None,
+        jump_times=jump_times,
+        rtol=rtol,
+        atol=atol,
+        max_steps=max_steps,
+        solver=solver,
+        adjoint=adjoint,
+        method=method,
+        stress=False,
+    )
 
 
-def nominal_stress(t: Any, *, radius: Any, C: Any, alpha: Any, branches: Sequence[tuple[Any, Any]] = (),
-                   displacement: Any, ramp_time: Any = None, equilibrium: Equilibrium = "fem",
-                   midplane: Any = None, jump_times: Sequence[float] | None = None, rtol: float = 1e-10,
-                   atol: float = 1e-10, max_steps: int = 16384, solver: Any = None, adjoint: Any = "reverse",
-          method: str = "quadrature") -> jnp.ndarray:
+def nominal_stress(
+    t: Any,
+    *,
+    radius: Any,
+    C: Any,
+    alpha: Any,
+    branches: Sequence[tuple[Any, Any]] = (),
+    displacement: Any,
+    ramp_time: Any = None,
+    equilibrium: Equilibrium = "fem",
+    midplane: Any = None,
+    jump_times: Sequence[float] | None = None,
+    rtol: float = 1e-10,
+    atol: float = 1e-10,
+    max_steps: int = 16384,
+    solver: Any = None,
+    adjoint: Any = "reverse",
+    method: str = "quadrature",
+) -> jnp.ndarray:
     r"""Nominal stress sigma~(t) = F(t) / (pi r_mid(delta(t))^2) in Pa (the seed's observable).
 
     Same arguments as :func:`force`; ``midplane`` chooses r_mid: "incompressible" (a0/sqrt(1 - x)),
     "fem" (calibrated), an (x, g) table, a callable r_mid(delta, *, radius, alpha) (m), or None (auto).
     """
-    return _evaluate(t, radius=radius, C=C, alpha=alpha, branches=branches, displacement=displacement,
-                     ramp_time=ramp_time, equilibrium=equilibrium, midplane=midplane, jump_times=jump_times,
-                     rtol=rtol, atol=atol, max_steps=max_steps, solver=solver, adjoint=adjoint, method=method, stress=True)
+    return _evaluate(
+        t,
+        radius=radius,
+        C=C,
+        alpha=alpha,
+        branches=branches,
+        displacement=displacement,
+        ramp_time=ramp_time,
+        equilibrium=equilibrium,
+        midplane=midplane,
+        jump_times=jump_times,
+        rtol=rtol,
+        atol=atol,
+        max_steps=max_steps,
+        solver=solver,
+        adjoint=adjoint,
+        method=method,
+        stress=True,
+    )
 
 
-def equilibrium_force(displacement: Any, *, radius: Any, C: Any, alpha: Any,
-                      equilibrium: Equilibrium = "fem") -> jnp.ndarray:
+def equilibrium_force(
+    displacement: Any, *, radius: Any, C: Any, alpha: Any, equilibrium: Equilibrium = "fem"
+) -> jnp.ndarray:
     """Elastic equilibrium force F_eq(delta) in N for the total approach ``displacement`` (m)."""
     if not is_traced(displacement, radius, C, alpha):
         validate_positive("radius (of the ball)", radius, "m")
@@ -569,7 +718,9 @@ def equilibrium_force(displacement: Any, *, radius: Any, C: Any, alpha: Any,
     return f(x) * C * jnp.asarray(radius) ** 2
 
 
-def midplane_radius(displacement: Any, *, radius: Any, alpha: Any = 0.0, midplane: Any = "incompressible") -> jnp.ndarray:
+def midplane_radius(
+    displacement: Any, *, radius: Any, alpha: Any = 0.0, midplane: Any = "incompressible"
+) -> jnp.ndarray:
     """Deformed equator radius r_mid (m) at total approach ``displacement`` (m)."""
     g, _ = _midplane_law(midplane, None, radius, alpha)
     x = jnp.asarray(displacement, dtype=jnp.float64) / (2.0 * jnp.asarray(radius, dtype=jnp.float64))

@@ -51,15 +51,16 @@ regimes; the ramp end is passed as a jump time. Stresses are scaled by C inside 
 
 from __future__ import annotations
 
-from typing import Any, Callable, NamedTuple, Sequence
+from collections.abc import Callable, Sequence
+from typing import Any, NamedTuple
 
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from reduced import blastula
-from reduced.material import (
+from tissuemech.reduced import blastula
+from tissuemech.reduced.material import (
     dW_dI1,
     is_traced,
     validate_branches,
@@ -133,7 +134,7 @@ def _rates(t, y, args):
     """(d y/dt, instantaneous tangent dP/dlambda_a / C) of the constraint-differentiated DAE."""
     p_fun, C, rho, wu, alpha, beta, tau = args
     la, q_rr, q_tt = y
-    P = lambda la_, qr, qt: _pressure_over_C(la_, qr, qt, rho, wu, alpha)  # noqa: E731
+    P = lambda la_, qr, qt: _pressure_over_C(la_, qr, qt, rho, wu, alpha)
     _, dS = jax.jvp(lambda la_: _s_iso(la_, rho, alpha), (la,), (jnp.ones_like(la),))
     relax_rr = -q_rr / tau[:, None]
     relax_tt = -q_tt / tau[:, None]
@@ -202,7 +203,9 @@ def inflate(
         if tn.ndim != 1 or tn.size == 0:
             raise ValueError("t must be a non-empty 1-D array of output times in s")
         if not np.all(np.isfinite(tn)) or np.any(tn < 0):
-            raise ValueError(f"output times t must be finite and >= 0 s (t = 0 is when loading starts); got min {tn.min():g}")
+            raise ValueError(
+                f"output times t must be finite and >= 0 s (t = 0 is when loading starts); got min {tn.min():g}"
+            )
         if np.any(np.diff(tn) < 0):
             raise ValueError("output times t must be in ascending order")
     if ramp_time is not None:
@@ -231,7 +234,9 @@ def _solve(t, p_fun, jumps, inner_radius, outer_radius, C, alpha, beta, tau, rto
     # state at t = 0+: instantaneous (glassy) response to p(0), C_inst = (1 + sum beta) C
     C_inst = C * (1.0 + jnp.sum(beta))
     p_start = p_fun(jnp.asarray(0.0))
-    la0, ok0 = blastula.inner_stretch_solve(p_start, inner_radius=inner_radius, outer_radius=outer_radius, C=C_inst, alpha=alpha)
+    la0, ok0 = blastula.inner_stretch_solve(
+        p_start, inner_radius=inner_radius, outer_radius=outer_radius, C=C_inst, alpha=alpha
+    )
     if not is_traced(la0) and not bool(ok0):
         raise ValueError(
             f"the initial pressure {float(p_start):g} Pa exceeds what the shell can hold even instantaneously "
@@ -239,7 +244,9 @@ def _solve(t, p_fun, jumps, inner_radius, outer_radius, C, alpha, beta, tau, rto
         )
     s_rr, s_tt = _s_iso(la0, rho, alpha)
     y0 = (la0, beta[:, None] * s_rr[None, :], beta[:, None] * s_tt[None, :])
-    controller = diffrax.PIDController(rtol=jnp.asarray(rtol, dtype=jnp.float64), atol=jnp.asarray(atol, dtype=jnp.float64))
+    controller = diffrax.PIDController(
+        rtol=jnp.asarray(rtol, dtype=jnp.float64), atol=jnp.asarray(atol, dtype=jnp.float64)
+    )
     if jumps is not None:
         controller = diffrax.ClipStepSizeController(controller, jump_ts=jumps)
     t1 = t[-1]
@@ -280,7 +287,11 @@ def _solve(t, p_fun, jumps, inner_radius, outer_radius, C, alpha, beta, tau, rto
             )
     else:
         la = jnp.where(sol.result == diffrax.RESULTS.successful, la, jnp.nan)
-    lb = blastula.outer_stretch(la, inner_radius=inner_radius, outer_radius=outer_radius) if not is_traced(la) else jnp.exp(
-        jnp.log1p(jnp.expm1(3.0 * jnp.log(la)) * (jnp.asarray(inner_radius) / jnp.asarray(outer_radius)) ** 3) / 3.0
+    lb = (
+        blastula.outer_stretch(la, inner_radius=inner_radius, outer_radius=outer_radius)
+        if not is_traced(la)
+        else jnp.exp(
+            jnp.log1p(jnp.expm1(3.0 * jnp.log(la)) * (jnp.asarray(inner_radius) / jnp.asarray(outer_radius)) ** 3) / 3.0
+        )
     )
     return la, lb

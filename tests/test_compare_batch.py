@@ -13,7 +13,7 @@ from typing import NamedTuple
 import numpy as np
 import pytest
 
-from compare import batch
+from tissuemech.compare import batch
 
 
 class Out(NamedTuple):
@@ -63,8 +63,7 @@ def test_failures_named_and_others_stored(tmp_path):
     assert set(info.value.failures) == {3}
     assert "load step 7" in str(info.value)
     assert len(list(tmp_path.glob("*.npz"))) == 5
-    res = batch.run(fails_on_three, POINTS, executor="serial", store=tmp_path, progress=False,
-                    raise_on_error=False)
+    res = batch.run(fails_on_three, POINTS, executor="serial", store=tmp_path, progress=False, raise_on_error=False)
     assert res[3] is None and float(res[4].y) == 5.0
 
 
@@ -88,7 +87,7 @@ def test_resume_after_kill(tmp_path, executor):
     pts = [dict(a=float(a), log=str(log), delay=0.25) for a in range(10)]
     ex = "'serial'" if executor == "serial" else "None"
     code = (
-        "import sys; sys.path.insert(0, %r); import test_compare_batch as t; from compare import batch\n"
+        "import sys; sys.path.insert(0, %r); import test_compare_batch as t; from tissuemech.compare import batch\n"
         "if __name__ == '__main__': batch.run(t.square, %r, executor=%s, store=%r, progress=False)"
         % (str(Path(__file__).parent), pts, ex, str(store))
     )
@@ -115,8 +114,10 @@ def test_resume_after_kill(tmp_path, executor):
 
 def test_dask_local_cluster(tmp_path):
     distributed = pytest.importorskip("distributed")
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
-                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+    with (
+        distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster,
+        distributed.Client(cluster) as client,
+    ):
         res = batch.run(square, POINTS, executor=client, store=tmp_path, progress=False)
     assert [float(r.total) for r in res] == [5.0 * p["a"] for p in POINTS]
     again = batch.run(square, POINTS, executor="serial", store=tmp_path, progress=False)

@@ -9,19 +9,25 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from compare import calibrate
+from tissuemech.compare import calibrate
 
 
 def fake_curve(*, alpha, x_max, mesh="default"):
     a0, C = 500e-6, 200.0
     x = np.sort(np.r_[np.geomspace(1e-4, x_max, 300), x_max])
-    return {"approach": 2 * a0 * x, "force": C * a0**2 * (32 / 3) * x**1.5 * np.exp(alpha * x),
-            "midplane_radius": a0 * (1 + x / 2), "radius": a0, "C": C}
+    return {
+        "approach": 2 * a0 * x,
+        "force": C * a0**2 * (32 / 3) * x**1.5 * np.exp(alpha * x),
+        "midplane_radius": a0 * (1 + x / 2),
+        "radius": a0,
+        "C": C,
+    }
 
 
 def test_tabulate_reproduces_curve_and_file_roundtrip(tmp_path):
-    curves = calibrate.tabulate(alphas=(0.0, 0.5, 1.0), n_x=16, executor="serial", store=str(tmp_path / "s"),
-                                curve=fake_curve)
+    curves = calibrate.tabulate(
+        alphas=(0.0, 0.5, 1.0), n_x=16, executor="serial", store=str(tmp_path / "s"), curve=fake_curve
+    )
     x = curves.x
     assert x[0] == 0.0 and x[-1] == pytest.approx(0.3)
     exact = calibrate.hertz_f(x)[None, :] * np.exp(curves.alpha[:, None] * x[None, :])

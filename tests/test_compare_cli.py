@@ -4,7 +4,7 @@ import re
 
 import pytest
 
-from compare import cli
+from tissuemech.compare import cli
 
 
 def test_blastula_table_and_plot(tmp_path, capsys):
@@ -30,10 +30,13 @@ def test_spheroid_table_and_plot(tmp_path, capsys):
     assert float(row.split()[1]) == pytest.approx(4.47314, abs=1e-4)  # printed with 4 decimals
 
 
-@pytest.mark.parametrize("argv, match", [
-    (["blastula", "--inner-radius-um", "80"], "inner_radius must be smaller than outer_radius"),
-    (["spheroid", "--displacement-um", "400"], "--equilibrium hertz"),
-])
+@pytest.mark.parametrize(
+    "argv, match",
+    [
+        (["blastula", "--inner-radius-um", "80"], "inner_radius must be smaller than outer_radius"),
+        (["spheroid", "--displacement-um", "400"], "--equilibrium hertz"),
+    ],
+)
 def test_bad_input_gives_one_line_error(tmp_path, capsys, argv, match):
     assert cli.main(argv + ["--out", str(tmp_path / "x.png")]) == 2
     err = capsys.readouterr().err.strip().splitlines()

@@ -10,13 +10,12 @@ q decays exactly as exp(-(t - t_r)/tau).
 
 from __future__ import annotations
 
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
-import reduced  # noqa: F401
-import jax.numpy as jnp
-
-from compare import fit
+import tissuemech.reduced  # noqa: F401
+from tissuemech.compare import fit
 
 A0 = 500e-6
 TR = 0.2
@@ -59,9 +58,17 @@ def synthetic(displacements, noise=0.0, seed=0, params=TRUE, times=TIMES):
     rng = np.random.default_rng(seed)
     out = []
     for d in displacements:
-        y = np.asarray(fake_nominal_stress(times, radius=A0, C=params["C"], alpha=params["alpha"],
-                                           branches=[(params["beta"], params["tau"])], displacement=d,
-                                           ramp_time=TR))
+        y = np.asarray(
+            fake_nominal_stress(
+                times,
+                radius=A0,
+                C=params["C"],
+                alpha=params["alpha"],
+                branches=[(params["beta"], params["tau"])],
+                displacement=d,
+                ramp_time=TR,
+            )
+        )
         out.append((times, y + noise * rng.standard_normal(y.shape), d))
     return out
 
@@ -72,12 +79,14 @@ def _fit(records, **kw):
 
 def test_fake_model_limits():
     # elastic limit (beta = 0): stress is F_eq/A_mid at every time; Maxwell peak = (1 + beta) at the end of a fast ramp
-    y0 = fake_nominal_stress(TIMES, radius=A0, C=100.0, alpha=0.0, branches=[(0.0, 10.0)],
-                             displacement=50e-6, ramp_time=TR)
+    y0 = fake_nominal_stress(
+        TIMES, radius=A0, C=100.0, alpha=0.0, branches=[(0.0, 10.0)], displacement=50e-6, ramp_time=TR
+    )
     x = 0.05
     assert np.allclose(y0[-1], 100.0 * (32 / 3) * x**1.5 / (np.pi * (1 + x)), rtol=1e-12)
-    y1 = fake_nominal_stress(np.array([TR]), radius=A0, C=100.0, alpha=0.0, branches=[(0.5, 1e9)],
-                             displacement=50e-6, ramp_time=TR)
+    y1 = fake_nominal_stress(
+        np.array([TR]), radius=A0, C=100.0, alpha=0.0, branches=[(0.5, 1e9)], displacement=50e-6, ramp_time=TR
+    )
     assert np.allclose(y1[0], 1.5 * y0[-1], rtol=1e-6)
 
 
@@ -132,8 +141,11 @@ def test_two_branches_names_and_fit():
     times = TIMES
     ys = []
     for d in (50e-6, 200e-6):
-        y = np.asarray(fake_nominal_stress(times, radius=A0, C=150.0, alpha=0.2,
-                                           branches=[(0.3, 5.0), (0.5, 300.0)], displacement=d, ramp_time=TR))
+        y = np.asarray(
+            fake_nominal_stress(
+                times, radius=A0, C=150.0, alpha=0.2, branches=[(0.3, 5.0), (0.5, 300.0)], displacement=d, ramp_time=TR
+            )
+        )
         ys.append((times, y, d))
     res = _fit(ys, n_branches=2, initial=dict(C=120, alpha=0.1, beta_1=0.2, beta_2=0.2, tau_1=2.0, tau_2=100.0))
     assert res.names == ("C", "alpha", "beta_1", "beta_2", "tau_1", "tau_2")
@@ -171,17 +183,30 @@ def test_validation_messages():
 
 def test_fit_through_reduced_spheroid():
     """Synthetic records from reduced.spheroid itself (Hertz equilibrium): exact data are recovered."""
-    red = pytest.importorskip("reduced.spheroid")
+    red = pytest.importorskip("tissuemech.reduced.spheroid")
     truth = dict(C=150.0, alpha=0.2, beta=0.4, tau=200.0)
     recs = []
     for d in (50e-6, 200e-6):
-        y = np.asarray(red.nominal_stress(TIMES, radius=A0, C=truth["C"], alpha=truth["alpha"],
-                                          branches=[(truth["beta"], truth["tau"])], displacement=d, ramp_time=TR))
+        y = np.asarray(
+            red.nominal_stress(
+                TIMES,
+                radius=A0,
+                C=truth["C"],
+                alpha=truth["alpha"],
+                branches=[(truth["beta"], truth["tau"])],
+                displacement=d,
+                ramp_time=TR,
+            )
+        )
         recs.append((TIMES, y, d))
     res = fit.relaxation(recs, radius=A0, ramp_time=TR, initial=dict(C=120.0, alpha=0.1, beta=0.6, tau=120.0))
     assert res.residual < 1e-6 * max(np.max(r[1]) for r in recs)
-    poorly = {n for i in res.identifiability.poorly for n, v in zip(res.names, res.identifiability.eigenvectors[:, i])
-              if abs(v) > 0.5}
+    poorly = {
+        n
+        for i in res.identifiability.poorly
+        for n, v in zip(res.names, res.identifiability.eigenvectors[:, i])
+        if abs(v) > 0.5
+    }
     for k in ("beta", "tau"):
         assert res.params[k] == pytest.approx(truth[k], rel=1e-4), k
     if "alpha" not in poorly:  # an alpha-dependent equilibrium identifies C and alpha from two levels

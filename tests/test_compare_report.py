@@ -14,13 +14,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from compare import report, stability
-from compare.accuracy import pareto
-
+from tissuemech.compare import report, stability
+from tissuemech.compare.accuracy import pareto
 
 # ---------------------------------------------------------------------------------------------
 # fast
 # ---------------------------------------------------------------------------------------------
+
 
 def test_pareto_front_marks_non_dominated_rows():
     df = pd.DataFrame(dict(wall_s=[1.0, 2.0, 0.5, 3.0, np.nan], error=[1e-3, 1e-6, 1e-2, 1e-6, 1e-9]))
@@ -58,7 +58,7 @@ def test_update_formulas_orders_and_stability():
 
 
 def test_cli_has_report_subcommand(capsys):
-    from compare.cli import main
+    from tissuemech.compare.cli import main
 
     with pytest.raises(SystemExit) as exc:
         main(["report", "--help"])
@@ -69,6 +69,7 @@ def test_cli_has_report_subcommand(capsys):
 # ---------------------------------------------------------------------------------------------
 # slow: the whole quick report once
 # ---------------------------------------------------------------------------------------------
+
 
 @pytest.fixture(scope="module")
 def quick_report(tmp_path_factory):

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from compare import scan
 from test_compare_fit import fake_nominal_stress
+
+from tissuemech.compare import scan
 
 
 def test_design_grid_random_lhs():
@@ -27,16 +27,33 @@ def test_design_grid_random_lhs():
 
 
 def test_spheroid_scan_matches_direct_model():
-    df = scan.spheroid(C=(100.0, 300.0), alpha=(0.0, 0.3), beta=(0.1, 1.0), tau=(10.0, 500.0),
-                       n=3, model=fake_nominal_stress, equilibrium="fake", batch_size=16, curves=True)
+    df = scan.spheroid(
+        C=(100.0, 300.0),
+        alpha=(0.0, 0.3),
+        beta=(0.1, 1.0),
+        tau=(10.0, 500.0),
+        n=3,
+        model=fake_nominal_stress,
+        equilibrium="fake",
+        batch_size=16,
+        curves=True,
+    )
     assert len(df) == 81
     assert {"C [Pa]", "sigma_peak [Pa]", "sigma_end [Pa]", "relaxed_fraction [-]", "t_half [s]"} <= set(df.columns)
     t = df.attrs["time [s]"]
     for i in (0, 40, 80):  # last batch is padded: check rows in every batch
         row = df.iloc[i]
-        s = np.asarray(fake_nominal_stress(t, radius=row["radius [m]"], C=row["C [Pa]"], alpha=row["alpha [-]"],
-                                           branches=[(row["beta [-]"], row["tau [s]"])],
-                                           displacement=row["displacement [m]"], ramp_time=row["ramp_time [s]"]))
+        s = np.asarray(
+            fake_nominal_stress(
+                t,
+                radius=row["radius [m]"],
+                C=row["C [Pa]"],
+                alpha=row["alpha [-]"],
+                branches=[(row["beta [-]"], row["tau [s]"])],
+                displacement=row["displacement [m]"],
+                ramp_time=row["ramp_time [s]"],
+            )
+        )
         assert np.allclose(row["sigma [Pa]"], s, rtol=1e-13)
         assert row["sigma_peak [Pa]"] == pytest.approx(s.max(), rel=1e-13)
         assert row["sigma_end [Pa]"] == pytest.approx(s[-1], rel=1e-13)
@@ -50,14 +67,32 @@ def test_spheroid_scan_matches_direct_model():
 
 def _fake_fe(*, radius, C, alpha, beta, tau, displacement, ramp_time, end_time):
     t = scan.default_times(ramp_time, end_time)
-    s = np.asarray(fake_nominal_stress(t, radius=radius, C=C * 1.01, alpha=alpha, branches=[(beta, tau)],
-                                       displacement=displacement, ramp_time=ramp_time))
+    s = np.asarray(
+        fake_nominal_stress(
+            t,
+            radius=radius,
+            C=C * 1.01,
+            alpha=alpha,
+            branches=[(beta, tau)],
+            displacement=displacement,
+            ramp_time=ramp_time,
+        )
+    )
     return {"time": t, "nominal_stress": s}
 
 
 def test_spheroid_fe_checks_columns(tmp_path):
-    df = scan.spheroid(C=(100.0, 300.0), alpha=(0.0, 0.3), n=20, design_method="lhs", model=fake_nominal_stress,
-                       fe_checks=3, fe_function=_fake_fe, fe_executor="serial", fe_store=str(tmp_path))
+    df = scan.spheroid(
+        C=(100.0, 300.0),
+        alpha=(0.0, 0.3),
+        n=20,
+        design_method="lhs",
+        model=fake_nominal_stress,
+        fe_checks=3,
+        fe_function=_fake_fe,
+        fe_executor="serial",
+        fe_store=str(tmp_path),
+    )
     checked = df["deviation [-]"].notna()
     assert checked.sum() == 3
     # the fake FE is 1 % stiffer: deviation = 1 - 1/1.01 at every checked point
@@ -70,20 +105,24 @@ def test_spread_indices_distinct_and_spread():
     idx = scan.spread_indices(pts, 5)
     assert len(set(idx)) == 5
     chosen = pts.iloc[idx].to_numpy()
-    d = np.min([np.linalg.norm(a - b) for i, a in enumerate(chosen) for b in chosen[i + 1:]])
+    d = np.min([np.linalg.norm(a - b) for i, a in enumerate(chosen) for b in chosen[i + 1 :]])
     assert d > 0.4
 
 
 def test_blastula_scan_exact_and_bursts():
-    from reduced import blastula as red
+    from tissuemech.reduced import blastula as red
 
     df = scan.blastula(alpha=[1e-5, 0.2], outer_radius=[60e-6, 75e-6], pressure=(0.0, 150.0), n=16)
     assert len(df) == 64
     ok = ~df["bursts [-]"]
     # round trip: p(lambda_a) reproduces the scanned pressure where the shell holds
-    p = red.pressure(df.loc[ok, "inner_stretch [-]"].to_numpy(), inner_radius=df.loc[ok, "inner_radius [m]"].to_numpy(),
-                     outer_radius=df.loc[ok, "outer_radius [m]"].to_numpy(), C=df.loc[ok, "C [Pa]"].to_numpy(),
-                     alpha=df.loc[ok, "alpha [-]"].to_numpy())
+    p = red.pressure(
+        df.loc[ok, "inner_stretch [-]"].to_numpy(),
+        inner_radius=df.loc[ok, "inner_radius [m]"].to_numpy(),
+        outer_radius=df.loc[ok, "outer_radius [m]"].to_numpy(),
+        C=df.loc[ok, "C [Pa]"].to_numpy(),
+        alpha=df.loc[ok, "alpha [-]"].to_numpy(),
+    )
     assert np.allclose(np.asarray(p), df.loc[ok, "pressure [Pa]"], rtol=1e-9, atol=1e-9)
     # bursting exactly where the pressure exceeds the limit pressure
     lim = df["p_limit [Pa]"].to_numpy()
@@ -100,7 +139,7 @@ def test_validation():
 
 
 def test_spheroid_scan_with_reduced_model():
-    red = pytest.importorskip("reduced.spheroid")
+    red = pytest.importorskip("tissuemech.reduced.spheroid")
     df = scan.spheroid(C=(100.0, 300.0), beta=(0.1, 1.0), n=3, curves=True, batch_size=4, rtol=1e-10)
     fast = scan.spheroid(C=(100.0, 300.0), beta=(0.1, 1.0), n=3, curves=True, batch_size=4)  # default rtol 1e-6
     for a, b in zip(df["sigma [Pa]"], fast["sigma [Pa]"]):
@@ -108,17 +147,26 @@ def test_spheroid_scan_with_reduced_model():
     t = df.attrs["time [s]"]
     for i in (0, 8):
         row = df.iloc[i]
-        s = np.asarray(red.nominal_stress(t, radius=row["radius [m]"], C=row["C [Pa]"], alpha=row["alpha [-]"],
-                                          branches=[(row["beta [-]"], row["tau [s]"])],
-                                          displacement=row["displacement [m]"], ramp_time=row["ramp_time [s]"]))
+        s = np.asarray(
+            red.nominal_stress(
+                t,
+                radius=row["radius [m]"],
+                C=row["C [Pa]"],
+                alpha=row["alpha [-]"],
+                branches=[(row["beta [-]"], row["tau [s]"])],
+                displacement=row["displacement [m]"],
+                ramp_time=row["ramp_time [s]"],
+            )
+        )
         assert np.allclose(row["sigma [Pa]"], s, rtol=1e-8)  # jit (Kvaerno5) vs eager (Tsit5), both at rtol 1e-10
 
 
 def test_blastula_scan_fe_spot_checks_agree():
     """FE spot-checks (fem.blastula, default mesh, kappa = 2.2 GPa) against the exact shell: < 1e-5."""
-    pytest.importorskip("fem.blastula")
-    df = scan.blastula(alpha=[0.2], outer_radius=[60e-6, 75e-6], pressure=(10.0, 60.0), n=4, fe_checks=2,
-                       fe_executor="serial")
+    pytest.importorskip("tissuemech.fem.blastula")
+    df = scan.blastula(
+        alpha=[0.2], outer_radius=[60e-6, 75e-6], pressure=(10.0, 60.0), n=4, fe_checks=2, fe_executor="serial"
+    )
     checked = df["deviation [-]"].notna()
     assert checked.sum() == 2
     assert (df.loc[checked, "deviation [-]"] < 1e-5).all()
@@ -129,7 +177,9 @@ def test_user_design_points():
     pts = {"C [Pa]": [100.0, 250.0], "alpha": [0.0, 0.3]}
     df = scan.spheroid(points=pts, model=fake_nominal_stress, tau=20.0)
     ref = scan.spheroid(C=[100.0, 250.0], alpha=[0.0, 0.3], tau=20.0, model=fake_nominal_stress)
-    ref = ref[((ref["C [Pa]"] == 100.0) & (ref["alpha [-]"] == 0.0)) | ((ref["C [Pa]"] == 250.0) & (ref["alpha [-]"] == 0.3))]
+    ref = ref[
+        ((ref["C [Pa]"] == 100.0) & (ref["alpha [-]"] == 0.0)) | ((ref["C [Pa]"] == 250.0) & (ref["alpha [-]"] == 0.3))
+    ]
     assert np.allclose(df["sigma_end [Pa]"].to_numpy(), ref["sigma_end [Pa]"].to_numpy(), rtol=1e-13)
     with pytest.raises(ValueError, match="unknown columns"):
         scan.blastula(points={"E": [1.0]})

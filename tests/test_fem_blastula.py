@@ -5,7 +5,7 @@ import pytest
 from scipy.integrate import quad
 from scipy.optimize import brentq, minimize_scalar
 
-from fem.blastula import LimitPointError, inflate
+from tissuemech.fem.blastula import LimitPointError, inflate
 
 A, B, C = 50e-6, 75e-6, 200.0
 
@@ -13,7 +13,7 @@ A, B, C = 50e-6, 75e-6, 200.0
 def p_exact(la, a0=A, b0=B, c=C, alpha=0.2):
     """p(lambda_a) = int_{lambda_b}^{lambda_a} 4 C exp(alpha (2 l^2 + l^-4 - 3)) (l^3 + 1)/l^5 dl."""
     lb = (1 + (la**3 - 1) * (a0 / b0) ** 3) ** (1 / 3)
-    g = lambda l: 4 * c * np.exp(alpha * (2 * l**2 + l**-4 - 3)) * (l**3 + 1) / l**5  # noqa: E731
+    g = lambda l: 4 * c * np.exp(alpha * (2 * l**2 + l**-4 - 3)) * (l**3 + 1) / l**5
     return quad(g, lb, la, epsabs=0, epsrel=1e-13)[0]
 
 
@@ -49,8 +49,8 @@ def test_mesh_refinement_reduces_error():
 
 def test_displacement_only_low_order_locks():
     kw = dict(inner_radius=A, outer_radius=B, C=C, alpha=0.2, pressures=[100.0, 200.0])
-    from fem.blastula import _make_mesh  # noqa: F401  (same divisions, Q1 geometry)
-    from fem.mesh import shell_section
+    from tissuemech.fem.blastula import _make_mesh  # noqa: F401  (same divisions, Q1 geometry)
+    from tissuemech.fem.mesh import shell_section
 
     mixed = inflate(**kw, mesh=(4, 8))
     q1 = inflate(**kw, mesh=shell_section(A, B, 4, 8, order=1), formulation="displacement")
@@ -62,16 +62,25 @@ def test_displacement_only_low_order_locks():
 
 
 def test_neo_hookean_limit_point_load_control_and_arclength():
-    lim = minimize_scalar(lambda l: -p_exact(l, alpha=0.0), bounds=(1.1, 3.0), method="bounded",
-                          options={"xatol": 1e-10})
+    lim = minimize_scalar(
+        lambda l: -p_exact(l, alpha=0.0), bounds=(1.1, 3.0), method="bounded", options={"xatol": 1e-10}
+    )
     pmax, lam_max = -lim.fun, lim.x
     with pytest.raises(LimitPointError) as ei:
         inflate(inner_radius=A, outer_radius=B, C=C, alpha=1e-5, pressures=np.linspace(0, 250, 6), mesh="coarse")
     last = ei.value.last_converged
     assert 0.97 * pmax < last < 1.01 * pmax
     assert "arclength" in str(ei.value)
-    r = inflate(inner_radius=A, outer_radius=B, C=C, alpha=1e-5, pressures=[20.0], mesh="coarse",
-                method="arclength", max_inner_stretch=1.25 * lam_max)
+    r = inflate(
+        inner_radius=A,
+        outer_radius=B,
+        C=C,
+        alpha=1e-5,
+        pressures=[20.0],
+        mesh="coarse",
+        method="arclength",
+        max_inner_stretch=1.25 * lam_max,
+    )
     assert abs(r.pressure.max() / pmax - 1) < 5e-3
     assert r.inner_stretch[-1] >= 1.2 * lam_max
     # the falling branch: past the limit the pressure decreases and matches the exact curve
@@ -107,20 +116,23 @@ def test_fields_export_and_plot(tmp_path):
     assert (tmp_path / "vm.png").stat().st_size > 1000
 
 
-@pytest.mark.parametrize("kw, msg", [
-    (dict(inner_radius=-1e-6), "inner_radius"),
-    (dict(outer_radius=40e-6), "inner"),
-    (dict(C=0.0), "C"),
-    (dict(alpha=-0.1), "alpha"),
-    (dict(kappa=-1.0), "kappa"),
-    (dict(pressures=[100.0, 50.0]), "sorted"),
-    (dict(pressures=[-1.0]), ">= 0"),
-    (dict(pressures=[np.nan]), "finite"),
-    (dict(mesh="huge"), "mesh"),
-    (dict(mesh=(0, 3)), "mesh"),
-    (dict(method="riks"), "method"),
-    (dict(method="arclength"), "max_inner_stretch"),
-])
+@pytest.mark.parametrize(
+    "kw, msg",
+    [
+        (dict(inner_radius=-1e-6), "inner_radius"),
+        (dict(outer_radius=40e-6), "inner"),
+        (dict(C=0.0), "C"),
+        (dict(alpha=-0.1), "alpha"),
+        (dict(kappa=-1.0), "kappa"),
+        (dict(pressures=[100.0, 50.0]), "sorted"),
+        (dict(pressures=[-1.0]), ">= 0"),
+        (dict(pressures=[np.nan]), "finite"),
+        (dict(mesh="huge"), "mesh"),
+        (dict(mesh=(0, 3)), "mesh"),
+        (dict(method="riks"), "method"),
+        (dict(method="arclength"), "max_inner_stretch"),
+    ],
+)
 def test_input_validation(kw, msg):
     args = dict(inner_radius=A, outer_radius=B, C=C, alpha=0.2, pressures=[100.0])
     args.update(kw)
@@ -130,6 +142,14 @@ def test_input_validation(kw, msg):
 
 def test_mixed_kappa_error_scales_as_one_over_kappa():
     """No locking over kappa/C = 1e3..1e4: the compressibility error falls 10x per decade of kappa."""
-    errs = [abs(inflate(inner_radius=50e-6, outer_radius=75e-6, C=200.0, alpha=0.2, pressures=[500.0],
-                        mesh="coarse", kappa=k).inner_stretch[-1] / la_exact(500.0) - 1) for k in (2e5, 2e6)]
+    errs = [
+        abs(
+            inflate(
+                inner_radius=50e-6, outer_radius=75e-6, C=200.0, alpha=0.2, pressures=[500.0], mesh="coarse", kappa=k
+            ).inner_stretch[-1]
+            / la_exact(500.0)
+            - 1
+        )
+        for k in (2e5, 2e6)
+    ]
     assert 8 < errs[0] / errs[1] < 12

@@ -8,7 +8,7 @@ with (1 + beta) C for a ramp much faster than tau) and against the reduced visco
 import numpy as np
 import pytest
 
-from fem.blastula import NewtonError, creep, inflate
+from tissuemech.fem.blastula import NewtonError, creep, inflate
 
 A, B, C = 50e-6, 75e-6, 200.0
 GEO = dict(inner_radius=A, outer_radius=B, C=C)
@@ -32,8 +32,17 @@ def test_beta_zero_reproduces_the_elastic_inflate_on_ramp_and_hold():
 
 def test_long_time_limit_is_the_elastic_curve_two_branches():
     br = [(0.5, 2.0), (0.3, 5.0)]
-    r = creep(**GEO, alpha=0.2, branches=br, pressure=300.0, ramp_time=1.0, end_time=3000.0, mesh="coarse",
-              n_ramp=4, n_hold=30)
+    r = creep(
+        **GEO,
+        alpha=0.2,
+        branches=br,
+        pressure=300.0,
+        ramp_time=1.0,
+        end_time=3000.0,
+        mesh="coarse",
+        n_ramp=4,
+        n_hold=30,
+    )
     el = inflate(**GEO, alpha=0.2, pressures=[300.0], mesh="coarse")
     assert r.inner_stretch[-1] == pytest.approx(el.inner_stretch[-1], rel=1e-9)
     assert r.outer_stretch[-1] == pytest.approx(el.outer_stretch[-1], rel=1e-9)
@@ -46,7 +55,7 @@ def test_long_time_limit_is_the_elastic_curve_two_branches():
 
 def test_fast_ramp_gives_the_instantaneous_stiffer_shell():
     """A ramp 1e5 x shorter than tau: Q_m -> beta_m S_iso, the shell of (1 + beta) C."""
-    from reduced import blastula as red
+    from tissuemech.reduced import blastula as red
 
     beta, p = 0.5, 300.0
     r = creep(**GEO, alpha=0.2, branches=[(beta, 100.0)], pressure=p, ramp_time=1e-3, end_time=1e-3, n_ramp=6)
@@ -67,7 +76,7 @@ ISSUE = dict(**GEO, alpha=0.2, branches=[(0.5, 100.0)])  # issue 5: 300 Pa in 1 
 @pytest.fixture(scope="module")
 def issue_case():
     """FE (default mesh and steps) and the reduced shell at the FE step times (one JAX compilation)."""
-    from reduced import viscoshell as vs
+    from tissuemech.reduced import viscoshell as vs
 
     r = creep(**ISSUE, pressure=300.0, ramp_time=1.0, end_time=601.0, times=[60.0, 300.0])
     return r, vs.inflate(r.time, pressure=300.0, ramp_time=1.0, **ISSUE)
@@ -88,8 +97,13 @@ def test_time_step_convergence_in_the_hold(issue_case):
     """The exponential Maxwell update is (at least) second order: 2 x the hold steps, >= 4 x smaller error."""
     _, red = issue_case
     ref = float(red.inner_stretch[-1])  # t = 601 s
-    errs = [abs(creep(**ISSUE, pressure=300.0, ramp_time=1.0, end_time=601.0, n_ramp=4, n_hold=n).inner_stretch[-1]
-                / ref - 1) for n in (15, 30)]
+    errs = [
+        abs(
+            creep(**ISSUE, pressure=300.0, ramp_time=1.0, end_time=601.0, n_ramp=4, n_hold=n).inner_stretch[-1] / ref
+            - 1
+        )
+        for n in (15, 30)
+    ]
     assert errs[1] < 1e-3 < errs[0]  # 15 hold steps are too few for 1e-3, 30 are enough
     assert 3.5 < errs[0] / errs[1] < 8.0  # measured 5.0 (and 5.8 for 30 -> 60)
 
@@ -97,25 +111,37 @@ def test_time_step_convergence_in_the_hold(issue_case):
 def test_creep_past_the_relaxed_limit_point_raises_a_clear_error():
     # neo-Hookean: relaxed limit ~197 Pa, instantaneous (1 + 1.2) C ~434 Pa: 250 Pa holds, then bursts
     with pytest.raises(NewtonError, match="bursts") as ei:
-        creep(**GEO, alpha=0.0, branches=[(1.2, 20.0)], pressure=250.0, ramp_time=1.0, end_time=600.0,
-              mesh="coarse", n_ramp=4, n_hold=10)
+        creep(
+            **GEO,
+            alpha=0.0,
+            branches=[(1.2, 20.0)],
+            pressure=250.0,
+            ramp_time=1.0,
+            end_time=600.0,
+            mesh="coarse",
+            n_ramp=4,
+            n_hold=10,
+        )
     assert "limit_point" in str(ei.value)
 
 
-@pytest.mark.parametrize("kw, msg", [
-    (dict(pressure=-1.0), "pressure"),
-    (dict(pressure=np.nan), "pressure"),
-    (dict(ramp_time=0.0), "ramp_time"),
-    (dict(end_time=0.5), "end_time"),
-    (dict(branches=[(-0.1, 10.0)]), "beta"),
-    (dict(branches=[(0.5, 0.0)]), "tau"),
-    (dict(branches=[0.5]), "pair"),
-    (dict(n_hold=0), "n_hold"),
-    (dict(times=[700.0]), "times"),
-    (dict(C=-1.0), "C"),
-    (dict(outer_radius=40e-6), "inner"),
-    (dict(mesh="huge"), "mesh"),
-])
+@pytest.mark.parametrize(
+    "kw, msg",
+    [
+        (dict(pressure=-1.0), "pressure"),
+        (dict(pressure=np.nan), "pressure"),
+        (dict(ramp_time=0.0), "ramp_time"),
+        (dict(end_time=0.5), "end_time"),
+        (dict(branches=[(-0.1, 10.0)]), "beta"),
+        (dict(branches=[(0.5, 0.0)]), "tau"),
+        (dict(branches=[0.5]), "pair"),
+        (dict(n_hold=0), "n_hold"),
+        (dict(times=[700.0]), "times"),
+        (dict(C=-1.0), "C"),
+        (dict(outer_radius=40e-6), "inner"),
+        (dict(mesh="huge"), "mesh"),
+    ],
+)
 def test_input_validation(kw, msg):
     args = dict(**GEO, alpha=0.2, branches=[(0.5, 100.0)], pressure=300.0, ramp_time=1.0, end_time=601.0)
     args.update(kw)

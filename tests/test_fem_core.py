@@ -4,12 +4,12 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from fem import constitutive as cm
-from fem.forms import Assembler, Material
-from fem.kinematics import IDENTITY5, invariants, second_from_first, first_from_second
-from fem.mesh import ball_section, graded_points, shell_section
-from fem.newton import NewtonError, newton
-from reduced.material import fung_energy
+from tissuemech.fem import constitutive as cm
+from tissuemech.fem.forms import Assembler, Material
+from tissuemech.fem.kinematics import IDENTITY5, first_from_second, invariants, second_from_first
+from tissuemech.fem.mesh import ball_section, graded_points, shell_section
+from tissuemech.fem.newton import NewtonError, newton
+from tissuemech.reduced.material import fung_energy
 
 RNG = np.random.default_rng(7)
 
@@ -120,20 +120,20 @@ def test_follower_pressure_tangent_and_resultant():
     u = np.zeros(a.ndof)
     u[: a.n_u] = e * m.X.T.ravel()
     F, _ = a.follower_pressure(u, 0.7, m.edges["inner"], tangent=False)
-    assert abs(F[1:a.n_u:2].sum() - 0.7 * np.pi * (1 + e) ** 2) < 1e-12
+    assert abs(F[1 : a.n_u : 2].sum() - 0.7 * np.pi * (1 + e) ** 2) < 1e-12
 
 
 def test_newton_quadratic_convergence_and_clear_error():
-    fun = lambda x: (np.array([x[0] ** 3 - 8.0]), sp.csr_matrix([[3 * x[0] ** 2]]))  # noqa: E731
+    fun = lambda x: (np.array([x[0] ** 3 - 8.0]), sp.csr_matrix([[3 * x[0] ** 2]]))
     res = newton(fun, np.array([3.0]), rtol=1e-14, xtol=1e-14)
     assert abs(res.x[0] - 2.0) < 1e-14
     h = res.residuals
     assert h[-2] < 1e-3 and h[-1] < 10 * h[-2] ** 2 + 1e-15  # quadratic
-    sing = lambda x: (np.array([1.0]), sp.csr_matrix([[0.0]]))  # noqa: E731
+    sing = lambda x: (np.array([1.0]), sp.csr_matrix([[0.0]]))
     with pytest.raises(NewtonError) as ei:
         newton(sing, np.array([0.0]), load="p = 5 Pa")
     assert "p = 5 Pa" in str(ei.value) and ei.value.residuals and ei.value.hint
-    bad = lambda x: (np.array([x[0] - 1.0]), sp.csr_matrix([[1.0]]))  # noqa: E731
+    bad = lambda x: (np.array([x[0] - 1.0]), sp.csr_matrix([[1.0]]))
     with pytest.raises(NewtonError, match="line search"):
         newton(bad, np.array([0.0]), admissible=lambda x: "J <= 0" if x[0] > 0.001 else None)
 
@@ -161,14 +161,12 @@ def test_ball_under_outer_follower_pressure_compresses_uniformly():
     assert abs(a.volume(res.x) / a.volume() - lam**3) < 1e-10
 
 
-
 def test_arc_length_passes_a_limit_point_and_load_control_stops_there():
     """lam(x) = x exp(-x) has a maximum 1/e at x = 1: Riks passes it, load control reports it."""
-    from fem.continuation import LimitPointError, arc_length, load_control
+    from tissuemech.fem.continuation import LimitPointError, arc_length, load_control
 
     def fun(x, lam):
-        return (np.array([x[0] * np.exp(-x[0]) - lam]), sp.csr_matrix([[(1 - x[0]) * np.exp(-x[0])]]),
-                np.array([-1.0]))
+        return (np.array([x[0] * np.exp(-x[0]) - lam]), sp.csr_matrix([[(1 - x[0]) * np.exp(-x[0])]]), np.array([-1.0]))
 
     path = arc_length(fun, np.array([0.0]), 0.0, 0.05, stop=lambda x, lam: x[0] >= 2.0, rtol=1e-12)
     xs = np.array([p[1][0] for p in path])
@@ -178,8 +176,14 @@ def test_arc_length_passes_a_limit_point_and_load_control_stops_there():
     assert abs(lams.max() - np.exp(-1)) < 2e-3
 
     def solve(lam, guess):
-        return newton(lambda x: fun(x, lam)[:2], guess, rtol=1e-12, xtol=1e-12, load=lam,
-                      admissible=lambda x: "past the maximum" if x[0] > 1.5 else None)
+        return newton(
+            lambda x: fun(x, lam)[:2],
+            guess,
+            rtol=1e-12,
+            xtol=1e-12,
+            load=lam,
+            admissible=lambda x: "past the maximum" if x[0] > 1.5 else None,
+        )
 
     with pytest.raises(LimitPointError) as ei:
         load_control(solve, np.linspace(0.05, 0.5, 10), np.array([0.0]), monitor=lambda x: x[0])

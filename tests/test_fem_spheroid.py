@@ -6,15 +6,14 @@ import numpy as np
 import pytest
 from scipy.optimize import curve_fit
 
-from fem import viscoelastic as ve
-from fem.mesh import ball_section
-from fem.newton import NewtonError, symmetric_solve, sparse_solve
-from fem.spheroid import compress, hertz_force, make_mesh
-from fem.timestepping import march, ramp_hold_schedule
+from tissuemech.fem import viscoelastic as ve
+from tissuemech.fem.mesh import ball_section
+from tissuemech.fem.newton import NewtonError, sparse_solve, symmetric_solve
+from tissuemech.fem.spheroid import compress, hertz_force, make_mesh
+from tissuemech.fem.timestepping import march, ramp_hold_schedule
 
 A0 = 500e-6
-FIG10 = dict(radius=A0, C=150.0, alpha=0.2, branches=[(0.4, 200.0)], displacement=50e-6, ramp_time=0.2,
-             end_time=1500.0)
+FIG10 = dict(radius=A0, C=150.0, alpha=0.2, branches=[(0.4, 200.0)], displacement=50e-6, ramp_time=0.2, end_time=1500.0)
 
 
 # ---- viscoelastic recursion ------------------------------------------------------------------
@@ -78,11 +77,11 @@ def test_schedule_and_cutback():
 
 def test_symmetric_solve_matches_pivoted_lu():
     m = make_mesh(0, A0)
-    from fem.forms import Assembler, Material
+    from tissuemech.fem.forms import Assembler, Material
 
     asm = Assembler(m)
     x = np.zeros(asm.ndof)
-    x[:asm.n_u] = 1e-3 * np.sin(np.arange(asm.n_u))
+    x[: asm.n_u] = 1e-3 * np.sin(np.arange(asm.n_u))
     _, K = asm.internal(x, Material(1.0, 0.2, 1e7))
     fixed = np.concatenate([2 * m.nodes["axis"], 2 * m.nodes["symmetry"] + 1, 2 * m.nodes["outer"] + 1])
     free = np.setdiff1d(np.arange(asm.ndof), fixed)
@@ -99,8 +98,17 @@ def fig10_coarse():
 
 @pytest.fixture(scope="module")
 def static_coarse():
-    return compress(radius=A0, C=150.0, alpha=0.2, branches=(), displacement=50e-6, ramp_time=1.0, end_time=1.0,
-                    mesh="coarse", static=True)
+    return compress(
+        radius=A0,
+        C=150.0,
+        alpha=0.2,
+        branches=(),
+        displacement=50e-6,
+        ramp_time=1.0,
+        end_time=1.0,
+        mesh="coarse",
+        static=True,
+    )
 
 
 def test_contact_force_equals_midplane_reaction_and_signorini(fig10_coarse):
@@ -123,8 +131,9 @@ def test_relaxation_time_and_long_time_force(fig10_coarse, static_coarse):
     r = fig10_coarse
     hold = r.time > 0.2 + 1e-9
     t, F = r.time[hold], r.force[hold]
-    (Finf, amp, tau), _ = curve_fit(lambda t, a, b, c: a + b * np.exp(-(t - 0.2) / c), t, F,
-                                    p0=(F[-1], F[0] - F[-1], 100.0))
+    (Finf, amp, tau), _ = curve_fit(
+        lambda t, a, b, c: a + b * np.exp(-(t - 0.2) / c), t, F, p0=(F[-1], F[0] - F[-1], 100.0)
+    )
     assert abs(tau / 200.0 - 1) < 0.01
     F_eq = static_coarse.force[-1]
     beta, tau0, tr = 0.4, 200.0, 0.2
@@ -138,7 +147,7 @@ def test_relaxation_time_and_long_time_force(fig10_coarse, static_coarse):
 
 
 def test_callable_history_matches_ramp_hold(fig10_coarse):
-    d = lambda t: 50e-6 * min(t / 0.2, 1.0)  # noqa: E731
+    d = lambda t: 50e-6 * min(t / 0.2, 1.0)
     r = compress(**{**FIG10, "displacement": d, "end_time": 20.0}, mesh="coarse")
     ref = fig10_coarse
     assert np.isclose(np.interp(20.0, r.time, r.force), np.interp(20.0, ref.time, ref.force), rtol=2e-3)
@@ -146,9 +155,10 @@ def test_callable_history_matches_ramp_hold(fig10_coarse):
 
 def test_unloading_releases_contact():
     """Load-unload: contact nodes are released as the plate goes back up; the force goes to zero."""
-    d = lambda t: 40e-6 * (1 - abs(t - 1.0))  # noqa: E731  (0 -> 40 um -> 0 over 2 s)
-    r = compress(radius=A0, C=200.0, alpha=0.0, branches=(), displacement=d, ramp_time=1.0, end_time=1.9,
-                 mesh="coarse", n_hold=6)
+    d = lambda t: 40e-6 * (1 - abs(t - 1.0))
+    r = compress(
+        radius=A0, C=200.0, alpha=0.0, branches=(), displacement=d, ramp_time=1.0, end_time=1.9, mesh="coarse", n_hold=6
+    )
     k = np.argmax(r.force)
     assert r.contact_radius[-1] < r.contact_radius[k]
     assert r.force[-1] < 0.1 * r.force[k]
@@ -163,8 +173,18 @@ def test_static_monotone_and_hertz_limit(static_coarse):
 
 def test_hertz_small_approach_on_pole_refined_mesh():
     m = ball_section(A0, 12, 8, grading=3.0, pole_grading=20.0)
-    r = compress(radius=A0, C=200.0, alpha=0.0, branches=(), displacement=2 * A0 * 0.002, ramp_time=1.0,
-                 end_time=1.0, mesh=m, static=True, n_static=4)
+    r = compress(
+        radius=A0,
+        C=200.0,
+        alpha=0.0,
+        branches=(),
+        displacement=2 * A0 * 0.002,
+        ramp_time=1.0,
+        end_time=1.0,
+        mesh=m,
+        static=True,
+        n_static=4,
+    )
     ratio = r.force[-1] / hertz_force(r.approach[-1], A0, 200.0)
     assert abs(ratio - 1) < 0.03
     a_hertz = np.sqrt(A0 * r.approach[-1] / 2)
@@ -185,17 +205,20 @@ def test_outputs_vtu_and_plots(fig10_coarse, tmp_path):
     assert np.all(r.newton_iterations >= 1)
 
 
-@pytest.mark.parametrize("kw, msg", [
-    (dict(radius=-1.0), "radius"),
-    (dict(C=0.0), "C"),
-    (dict(alpha=-0.1), "alpha"),
-    (dict(branches=[(0.4, -1.0)]), "tau"),
-    (dict(displacement=0.9e-3), "squeeze"),
-    (dict(end_time=0.1), "end_time"),
-    (dict(mesh="huge"), "mesh"),
-    (dict(mesh=9), "mesh level"),
-    (dict(field_times=[2000.0]), "field_times"),
-])
+@pytest.mark.parametrize(
+    "kw, msg",
+    [
+        (dict(radius=-1.0), "radius"),
+        (dict(C=0.0), "C"),
+        (dict(alpha=-0.1), "alpha"),
+        (dict(branches=[(0.4, -1.0)]), "tau"),
+        (dict(displacement=0.9e-3), "squeeze"),
+        (dict(end_time=0.1), "end_time"),
+        (dict(mesh="huge"), "mesh"),
+        (dict(mesh=9), "mesh level"),
+        (dict(field_times=[2000.0]), "field_times"),
+    ],
+)
 def test_bad_input_messages(kw, msg):
     with pytest.raises(ValueError, match=msg):
         compress(**{**FIG10, **kw})
@@ -205,8 +228,17 @@ def test_bad_input_messages(kw, msg):
 @pytest.mark.slow
 def test_static_to_30_percent_and_40():
     for x, n in [(0.3, None), (0.4, 40)]:
-        r = compress(radius=A0, C=200.0, alpha=0.2, branches=(), displacement=2 * A0 * x, ramp_time=1.0,
-                     end_time=1.0, static=True, n_static=n)
+        r = compress(
+            radius=A0,
+            C=200.0,
+            alpha=0.2,
+            branches=(),
+            displacement=2 * A0 * x,
+            ramp_time=1.0,
+            end_time=1.0,
+            static=True,
+            n_static=n,
+        )
         assert np.isclose(r.approach[-1], 2 * A0 * x)
         assert np.all(np.diff(r.force) > 0)
         assert np.max(np.abs(r.force - r.reaction_force) / r.force) < 1e-6
@@ -214,8 +246,16 @@ def test_static_to_30_percent_and_40():
 
 @pytest.mark.slow
 def test_fig8_9_case_and_default_mesh_fig10():
-    r = compress(radius=A0, C=200.0, alpha=0.2, branches=[(1.2, 200.0)], displacement=200e-6, ramp_time=0.2,
-                 end_time=1500.0, field_times=[0.2, 1497.0])
+    r = compress(
+        radius=A0,
+        C=200.0,
+        alpha=0.2,
+        branches=[(1.2, 200.0)],
+        displacement=200e-6,
+        ramp_time=0.2,
+        end_time=1500.0,
+        field_times=[0.2, 1497.0],
+    )
     assert np.max(np.abs(r.force - r.reaction_force) / r.force) < 1e-6
     assert r.force[-1] < 0.5 * r.force[r.time == 0.2][0]
     assert any(np.isclose(f.time, 1497.0) for f in r.fields)

@@ -9,8 +9,8 @@ import pytest
 from scipy.integrate import quad
 from scipy.optimize import brentq
 
-import reduced  # noqa: F401  (x64)
-from reduced import blastula as bl
+import tissuemech.reduced  # noqa: F401  (x64)
+from tissuemech.reduced import blastula as bl
 
 A = 50e-6
 C = 200.0
@@ -28,14 +28,14 @@ def nh_closed_decimal(la: float, A: float, B: float, C: float) -> float:
     getcontext().prec = 50
     la, A, B, C = (Decimal(float(v)) for v in (la, A, B, C))
     lb = (1 + (la**3 - 1) * (A / B) ** 3) ** (Decimal(1) / 3)
-    f = lambda l: 1 / l + 1 / (4 * l**4)  # noqa: E731
+    f = lambda l: 1 / l + 1 / (4 * l**4)
     return float(4 * C * (f(lb) - f(la)))
 
 
 def fung_quad(la, A, B, C, alpha):
     k = (A / B) ** 3
     lb = (1.0 + (la**3 - 1.0) * k) ** (1.0 / 3.0)
-    g = lambda l: 4 * C * np.exp(alpha * (2 * l * l + l**-4 - 3)) * (l**3 + 1) / l**5  # noqa: E731
+    g = lambda l: 4 * C * np.exp(alpha * (2 * l * l + l**-4 - 3)) * (l**3 + 1) / l**5
     return quad(g, lb, la, epsabs=0.0, epsrel=1e-13, limit=200)[0]
 
 
@@ -110,8 +110,10 @@ def test_pressure_derivative_closed_form():
     for alpha in (0.0, 0.2):
         d = np.asarray(bl.pressure_derivative(la, **GEO, C=C, alpha=alpha))
         h = 1e-6
-        fd = (np.asarray(bl.pressure(la + h, **GEO, C=C, alpha=alpha))
-              - np.asarray(bl.pressure(la - h, **GEO, C=C, alpha=alpha))) / (2 * h)
+        fd = (
+            np.asarray(bl.pressure(la + h, **GEO, C=C, alpha=alpha))
+            - np.asarray(bl.pressure(la - h, **GEO, C=C, alpha=alpha))
+        ) / (2 * h)
         np.testing.assert_allclose(d, fd, rtol=1e-7)
 
 
@@ -210,20 +212,20 @@ def _fd_check(f, args, rel=1e-6, rtol=1e-6, alpha_index=2):
 
 
 def test_grad_pressure():
-    f = lambda la, C_, al, A_, B_: bl.pressure(la, inner_radius=A_, outer_radius=B_, C=C_, alpha=al)  # noqa: E731
+    f = lambda la, C_, al, A_, B_: bl.pressure(la, inner_radius=A_, outer_radius=B_, C=C_, alpha=al)
     _fd_check(f, (1.7, 200.0, 0.2, 50e-6, 75e-6))
     _fd_check(f, (1.2, 150.0, 1e-5, 50e-6, 60e-6))
 
 
 def test_grad_inverse():
-    f = lambda p, C_, al, A_, B_: bl.inner_stretch(p, inner_radius=A_, outer_radius=B_, C=C_, alpha=al)  # noqa: E731
+    f = lambda p, C_, al, A_, B_: bl.inner_stretch(p, inner_radius=A_, outer_radius=B_, C=C_, alpha=al)
     _fd_check(f, (150.0, 200.0, 0.05, 50e-6, 75e-6))
     _fd_check(f, (800.0, 200.0, 0.2, 50e-6, 75e-6))
 
 
 def test_grad_limit_point():
     for j in (0, 1):
-        f = lambda C_, al, A_, B_: bl.limit_point(inner_radius=A_, outer_radius=B_, C=C_, alpha=al)[j]  # noqa: E731
+        f = lambda C_, al, A_, B_: bl.limit_point(inner_radius=A_, outer_radius=B_, C=C_, alpha=al)[j]
         _fd_check(f, (200.0, 0.01, 50e-6, 75e-6), rel=1e-5, rtol=1e-5, alpha_index=1)
 
 

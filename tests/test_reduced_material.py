@@ -5,8 +5,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-import reduced  # noqa: F401  (enables x64)
-from reduced import material as m
+import tissuemech.reduced  # noqa: F401  (enables x64)
+from tissuemech.reduced import material as m
 
 
 def test_neo_hookean_limit_is_exact():

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from reduced import spheroid as sp
-from reduced.interp import Spline1D, Spline2D
+from tissuemech.reduced import spheroid as sp
+from tissuemech.reduced.interp import Spline1D, Spline2D
 
 A0, D, TR = 500e-6, 50e-6, 0.2
 T = np.concatenate([np.linspace(0.0, TR, 11), np.geomspace(TR, 1500.0, 40)[1:]])
@@ -22,10 +22,11 @@ def reference_force(t, C, beta, tau, delta=D, tr=TR):
     """F_eq + q by adaptive quadrature of the convolution q = beta int e^{-(t-s)/tau} dF_eq/ds ds."""
     s = min(t, tr)
     rate = delta / tr
-    dfeq = lambda u: 1.5 * hertz(rate * u, C) / u if u > 0 else 0.0  # noqa: E731
+    dfeq = lambda u: 1.5 * hertz(rate * u, C) / u if u > 0 else 0.0
     pts = [max(0.0, s - 30 * tau)] if 0 < s - 30 * tau else None  # a stiff kernel lives in the last ~30 tau
-    q = quad(lambda u: beta * dfeq(u) * np.exp(-(s - u) / tau), 0.0, s, epsabs=0, epsrel=1e-13, limit=200,
-             points=pts)[0]
+    q = quad(lambda u: beta * dfeq(u) * np.exp(-(s - u) / tau), 0.0, s, epsabs=0, epsrel=1e-13, limit=200, points=pts)[
+        0
+    ]
     return hertz(rate * s, C) + q * np.exp(-max(t - tr, 0.0) / tau)
 
 
@@ -33,7 +34,9 @@ def test_hertz_master_curve():
     # F = (4/3) E* sqrt(a0) (delta/2)^1.5 with E* = 8C  <=>  f(x) = (32/3) x^1.5, x = delta / (2 a0)
     x = D / (2 * A0)
     assert float(sp.hertz_f(x)) * 150.0 * A0**2 == pytest.approx(hertz(D), rel=1e-14)
-    assert float(sp.equilibrium_force(D, radius=A0, C=150.0, alpha=0.2, equilibrium="hertz")) == pytest.approx(hertz(D), rel=1e-14)
+    assert float(sp.equilibrium_force(D, radius=A0, C=150.0, alpha=0.2, equilibrium="hertz")) == pytest.approx(
+        hertz(D), rel=1e-14
+    )
     assert float(jax.grad(sp.hertz_f)(0.0)) == 0.0  # finite slope at first contact
 
 
@@ -71,7 +74,7 @@ def test_two_branches_superpose():
 
 
 def test_general_history_equals_ramp():
-    hist = lambda t: D * jnp.minimum(t / TR, 1.0)  # noqa: E731
+    hist = lambda t: D * jnp.minimum(t / TR, 1.0)
     Fh = np.asarray(sp.force(T, **{**FIG10, "displacement": hist, "ramp_time": None}, jump_times=[TR]))
     F = np.asarray(sp.force(T, **FIG10))
     assert np.max(np.abs(Fh - F)) < 1e-7 * F.max()
@@ -100,33 +103,79 @@ def test_gradients_forward_and_reverse_agree_with_finite_differences():
     t = jnp.array([0.1, 0.2, 300.0])
 
     def model(p, adjoint):
-        return sp.force(t, radius=A0, C=p[0], alpha=0.2, branches=[(p[1], p[2])], displacement=D,
-                        ramp_time=TR, adjoint=adjoint, equilibrium="hertz")
+        return sp.force(
+            t,
+            radius=A0,
+            C=p[0],
+            alpha=0.2,
+            branches=[(p[1], p[2])],
+            displacement=D,
+            ramp_time=TR,
+            adjoint=adjoint,
+            equilibrium="hertz",
+        )
 
     p = jnp.array([150.0, 0.4, 200.0])
     Jf = np.asarray(jax.jacfwd(lambda q: model(q, "forward"))(p))
     Jr = np.asarray(jax.jacrev(lambda q: model(q, "reverse"))(p))
     h = np.array([1e-3, 1e-6, 1e-3])
-    Jfd = np.stack([(np.asarray(model(p.at[k].add(h[k]), "reverse")) - np.asarray(model(p.at[k].add(-h[k]), "reverse")))
-                    / (2 * h[k]) for k in range(3)], axis=1)
+    Jfd = np.stack(
+        [
+            (np.asarray(model(p.at[k].add(h[k]), "reverse")) - np.asarray(model(p.at[k].add(-h[k]), "reverse")))
+            / (2 * h[k])
+            for k in range(3)
+        ],
+        axis=1,
+    )
     assert np.allclose(Jf, Jr, rtol=1e-8, atol=1e-20)
     assert np.allclose(Jf, Jfd, rtol=1e-5, atol=1e-16)
     # through the calibrated table: d sigma / d alpha (the spline is differentiable in alpha)
     if sp.DATA_FILE.exists():
-        s = lambda a: sp.nominal_stress(t, radius=A0, C=150.0, alpha=a, branches=[(0.4, 200.0)],  # noqa: E731
-                                        displacement=150e-6, ramp_time=TR, equilibrium="fem", rtol=1e-13, atol=1e-13)
-        da = np.asarray(jax.jacfwd(lambda a: sp.nominal_stress(
-            t, radius=A0, C=150.0, alpha=a, branches=[(0.4, 200.0)], displacement=150e-6, ramp_time=TR,
-            equilibrium="fem", adjoint="forward"))(0.25))
+        s = lambda a: sp.nominal_stress(
+            t,
+            radius=A0,
+            C=150.0,
+            alpha=a,
+            branches=[(0.4, 200.0)],
+            displacement=150e-6,
+            ramp_time=TR,
+            equilibrium="fem",
+            rtol=1e-13,
+            atol=1e-13,
+        )
+        da = np.asarray(
+            jax.jacfwd(
+                lambda a: sp.nominal_stress(
+                    t,
+                    radius=A0,
+                    C=150.0,
+                    alpha=a,
+                    branches=[(0.4, 200.0)],
+                    displacement=150e-6,
+                    ramp_time=TR,
+                    equilibrium="fem",
+                    adjoint="forward",
+                )
+            )(0.25)
+        )
         fd = (np.asarray(s(0.25 + 2e-3)) - np.asarray(s(0.25 - 2e-3))) / 4e-3  # adaptive steps: not too small an h
         assert np.all(da > 0)  # stiffer with alpha
         assert np.allclose(da, fd, rtol=1e-4)
 
 
 def test_jit_and_vmap_on_public_api():
-    f = jax.jit(lambda C, b: sp.nominal_stress(jnp.array([0.2, 100.0]), radius=A0, C=C, alpha=0.2,
-                                               branches=[(b, 200.0)], displacement=D, ramp_time=TR,
-                                               equilibrium="hertz"))
+    f = jax.jit(
+        lambda C, b: sp.nominal_stress(
+            jnp.array([0.2, 100.0]),
+            radius=A0,
+            C=C,
+            alpha=0.2,
+            branches=[(b, 200.0)],
+            displacement=D,
+            ramp_time=TR,
+            equilibrium="hertz",
+        )
+    )
     out = jax.vmap(f)(jnp.array([100.0, 200.0]), jnp.array([0.2, 0.4]))
     ref = np.asarray(sp.nominal_stress([0.2, 100.0], **{**FIG10, "C": 200.0}))
     assert np.allclose(out[1], ref, rtol=1e-8)  # traced: Kvaerno5; eager non-stiff: Tsit5 (both rtol 1e-10)
@@ -139,7 +188,9 @@ def test_table_and_callable_equilibria():
     F = np.asarray(sp.force(T, **FIG10))
     assert np.allclose(Ft, F, rtol=1e-12)
     # a stiffening callable: F_eq = Hertz * (1 + 5 x)
-    call = lambda d, *, radius, C, alpha: (32 / 3) * C * radius**2 * (d / (2 * radius)) ** 1.5 * (1 + 5 * d / (2 * radius))  # noqa: E731
+    call = lambda d, *, radius, C, alpha: (
+        (32 / 3) * C * radius**2 * (d / (2 * radius)) ** 1.5 * (1 + 5 * d / (2 * radius))
+    )
     Fc = np.asarray(sp.force([1500.0], **{**FIG10, "branches": [], "equilibrium": call}))
     assert Fc[0] == pytest.approx(hertz(D) * (1 + 5 * D / (2 * A0)), rel=1e-12)
     with pytest.raises(ValueError, match="beyond the calibrated table"):
@@ -159,15 +210,18 @@ def test_splines_interpolate_and_are_smooth():
     assert float(s2(0.3, 0.5)) == pytest.approx(np.sin(0.9) * 1.5, rel=2e-3)
 
 
-@pytest.mark.parametrize("bad, match", [
-    (dict(C=-1.0), "C"),
-    (dict(alpha=-0.1), "alpha"),
-    (dict(radius=0.0), "radius"),
-    (dict(branches=[(0.4, 0.0)]), "tau"),
-    (dict(branches=[(-0.4, 10.0)]), "beta"),
-    (dict(displacement=1.2e-3), "diameter"),
-    (dict(ramp_time=None), "ramp_time"),
-])
+@pytest.mark.parametrize(
+    "bad, match",
+    [
+        (dict(C=-1.0), "C"),
+        (dict(alpha=-0.1), "alpha"),
+        (dict(radius=0.0), "radius"),
+        (dict(branches=[(0.4, 0.0)]), "tau"),
+        (dict(branches=[(-0.4, 10.0)]), "beta"),
+        (dict(displacement=1.2e-3), "diameter"),
+        (dict(ramp_time=None), "ramp_time"),
+    ],
+)
 def test_validation(bad, match):
     with pytest.raises(ValueError, match=match):
         sp.force(T, **{**FIG10, **bad})

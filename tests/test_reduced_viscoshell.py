@@ -4,9 +4,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-import reduced  # noqa: F401  (x64)
-from reduced import blastula as bl
-from reduced import viscoshell as vs
+import tissuemech.reduced  # noqa: F401  (x64)
+from tissuemech.reduced import blastula as bl
+from tissuemech.reduced import viscoshell as vs
 
 A, B, C = 50e-6, 75e-6, 200.0
 GEO = dict(inner_radius=A, outer_radius=B)
@@ -24,9 +24,7 @@ def test_step_instantaneous_then_relaxed(alpha, branches):
     # t >> tau: the relaxed elastic curve (C)
     assert la[-1] == pytest.approx(float(bl.inner_stretch(p, **GEO, C=C, alpha=alpha)), rel=1e-9)
     assert np.all(np.diff(la) > -1e-12)  # creep: the cavity only grows under a held pressure
-    np.testing.assert_allclose(
-        np.asarray(run.outer_stretch), np.asarray(bl.outer_stretch(la, **GEO)), rtol=1e-14
-    )
+    np.testing.assert_allclose(np.asarray(run.outer_stretch), np.asarray(bl.outer_stretch(la, **GEO)), rtol=1e-14)
 
 
 def test_small_strain_creep_is_standard_linear_solid():
@@ -51,7 +49,7 @@ def test_beta_zero_is_elastic_during_ramp_and_hold():
 
 def test_callable_pressure_elastic_and_fast_ramp_is_glassy():
     t = jnp.linspace(0.0, 5.0, T_STEP.size)
-    p_fun = lambda s: 300.0 * (1.0 - jnp.exp(-s))  # noqa: E731
+    p_fun = lambda s: 300.0 * (1.0 - jnp.exp(-s))
     run = vs.inflate(t, pressure=p_fun, **GEO, C=C, alpha=0.2, branches=None)
     ref = np.asarray(bl.inner_stretch(np.asarray(p_fun(t)), **GEO, C=C, alpha=0.2))
     np.testing.assert_allclose(np.asarray(run.inner_stretch), ref, rtol=1e-8)
@@ -125,7 +123,7 @@ def _recursion_reference(p_of_t, t_end, dt, alpha, beta, tau, n_nodes=16):
     out = {}
     for n in range(1, int(round(t_end / dt)) + 1):
         t = n * dt
-        Q_of = lambda la_: a * Q + g * (fields(la_)[2] - S_old)  # noqa: E731
+        Q_of = lambda la_: a * Q + g * (fields(la_)[2] - S_old)
         la = brentq(lambda la_: P(la_, Q_of(la_)) - p_of_t(t) / C, 0.9, 4.0, xtol=1e-14)
         Q, S_old = Q_of(la), fields(la)[2]
         out[round(t, 9)] = la

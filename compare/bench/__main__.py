@@ -1,4 +1,4 @@
-"""Dispatch ``python -m compare.bench NAME [options]``."""
+"""Dispatch ``python -m tissuemech.compare.bench NAME [options]``."""
 
 from __future__ import annotations
 
@@ -6,17 +6,17 @@ import importlib
 import sys
 
 SUITES = {
-    "reduced": "compare.bench.reduced",
-    "fem-blastula": "compare.bench.fem_blastula",
-    "fem-spheroid": "compare.bench.fem_spheroid",
-    "hybrid": "compare.bench.hybrid",
+    "reduced": "tissuemech.compare.bench.reduced",
+    "fem-blastula": "tissuemech.compare.bench.fem_blastula",
+    "fem-spheroid": "tissuemech.compare.bench.fem_spheroid",
+    "hybrid": "tissuemech.compare.bench.hybrid",
 }
 
 
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if not argv or argv[0] in ("-h", "--help"):
-        print("usage: python -m compare.bench {" + ",".join(SUITES) + ",all} [options]")
+        print("usage: python -m tissuemech.compare.bench {" + ",".join(SUITES) + ",all} [options]")
         return 0
     name, rest = argv[0], argv[1:]
     names = list(SUITES) if name == "all" else [name]

@@ -1,6 +1,6 @@
 """Benchmark of the FE blastula: accuracy vs the exact solution, convergence table, seed sets, speed.
 
-``python -m compare.bench fem-blastula [--quick] [--figure PATH.png]`` prints the tables. The exact reference is the
+``python -m tissuemech.compare.bench fem-blastula [--quick] [--figure PATH.png]`` prints the tables. The exact reference is the
 incompressible thick-shell integral of physics.md (scipy quad + brentq); for the creep table
 (``fem.blastula.creep``, issue 5's ramp-and-hold) it is the reduced viscoelastic shell ``reduced.viscoshell``. Timings exclude imports and
 the first (warm-up) call; the machine is shared, so they are pessimistic.
@@ -14,14 +14,14 @@ import numpy as np
 from scipy.integrate import quad
 from scipy.optimize import brentq, minimize_scalar
 
-from fem.blastula import LimitPointError, creep, inflate
+from tissuemech.fem.blastula import LimitPointError, creep, inflate
 
 A, C = 50e-6, 200.0
 
 
 def p_exact(la: float, B: float, alpha: float) -> float:
     lb = (1 + (la**3 - 1) * (A / B) ** 3) ** (1 / 3)
-    g = lambda l: 4 * C * np.exp(alpha * (2 * l**2 + l**-4 - 3)) * (l**3 + 1) / l**5  # noqa: E731
+    g = lambda l: 4 * C * np.exp(alpha * (2 * l**2 + l**-4 - 3)) * (l**3 + 1) / l**5
     return quad(g, lb, la, epsabs=0, epsrel=1e-13)[0]
 
 
@@ -50,8 +50,10 @@ def speed(repeats: int = 5) -> None:
     e = _err(r, 75e-6, 0.2)
     print("\n## Speed: alpha = 0.2, B = 75 um, 0 -> 1 kPa in 50 equal steps, default mesh (4 x 8 Q2/P1disc)")
     print(f"wall time  min {min(times):.3f} s  median {np.median(times):.3f} s  ({repeats} runs)")
-    print(f"Newton iterations {r.newton_iterations.sum()} in total; max |inner stretch error| {e.max():.2e}"
-          f" (at 200/500/1000 Pa: {_err(inflate(**{**kw, 'pressures': [200.0, 500.0, 1000.0]}), 75e-6, 0.2)})")
+    print(
+        f"Newton iterations {r.newton_iterations.sum()} in total; max |inner stretch error| {e.max():.2e}"
+        f" (at 200/500/1000 Pa: {_err(inflate(**{**kw, 'pressures': [200.0, 500.0, 1000.0]}), 75e-6, 0.2)})"
+    )
 
 
 def convergence(quick: bool) -> None:
@@ -62,11 +64,14 @@ def convergence(quick: bool) -> None:
     lam = {}
     for k in kappas:
         for m in meshes:
-            lam[k, m] = inflate(inner_radius=A, outer_radius=75e-6, C=C, alpha=0.2, pressures=ps, mesh=m,
-                                kappa=k).inner_stretch
+            lam[k, m] = inflate(
+                inner_radius=A, outer_radius=75e-6, C=C, alpha=0.2, pressures=ps, mesh=m, kappa=k
+            ).inner_stretch
     print("\n## Convergence (alpha = 0.2, B = 75 um): max over p in {200, 500, 1000} Pa of relative error")
-    print("total = |FE/exact - 1|; mesh = |FE(mesh)/FE(finest) - 1| at the same kappa; "
-          "kappa = |FE(finest)/exact - 1| (the compressibility error)")
+    print(
+        "total = |FE/exact - 1|; mesh = |FE(mesh)/FE(finest) - 1| at the same kappa; "
+        "kappa = |FE(finest)/exact - 1| (the compressibility error)"
+    )
     print(f"{'kappa/C':>8} {'mesh':>8} {'total':>10} {'mesh err':>10} {'kappa err':>10}")
     for k in kappas:
         fine = lam[k, meshes[-1]]
@@ -79,7 +84,9 @@ def convergence(quick: bool) -> None:
 
 def seed_sets() -> None:
     print("\n## Seed parameter sets (load control 0 -> 1 kPa in 20 steps, default mesh)")
-    print(f"{'B (um)':>6} {'alpha':>6} {'final p (Pa)':>12} {'inner stretch':>13} {'outer':>8} {'max rel err*':>12} {'time (s)':>8}  note")
+    print(
+        f"{'B (um)':>6} {'alpha':>6} {'final p (Pa)':>12} {'inner stretch':>13} {'outer':>8} {'max rel err*':>12} {'time (s)':>8}  note"
+    )
     for B, alpha in [(75e-6, 1e-5), (75e-6, 0.1), (75e-6, 0.2), (75e-6, 0.3), (52e-6, 0.2), (60e-6, 0.2)]:
         t = time.perf_counter()
         note = ""
@@ -87,26 +94,47 @@ def seed_sets() -> None:
             r = inflate(inner_radius=A, outer_radius=B, C=C, alpha=alpha, pressures=np.linspace(50, 1000, 20))
         except LimitPointError as e:
             note = f"limit point: load control stopped at {e.last_converged:.4g} Pa"
-            r = inflate(inner_radius=A, outer_radius=B, C=C, alpha=alpha, pressures=None,
-                        method="arclength", max_inner_stretch=3.0)
+            r = inflate(
+                inner_radius=A,
+                outer_radius=B,
+                C=C,
+                alpha=alpha,
+                pressures=None,
+                method="arclength",
+                max_inner_stretch=3.0,
+            )
             note += "; arc-length from 0 to inner stretch 3 (err* = pressure error on the traced curve)"
         dt = time.perf_counter() - t
-        print(f"{B * 1e6:6.0f} {alpha:6.0e} {r.pressure[-1]:12.2f} {r.inner_stretch[-1]:13.6f} "
-              f"{r.outer_stretch[-1]:8.5f} {_err(r, B, alpha).max():12.2e} {dt:8.2f}  {note}")
+        print(
+            f"{B * 1e6:6.0f} {alpha:6.0e} {r.pressure[-1]:12.2f} {r.inner_stretch[-1]:13.6f} "
+            f"{r.outer_stretch[-1]:8.5f} {_err(r, B, alpha).max():12.2e} {dt:8.2f}  {note}"
+        )
 
 
 def limit_point() -> None:
     print("\n## Neo-Hookean (alpha = 1e-5) limit point by arc-length, default mesh")
-    print(f"{'B (um)':>6} {'exact p_max':>11} {'FE p_max':>10} {'rel err':>9} {'exact la*':>9} {'traced to':>9} {'steps':>5} {'time':>6}")
+    print(
+        f"{'B (um)':>6} {'exact p_max':>11} {'FE p_max':>10} {'rel err':>9} {'exact la*':>9} {'traced to':>9} {'steps':>5} {'time':>6}"
+    )
     for B in [52e-6, 60e-6, 75e-6]:
-        o = minimize_scalar(lambda l: -p_exact(l, B, 1e-5), bounds=(1.01, 4.0), method="bounded",
-                            options={"xatol": 1e-10})
+        o = minimize_scalar(
+            lambda l: -p_exact(l, B, 1e-5), bounds=(1.01, 4.0), method="bounded", options={"xatol": 1e-10}
+        )
         t = time.perf_counter()
-        r = inflate(inner_radius=A, outer_radius=B, C=C, alpha=1e-5, pressures=None, method="arclength",
-                    max_inner_stretch=1.25 * o.x)
+        r = inflate(
+            inner_radius=A,
+            outer_radius=B,
+            C=C,
+            alpha=1e-5,
+            pressures=None,
+            method="arclength",
+            max_inner_stretch=1.25 * o.x,
+        )
         dt = time.perf_counter() - t
-        print(f"{B * 1e6:6.0f} {-o.fun:11.4f} {r.pressure.max():10.4f} {r.pressure.max() / -o.fun - 1:9.1e} "
-              f"{o.x:9.4f} {r.inner_stretch[-1]:9.4f} {len(r.pressure):5d} {dt:6.2f}")
+        print(
+            f"{B * 1e6:6.0f} {-o.fun:11.4f} {r.pressure.max():10.4f} {r.pressure.max() / -o.fun - 1:9.1e} "
+            f"{o.x:9.4f} {r.inner_stretch[-1]:9.4f} {len(r.pressure):5d} {dt:6.2f}"
+        )
     try:
         inflate(inner_radius=A, outer_radius=75e-6, C=C, alpha=1e-5, pressures=np.linspace(10, 200, 20))
     except LimitPointError as e:
@@ -116,10 +144,18 @@ def limit_point() -> None:
 def creep_table(quick: bool) -> None:
     """Issue 5 creep (alpha = 0.2, beta = 0.5, tau = 100 s, 300 Pa in 1 s, held 600 s), B = 75 um:
     max |lambda_FE / lambda_reduced - 1| over the history vs mesh and number of hold steps, FE wall time."""
-    from reduced import viscoshell as vs
+    from tissuemech.reduced import viscoshell as vs
 
-    kw = dict(inner_radius=A, outer_radius=75e-6, C=C, alpha=0.2, branches=[(0.5, 100.0)], pressure=300.0,
-              ramp_time=1.0, end_time=601.0)
+    kw = dict(
+        inner_radius=A,
+        outer_radius=75e-6,
+        C=C,
+        alpha=0.2,
+        branches=[(0.5, 100.0)],
+        pressure=300.0,
+        ramp_time=1.0,
+        end_time=601.0,
+    )
     meshes = ["coarse", "default"] if quick else ["coarse", "default", "fine"]
     holds = [30, 60] if quick else [15, 30, 60, 120]
     creep(**kw, mesh="coarse", n_hold=5)  # warm-up
@@ -130,18 +166,28 @@ def creep_table(quick: bool) -> None:
             r = creep(**kw, mesh=m, n_hold=n)
             runs[m, n] = (r, time.perf_counter() - t)
     ts = np.unique(np.concatenate([r.time for r, _ in runs.values()]))
-    red = vs.inflate(ts, pressure=300.0, ramp_time=1.0, **{k: kw[k] for k in ("inner_radius", "outer_radius",
-                                                                              "C", "alpha", "branches")})
+    red = vs.inflate(
+        ts,
+        pressure=300.0,
+        ramp_time=1.0,
+        **{k: kw[k] for k in ("inner_radius", "outer_radius", "C", "alpha", "branches")},
+    )
     la_red = np.asarray(red.inner_stretch)
-    print("\n## Creep (fem.blastula.creep vs reduced.viscoshell): alpha = 0.2, beta = 0.5, tau = 100 s, "
-          "300 Pa in 1 s (8 ramp steps), held 600 s")
-    print(f"{'mesh':>8} {'n_hold':>6} {'steps':>5} {'Newton':>6} {'max dev':>9} {'ramp':>9} {'hold':>9} "
-          f"{'la(601 s)':>9} {'wall (s)':>8}")
+    print(
+        "\n## Creep (fem.blastula.creep vs reduced.viscoshell): alpha = 0.2, beta = 0.5, tau = 100 s, "
+        "300 Pa in 1 s (8 ramp steps), held 600 s"
+    )
+    print(
+        f"{'mesh':>8} {'n_hold':>6} {'steps':>5} {'Newton':>6} {'max dev':>9} {'ramp':>9} {'hold':>9} "
+        f"{'la(601 s)':>9} {'wall (s)':>8}"
+    )
     for (m, n), (r, w) in runs.items():
         d = np.abs(r.inner_stretch / la_red[np.searchsorted(ts, r.time)] - 1)
         ramp = r.time <= 1.0
-        print(f"{m:>8} {n:6d} {r.time.size:5d} {r.newton_iterations.sum():6d} {d.max():9.2e} {d[ramp].max():9.2e} "
-              f"{d[~ramp].max():9.2e} {r.inner_stretch[-1]:9.5f} {w:8.2f}")
+        print(
+            f"{m:>8} {n:6d} {r.time.size:5d} {r.newton_iterations.sum():6d} {d.max():9.2e} {d[ramp].max():9.2e} "
+            f"{d[~ramp].max():9.2e} {r.inner_stretch[-1]:9.5f} {w:8.2f}"
+        )
 
 
 def figure(path: str) -> None:
@@ -149,8 +195,7 @@ def figure(path: str) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
-    r = inflate(inner_radius=A, outer_radius=75e-6, C=C, alpha=0.2, pressures=np.linspace(100, 1000, 10),
-                mesh="fine")
+    r = inflate(inner_radius=A, outer_radius=75e-6, C=C, alpha=0.2, pressures=np.linspace(100, 1000, 10), mesh="fine")
     ax = r.plot()
     ax.set_title("von Mises stress, alpha = 0.2, p = 1 kPa")
     ax.figure.savefig(path, dpi=120, bbox_inches="tight")

@@ -1,4 +1,4 @@
-"""``python -m compare.bench reduced``: every reduced path's throughput, compile time, accuracy
+"""``python -m tissuemech.compare.bench reduced``: every reduced path's throughput, compile time, accuracy
 and its plain-SciPy baseline, in one run and one table.
 
 Rows come from ``compare.bench.reduced_blastula.rows()`` and ``compare.bench.reduced_spheroid.rows()``;
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
-from typing import Sequence
+from collections.abc import Sequence
 
 
 def import_time() -> float:
@@ -38,7 +38,7 @@ def print_rows(rows: list[dict]) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> list[dict]:
-    from compare.bench import reduced_blastula, reduced_spheroid
+    from tissuemech.compare.bench import reduced_blastula, reduced_spheroid
 
     print(f"import reduced: {import_time():.2f} s (fresh interpreter, best of 3)")
     rows = list(reduced_blastula.rows()) + list(reduced_spheroid.rows())

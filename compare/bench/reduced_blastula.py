@@ -1,6 +1,6 @@
 """Benchmark of the reduced blastula paths (``reduced.blastula``, ``reduced.viscoshell``).
 
-    python -m compare.bench.reduced_blastula [--n 1000000] [--baseline 2000]
+    python -m tissuemech.compare.bench.reduced_blastula [--n 1000000] [--baseline 2000]
 
 Each row: the path, points per call, compile time, throughput after compile (points/s, best of a
 few calls with ``block_until_ready``), the max relative error against a high-accuracy reference,
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import argparse
 import time
-from typing import Callable, Sequence
+from collections.abc import Callable, Sequence
 
 import jax
 import jax.numpy as jnp
@@ -26,7 +26,7 @@ A, B, C = 50e-6, 75e-6, 200.0
 def _quad_pressure(la: float, A: float, B: float, C: float, alpha: float) -> float:
     k = (A / B) ** 3
     lb = (1.0 + (la**3 - 1.0) * k) ** (1.0 / 3.0)
-    g = lambda l: 4 * C * np.exp(alpha * (2 * l * l + l**-4 - 3)) * (l**3 + 1) / l**5  # noqa: E731
+    g = lambda l: 4 * C * np.exp(alpha * (2 * l * l + l**-4 - 3)) * (l**3 + 1) / l**5
     return quad(g, lb, la, epsabs=0.0, epsrel=1e-13, limit=200)[0]
 
 
@@ -52,8 +52,8 @@ def _scipy_rate(fn: Callable, items) -> float:
 
 
 def rows(n: int = 1_000_000, n_baseline: int = 2000, seed: int = 0) -> list[dict]:
-    from reduced import blastula as bl
-    from reduced import viscoshell as vs
+    from tissuemech.reduced import blastula as bl
+    from tissuemech.reduced import viscoshell as vs
 
     rng = np.random.default_rng(seed)
     out: list[dict] = []
@@ -69,8 +69,18 @@ def rows(n: int = 1_000_000, n_baseline: int = 2000, seed: int = 0) -> list[dict
     ref = np.array([_quad_pressure(*it) for it in items])
     err = float(np.max(np.abs(np.asarray(p)[idx] / ref - 1)))
     base = _scipy_rate(_quad_pressure, items)
-    out.append(dict(path="blastula.pressure quadrature", points=n, compile_s=tc, points_per_s=n / dt,
-                    max_rel_err=err, baseline="scipy quad loop", baseline_points_per_s=base, speedup=n / dt / base))
+    out.append(
+        dict(
+            path="blastula.pressure quadrature",
+            points=n,
+            compile_s=tc,
+            points_per_s=n / dt,
+            max_rel_err=err,
+            baseline="scipy quad loop",
+            baseline_points_per_s=base,
+            speedup=n / dt / base,
+        )
+    )
 
     # -- inverse (rising branch): Fung alpha = 0.2 over lambda_a in [0.5, 4]; neo-Hookean below the limit
     for a_inv, hi in ((alpha, 4.0), (0.0, float(bl.limit_point(**geo, C=C, alpha=0.0).inner_stretch) - 1e-3)):
@@ -82,13 +92,22 @@ def rows(n: int = 1_000_000, n_baseline: int = 2000, seed: int = 0) -> list[dict
         sub = [(float(pt[i]), float(la[i])) for i in idx[:nb]]
 
         def brent(pv: float, _la: float, a_=a_inv, hi_=hi) -> float:
-            f = lambda x: _quad_pressure(x, A, B, C, a_) - pv  # noqa: E731
+            f = lambda x: _quad_pressure(x, A, B, C, a_) - pv
             return brentq(f, 0.5, hi_ + 1e-3, xtol=1e-14, rtol=1e-14)
 
         base = _scipy_rate(brent, sub)
-        out.append(dict(path=f"blastula.inner_stretch (alpha={a_inv:g})", points=n, compile_s=tc,
-                        points_per_s=n / dt, max_rel_err=err, baseline="brentq on quad",
-                        baseline_points_per_s=base, speedup=n / dt / base))
+        out.append(
+            dict(
+                path=f"blastula.inner_stretch (alpha={a_inv:g})",
+                points=n,
+                compile_s=tc,
+                points_per_s=n / dt,
+                max_rel_err=err,
+                baseline="brentq on quad",
+                baseline_points_per_s=base,
+                speedup=n / dt / base,
+            )
+        )
 
     # -- diffrax radial-ODE path (vmapped), error against the quadrature
     m = max(n // 50, 1000)
@@ -96,17 +115,36 @@ def rows(n: int = 1_000_000, n_baseline: int = 2000, seed: int = 0) -> list[dict
     tc, dt, p_ode = _timed(lambda x: bl.pressure(x, **geo, C=C, alpha=alpha, method="ode"), la, repeats=2)
     p_q = bl.pressure(la, **geo, C=C, alpha=alpha)
     err = float(np.max(np.abs(np.asarray(p_ode) / np.asarray(p_q) - 1)))
-    out.append(dict(path="blastula.pressure ode (Dopri8, vmap)", points=m, compile_s=tc, points_per_s=m / dt,
-                    max_rel_err=err, baseline="scipy quad loop", baseline_points_per_s=base_fwd(out),
-                    speedup=m / dt / base_fwd(out)))
+    out.append(
+        dict(
+            path="blastula.pressure ode (Dopri8, vmap)",
+            points=m,
+            compile_s=tc,
+            points_per_s=m / dt,
+            max_rel_err=err,
+            baseline="scipy quad loop",
+            baseline_points_per_s=base_fwd(out),
+            speedup=m / dt / base_fwd(out),
+        )
+    )
 
     # -- limit point (scan + bisection), vmapped over alpha x B
     nl = 10_000
     al = jnp.asarray(rng.uniform(0.0, 0.05, nl))
     Bs = jnp.asarray(rng.uniform(52e-6, 100e-6, nl))
     tc, dt, lim = _timed(lambda a, b: bl.limit_point(inner_radius=A, outer_radius=b, C=C, alpha=a), al, Bs)
-    out.append(dict(path="blastula.limit_point", points=nl, compile_s=tc, points_per_s=nl / dt,
-                    max_rel_err="", baseline="", baseline_points_per_s="", speedup=""))
+    out.append(
+        dict(
+            path="blastula.limit_point",
+            points=nl,
+            compile_s=tc,
+            points_per_s=nl / dt,
+            max_rel_err="",
+            baseline="",
+            baseline_points_per_s="",
+            speedup="",
+        )
+    )
 
     # -- 1e6-point parameter grid (stretch x alpha x B) in one call, by broadcasting
     g = round(n ** (1 / 3))
@@ -115,9 +153,18 @@ def rows(n: int = 1_000_000, n_baseline: int = 2000, seed: int = 0) -> list[dict
     B_g = jnp.linspace(52e-6, 150e-6, g)[None, None, :]
     tc, dt, grid = _timed(lambda x, a, b: bl.pressure(x, inner_radius=A, outer_radius=b, C=C, alpha=a), la_g, al_g, B_g)
     ok = bool(np.all(np.isfinite(np.asarray(grid))))
-    out.append(dict(path=f"pressure grid {g}x{g}x{g} (la x alpha x B)", points=g**3, compile_s=tc,
-                    points_per_s=g**3 / dt, max_rel_err="" if ok else "non-finite", baseline="",
-                    baseline_points_per_s="", speedup=""))
+    out.append(
+        dict(
+            path=f"pressure grid {g}x{g}x{g} (la x alpha x B)",
+            points=g**3,
+            compile_s=tc,
+            points_per_s=g**3 / dt,
+            max_rel_err="" if ok else "non-finite",
+            baseline="",
+            baseline_points_per_s="",
+            speedup="",
+        )
+    )
 
     # -- viscoelastic shell: one creep history (step, held 60 tau), after compile
     t = jnp.linspace(0.0, 12_000.0, 61)
@@ -129,9 +176,18 @@ def rows(n: int = 1_000_000, n_baseline: int = 2000, seed: int = 0) -> list[dict
     run = vs.inflate(t, **kw)
     t_run = time.perf_counter() - t0
     relaxed = float(bl.inner_stretch(150.0, **geo, C=C, alpha=alpha))
-    out.append(dict(path="viscoshell.inflate (1 branch, 61 outputs)", points=1, compile_s=t_first - t_run,
-                    points_per_s=1 / t_run, max_rel_err=abs(float(run.inner_stretch[-1]) / relaxed - 1),
-                    baseline="vs relaxed elastic limit", baseline_points_per_s="", speedup=""))
+    out.append(
+        dict(
+            path="viscoshell.inflate (1 branch, 61 outputs)",
+            points=1,
+            compile_s=t_first - t_run,
+            points_per_s=1 / t_run,
+            max_rel_err=abs(float(run.inner_stretch[-1]) / relaxed - 1),
+            baseline="vs relaxed elastic limit",
+            baseline_points_per_s="",
+            speedup="",
+        )
+    )
     return out
 
 
@@ -140,10 +196,10 @@ def base_fwd(rows_so_far: list[dict]) -> float:
 
 
 def main(argv: Sequence[str] | None = None) -> list[dict]:
-    import reduced  # noqa: F401  (x64)
-    from compare.bench.reduced import print_rows
+    import tissuemech.reduced  # noqa: F401  (x64)
+    from tissuemech.compare.bench.reduced import print_rows
 
-    ap = argparse.ArgumentParser(prog="python -m compare.bench.reduced_blastula")
+    ap = argparse.ArgumentParser(prog="python -m tissuemech.compare.bench.reduced_blastula")
     ap.add_argument("--n", type=int, default=1_000_000, help="points per vectorised call")
     ap.add_argument("--baseline", type=int, default=2000, help="points in the scipy quad loop")
     args = ap.parse_args(list(argv) if argv is not None else None)

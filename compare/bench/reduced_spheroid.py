@@ -1,7 +1,7 @@
 """Benchmark of the reduced spheroid (``reduced.spheroid``): one relaxation curve and a scan of
 many, against a convolution-quadrature reference and a SciPy ``solve_ivp`` baseline.
 
-    python -m compare.bench.reduced_spheroid [--n 10000]
+    python -m tissuemech.compare.bench.reduced_spheroid [--n 10000]
 
 Rows: compile time, curves per second after compile (best of a few calls, ``block_until_ready``),
 the max error relative to the curve's peak force (Hertz law: the convolution quadrature is exact for
@@ -13,13 +13,13 @@ from __future__ import annotations
 
 import argparse
 import time
-from typing import Sequence
+from collections.abc import Sequence
 
 import jax.numpy as jnp
 import numpy as np
 from scipy.integrate import quad, solve_ivp
 
-from compare.bench.reduced_blastula import _timed
+from tissuemech.compare.bench.reduced_blastula import _timed
 
 A0, D, TR, END = 500e-6, 50e-6, 0.2, 1500.0
 TIMES = np.concatenate([np.linspace(0.0, TR, 21), np.geomspace(TR, END, 180)[1:]])  # 200 output times
@@ -33,8 +33,14 @@ def reference(t: float, C: float, beta: float, tau: float) -> float:
     """F(t) by adaptive quadrature of q = beta int_0^min(t,tr) e^{-(t-s)/tau} dF_eq/ds ds."""
     s = min(t, TR)
     rate = D / TR
-    q = quad(lambda u: beta * 1.5 * _hertz(rate * u, C) / u * np.exp(-(s - u) / tau) if u > 0 else 0.0,
-             0.0, s, epsabs=0, epsrel=1e-13, limit=200)[0]
+    q = quad(
+        lambda u: beta * 1.5 * _hertz(rate * u, C) / u * np.exp(-(s - u) / tau) if u > 0 else 0.0,
+        0.0,
+        s,
+        epsabs=0,
+        epsrel=1e-13,
+        limit=200,
+    )[0]
     return _hertz(rate * s, C) + q * np.exp(-max(t - TR, 0.0) / tau)
 
 
@@ -58,7 +64,7 @@ def _scipy_curve(C: float, beta: float, tau: float) -> np.ndarray:
 def rows(n: int = 10_000, n_ref: int = 20, seed: int = 0) -> list[dict]:
     import diffrax
 
-    from reduced import spheroid as sp
+    from tissuemech.reduced import spheroid as sp
 
     rng = np.random.default_rng(seed)
     out = []
@@ -73,13 +79,25 @@ def rows(n: int = 10_000, n_ref: int = 20, seed: int = 0) -> list[dict]:
     t0 = time.perf_counter()
     base = _scipy_curve(150.0, 0.4, 200.0)
     t_base = time.perf_counter() - t0
-    for label, m, solver in (("quadrature", "quadrature", None), ("ode Kvaerno5", "ode", diffrax.Kvaerno5()),
-                             ("ode Tsit5", "ode", diffrax.Tsit5())):
+    for label, m, solver in (
+        ("quadrature", "quadrature", None),
+        ("ode Kvaerno5", "ode", diffrax.Kvaerno5()),
+        ("ode Tsit5", "ode", diffrax.Tsit5()),
+    ):
         tc, dt, F = _timed(lambda c, b, t_: one(c, b, t_, m, solver), 150.0, 0.4, 200.0, repeats=5)
-        out.append(dict(path=f"spheroid.force one curve, {label}", points=1, compile_s=tc, points_per_s=1 / dt,
-                        max_rel_err=float(np.max(np.abs(np.asarray(F) - ref)) / ref.max()),
-                        baseline="scipy solve_ivp LSODA", baseline_points_per_s=1 / t_base, speedup=t_base / dt,
-                        baseline_err=float(np.max(np.abs(base - ref)) / ref.max())))
+        out.append(
+            dict(
+                path=f"spheroid.force one curve, {label}",
+                points=1,
+                compile_s=tc,
+                points_per_s=1 / dt,
+                max_rel_err=float(np.max(np.abs(np.asarray(F) - ref)) / ref.max()),
+                baseline="scipy solve_ivp LSODA",
+                baseline_points_per_s=1 / t_base,
+                speedup=t_base / dt,
+                baseline_err=float(np.max(np.abs(base - ref)) / ref.max()),
+            )
+        )
 
     # scans: n curves over (C, beta, tau) in one vmapped call; tau from 0.1 s (stiff-ish) to 1000 s
     Cs = jnp.asarray(rng.uniform(100.0, 300.0, n))
@@ -91,29 +109,53 @@ def rows(n: int = 10_000, n_ref: int = 20, seed: int = 0) -> list[dict]:
     for i in idx[:5]:
         _scipy_curve(float(Cs[i]), float(bs[i]), float(ts[i]))
     base_rate = 5 / (time.perf_counter() - t0)
-    for label, m, solver in (("quadrature", "quadrature", None), ("ode Kvaerno5", "ode", diffrax.Kvaerno5()),
-                             ("ode Tsit5", "ode", diffrax.Tsit5())):
+    for label, m, solver in (
+        ("quadrature", "quadrature", None),
+        ("ode Kvaerno5", "ode", diffrax.Kvaerno5()),
+        ("ode Tsit5", "ode", diffrax.Tsit5()),
+    ):
         tc, dt, G = _timed(lambda c, b, t_: one(c, b, t_, m, solver), Cs, bs, ts, repeats=2)
         err = max(np.max(np.abs(np.asarray(G[i]) - r)) / r.max() for i, r in refs.items())
-        out.append(dict(path=f"spheroid.force scan {n} curves x {TIMES.size} times, {label}", points=n, compile_s=tc,
-                        points_per_s=n / dt, max_rel_err=float(err), baseline="scipy solve_ivp LSODA loop",
-                        baseline_points_per_s=base_rate, speedup=n / dt / base_rate))
+        out.append(
+            dict(
+                path=f"spheroid.force scan {n} curves x {TIMES.size} times, {label}",
+                points=n,
+                compile_s=tc,
+                points_per_s=n / dt,
+                max_rel_err=float(err),
+                baseline="scipy solve_ivp LSODA loop",
+                baseline_points_per_s=base_rate,
+                speedup=n / dt / base_rate,
+            )
+        )
     # the calibrated FE law (the default): quadrature vs its own tight ODE solution
     tc, dt, G3 = _timed(lambda c, b, t_: one(c, b, t_, "quadrature", None, "fem"), Cs, bs, ts, repeats=2)
     sub = np.asarray(idx[:5])
-    ref3 = np.asarray(sp.force(T, C=Cs[sub], branches=[(bs[sub], ts[sub])], equilibrium="fem", method="ode",
-                               rtol=1e-12, atol=1e-12, **kw))
-    out.append(dict(path="  same scan, calibrated FE law, quadrature", points=n, compile_s=tc, points_per_s=n / dt,
-                    max_rel_err=float(np.max(np.abs(np.asarray(G3)[sub] - ref3) / ref3.max(axis=1)[:, None])),
-                    baseline="scipy solve_ivp LSODA loop", baseline_points_per_s=base_rate, speedup=n / dt / base_rate))
+    ref3 = np.asarray(
+        sp.force(
+            T, C=Cs[sub], branches=[(bs[sub], ts[sub])], equilibrium="fem", method="ode", rtol=1e-12, atol=1e-12, **kw
+        )
+    )
+    out.append(
+        dict(
+            path="  same scan, calibrated FE law, quadrature",
+            points=n,
+            compile_s=tc,
+            points_per_s=n / dt,
+            max_rel_err=float(np.max(np.abs(np.asarray(G3)[sub] - ref3) / ref3.max(axis=1)[:, None])),
+            baseline="scipy solve_ivp LSODA loop",
+            baseline_points_per_s=base_rate,
+            speedup=n / dt / base_rate,
+        )
+    )
     return out
 
 
 def main(argv: Sequence[str] | None = None) -> list[dict]:
-    ap = argparse.ArgumentParser(prog="python -m compare.bench.reduced_spheroid", description=__doc__)
+    ap = argparse.ArgumentParser(prog="python -m tissuemech.compare.bench.reduced_spheroid", description=__doc__)
     ap.add_argument("--n", type=int, default=10_000, help="curves in the scan (default %(default)s)")
     a = ap.parse_args(argv)
-    from compare.bench.reduced import print_rows
+    from tissuemech.compare.bench.reduced import print_rows
 
     r = rows(a.n)
     print_rows(r)
