@@ -47,9 +47,10 @@ def load_control(
     unit: str = "",
     scale: float = 1.0,
 ) -> list:
-    out = []
+    out: list = []
     x_prev, lam_prev = np.array(x0, float), float(lam0)
-    x_old, lam_old = None, None
+    x_old: np.ndarray | None = None
+    lam_old = 0.0
     slope0 = None
     for target in loads:
         lam_c, x_c = lam_prev, x_prev
@@ -128,7 +129,7 @@ def arc_length(
     x, lam = np.array(x0, float), float(lam0)
     r, K, rl = fun(x, lam)
     tx = sparse_solve(K, -rl)
-    c = max(np.linalg.norm(tx), 1e-12)
+    c = max(float(np.linalg.norm(tx)), 1e-12)
     nrm = lambda a, b: np.sqrt(a @ a / c**2 + b * b)
     n0 = nrm(tx, 1.0)
     tx, tl = tx / n0, 1.0 / n0

@@ -80,7 +80,7 @@ def symmetric_solve(K: sp.spmatrix, b: np.ndarray, *, refine: int = 4, rtol: flo
                 x, rn = x2, rn2
             break
         x, res, rn = x2, res2, rn2
-    if not (np.all(np.isfinite(x)) and rn <= 1e-8 * max(nb, 1e-300)):
+    if not (np.all(np.isfinite(x)) and rn <= 1e-8 * max(float(nb), 1e-300)):
         return sparse_solve(Kc, b)
     return x
 

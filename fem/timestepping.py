@@ -81,12 +81,11 @@ def ramp_hold_schedule(
                 q = 0.5 * (lo + hi)
                 steps = h0 * q ** np.arange(n_hold)
                 t += list(ramp_time + np.cumsum(steps) * span / steps.sum())
-    t = np.array(t + [float(b) for b in breakpoints if 0 < b <= end_time])
-    t = np.unique(t)
-    keep = np.r_[True, np.diff(t) > 1e-12 * max(end_time, 1.0)]
-    t = t[keep]
-    t[-1] = max(t[-1], end_time)
-    return t
+    ts = np.unique(np.array(t + [float(b) for b in breakpoints if 0 < b <= end_time]))
+    keep = np.r_[True, np.diff(ts) > 1e-12 * max(end_time, 1.0)]
+    ts = ts[keep]
+    ts[-1] = max(ts[-1], end_time)
+    return ts
 
 
 def march(
