@@ -1,6 +1,6 @@
 r"""How far the reduced models can be trusted: reduced vs FE, case by case, as tidy tables.
 
-    python -m tissuemech.compare.checks [--spheroid-random 10] [--blastula-random 10] [--mesh default] [--out DIR]
+    python -m tissuemech.compare.studies.checks [--spheroid-random 10] [--blastula-random 10] [--mesh default] [--out DIR]
 
 * ``blastula(...)``: exact thick-shell stretch (``reduced.blastula``) against the FE shell
   (``fem.blastula.inflate``, kappa = 2.2 GPa) for the seed sets and random (alpha, B/A, p) points.
@@ -26,17 +26,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from tissuemech.compare import cases
+
 __all__ = ["blastula", "blastula_creep", "spheroid", "hertz_table", "fit_demo", "SPHEROID_CASES", "CREEP_CASES", "main"]
 
-UM = 1e-6
-A_BLASTULA = 50 * UM
-SPHEROID_CASES = {
-    "Fig. 10": dict(C=150.0, alpha=0.2, beta=0.4, tau=200.0, displacement=50 * UM),
-    "Figs 8-9": dict(C=200.0, alpha=0.2, beta=1.2, tau=200.0, displacement=200 * UM),
-}
-CREEP_CASES = {  # blastula A = 50 um, B = 75 um, C = 200 Pa; pressure ramped over ramp_time, held `hold` s
-    "issue 5": dict(alpha=0.2, beta=0.5, tau=100.0, pressure=300.0, ramp_time=1.0, hold=600.0),
-}
+UM = cases.UM
+A_BLASTULA = cases.BLASTULA_INNER_RADIUS
+SPHEROID_CASES = cases.SPHEROID_CHECK_CASES
+CREEP_CASES = cases.CREEP_CASES
 
 
 def blastula(*, n_random: int = 10, seed: int = 0, mesh: str = "default", kappa: float = 2.2e9) -> pd.DataFrame:
@@ -297,7 +294,7 @@ def hertz_table(
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m tissuemech.compare.checks", description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog="python -m tissuemech.compare.studies.checks", description=__doc__.split("\n")[0])
     ap.add_argument("--spheroid-random", type=int, default=10)
     ap.add_argument("--blastula-random", type=int, default=10)
     ap.add_argument("--mesh", default="default", help="FE mesh for the spheroid checks")
