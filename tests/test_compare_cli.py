@@ -48,3 +48,10 @@ def test_argparse_rejects_negative_modulus(capsys):
         cli.main(["spheroid", "--C", "-5"])
     assert e.value.code == 2
     assert "must be positive" in capsys.readouterr().err
+
+
+def test_cli_has_report_subcommand(capsys):
+    with pytest.raises(SystemExit) as exc:
+        cli.main(["report", "--help"])
+    assert exc.value.code == 0
+    assert "--quick" in capsys.readouterr().out

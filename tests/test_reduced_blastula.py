@@ -6,10 +6,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from scipy.integrate import quad
 from scipy.optimize import brentq
 
 import tissuemech.reduced  # noqa: F401  (x64)
+from tissuemech.compare.reference import shell_pressure
 from tissuemech.reduced import blastula as bl
 
 A = 50e-6
@@ -33,10 +33,8 @@ def nh_closed_decimal(la: float, A: float, B: float, C: float) -> float:
 
 
 def fung_quad(la, A, B, C, alpha):
-    k = (A / B) ** 3
-    lb = (1.0 + (la**3 - 1.0) * k) ** (1.0 / 3.0)
-    g = lambda l: 4 * C * np.exp(alpha * (2 * l * l + l**-4 - 3)) * (l**3 + 1) / l**5
-    return quad(g, lb, la, epsabs=0.0, epsrel=1e-13, limit=200)[0]
+    """The independent scipy-quad reference (``compare.reference.shell_pressure``)."""
+    return shell_pressure(la, inner_radius=A, outer_radius=B, C=C, alpha=alpha)
 
 
 # ------------------------------------------------------------------ forward pressure

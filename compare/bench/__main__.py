@@ -22,8 +22,14 @@ def main(argv: list[str] | None = None) -> int:
     names = list(SUITES) if name == "all" else [name]
     for n in names:
         if n not in SUITES:
-            print(f"error: unknown benchmark {n!r}; choose from {', '.join(SUITES)} or all")
+            print(f"error: unknown benchmark {n!r}; choose from {', '.join(SUITES)} or all", file=sys.stderr)
             return 2
+    if "-h" in rest or "--help" in rest:  # describe, never start a suite
+        for n in names:
+            doc = (importlib.import_module(SUITES[n]).__doc__ or "").strip()
+            print(f"== {n} (python -m tissuemech.compare.bench {n} [options]) ==\n{doc}\n")
+        return 0
+    for n in names:
         importlib.import_module(SUITES[n]).main(rest)
     return 0
 

@@ -11,22 +11,23 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from scipy.integrate import quad
-from scipy.optimize import brentq, minimize_scalar
+from scipy.optimize import minimize_scalar
 
+from tissuemech.compare.cases import BLASTULA_C, BLASTULA_INNER_RADIUS
+from tissuemech.compare.reference import shell_inner_stretch, shell_pressure
 from tissuemech.fem.blastula import LimitPointError, creep, inflate
 
-A, C = 50e-6, 200.0
+A, C = BLASTULA_INNER_RADIUS, BLASTULA_C
 
 
 def p_exact(la: float, B: float, alpha: float) -> float:
-    lb = (1 + (la**3 - 1) * (A / B) ** 3) ** (1 / 3)
-    g = lambda l: 4 * C * np.exp(alpha * (2 * l**2 + l**-4 - 3)) * (l**3 + 1) / l**5
-    return quad(g, lb, la, epsabs=0, epsrel=1e-13)[0]
+    """Exact pressure (Pa) at inner stretch la, outer radius B (m): ``compare.reference.shell_pressure``."""
+    return shell_pressure(la, outer_radius=B, alpha=alpha)
 
 
 def la_exact(p: float, B: float, alpha: float) -> float:
-    return brentq(lambda l: p_exact(l, B, alpha) - p, 1.0, 20.0, xtol=1e-14)
+    """Exact inner stretch at pressure p (Pa): ``compare.reference.shell_inner_stretch``."""
+    return shell_inner_stretch(p, outer_radius=B, alpha=alpha)
 
 
 def _err(r, B, alpha):
@@ -205,16 +206,23 @@ def figure(path: str) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """Options: --quick (fewer meshes/repeats), --figure PATH.png (seed Fig. 3 + VTU)."""
-    argv = list(argv or [])
-    quick = "--quick" in argv
+    import argparse
+
+    ap = argparse.ArgumentParser(
+        prog="python -m tissuemech.compare.bench fem-blastula", description=__doc__.split("\n")[0]
+    )
+    ap.add_argument("--quick", action="store_true", help="fewer meshes and repeats")
+    ap.add_argument("--figure", metavar="PATH.png", help="also write the seed's Fig. 3 (and a VTU next to it)")
+    a = ap.parse_args(list(argv or []))
+    quick = a.quick
     print("# FE blastula benchmark (fem.blastula.inflate; A = 50 um, C = 200 Pa, kappa = 2.2 GPa unless stated)")
     speed(3 if quick else 5)
     convergence(quick)
     seed_sets()
     limit_point()
     creep_table(quick)
-    if "--figure" in argv:
-        figure(argv[argv.index("--figure") + 1])
+    if a.figure:
+        figure(a.figure)
     return 0
 
 

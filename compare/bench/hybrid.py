@@ -215,7 +215,7 @@ def batch_rows(n: int = 40) -> list[dict]:
 
 
 def main(argv: Sequence[str] | None = None) -> list[dict]:
-    from tissuemech.compare.bench.reduced import print_rows
+    from tissuemech.compare.bench.common import print_rows
 
     ap = argparse.ArgumentParser(prog="python -m tissuemech.compare.bench hybrid")
     ap.add_argument("--n-scan", type=int, default=100_000)

@@ -14,34 +14,20 @@ import argparse
 import time
 from collections.abc import Callable, Sequence
 
-import jax
 import jax.numpy as jnp
 import numpy as np
-from scipy.integrate import quad
 from scipy.optimize import brentq
 
-A, B, C = 50e-6, 75e-6, 200.0
+from tissuemech.compare.bench.common import jit_timed as _timed
+from tissuemech.compare.bench.common import print_rows
+from tissuemech.compare.cases import BLASTULA_C, BLASTULA_INNER_RADIUS, FIG4_OUTER_RADIUS
+from tissuemech.compare.reference import shell_pressure
+
+A, B, C = BLASTULA_INNER_RADIUS, FIG4_OUTER_RADIUS, BLASTULA_C
 
 
 def _quad_pressure(la: float, A: float, B: float, C: float, alpha: float) -> float:
-    k = (A / B) ** 3
-    lb = (1.0 + (la**3 - 1.0) * k) ** (1.0 / 3.0)
-    g = lambda l: 4 * C * np.exp(alpha * (2 * l * l + l**-4 - 3)) * (l**3 + 1) / l**5
-    return quad(g, lb, la, epsabs=0.0, epsrel=1e-13, limit=200)[0]
-
-
-def _timed(fn: Callable, *args, repeats: int = 3) -> tuple[float, float, object]:
-    """(compile seconds, best seconds per call, result) of jax.jit(fn)(*args)."""
-    t0 = time.perf_counter()
-    compiled = jax.jit(fn).lower(*args).compile()
-    t_compile = time.perf_counter() - t0
-    out = jax.block_until_ready(compiled(*args))
-    best = np.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = jax.block_until_ready(compiled(*args))
-        best = min(best, time.perf_counter() - t0)
-    return t_compile, best, out
+    return shell_pressure(la, inner_radius=A, outer_radius=B, C=C, alpha=alpha)
 
 
 def _scipy_rate(fn: Callable, items) -> float:
@@ -197,7 +183,6 @@ def base_fwd(rows_so_far: list[dict]) -> float:
 
 def main(argv: Sequence[str] | None = None) -> list[dict]:
     import tissuemech.reduced  # noqa: F401  (x64)
-    from tissuemech.compare.bench.reduced import print_rows
 
     ap = argparse.ArgumentParser(prog="python -m tissuemech.compare.bench.reduced_blastula")
     ap.add_argument("--n", type=int, default=1_000_000, help="points per vectorised call")

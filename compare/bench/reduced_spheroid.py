@@ -19,14 +19,16 @@ import jax.numpy as jnp
 import numpy as np
 from scipy.integrate import quad, solve_ivp
 
-from tissuemech.compare.bench.reduced_blastula import _timed
+from tissuemech.compare.bench.common import jit_timed as _timed
+from tissuemech.compare.bench.common import print_rows
+from tissuemech.compare.reference import hertz_force
 
 A0, D, TR, END = 500e-6, 50e-6, 0.2, 1500.0
 TIMES = np.concatenate([np.linspace(0.0, TR, 21), np.geomspace(TR, END, 180)[1:]])  # 200 output times
 
 
 def _hertz(delta, C):
-    return (32.0 / 3.0) * C * A0**2 * (delta / (2 * A0)) ** 1.5
+    return hertz_force(delta, radius=A0, C=C)
 
 
 def reference(t: float, C: float, beta: float, tau: float) -> float:
@@ -155,8 +157,6 @@ def main(argv: Sequence[str] | None = None) -> list[dict]:
     ap = argparse.ArgumentParser(prog="python -m tissuemech.compare.bench.reduced_spheroid", description=__doc__)
     ap.add_argument("--n", type=int, default=10_000, help="curves in the scan (default %(default)s)")
     a = ap.parse_args(argv)
-    from tissuemech.compare.bench.reduced import print_rows
-
     r = rows(a.n)
     print_rows(r)
     return r

@@ -7,7 +7,7 @@ pressure residual of that state against the exact incompressible shell,
     error = max_i | p_exact(lambda_a,i) / p_i - 1 |,
     p_exact(lambda_a) = int_{lambda_b}^{lambda_a} 4 C exp(alpha (2 l^2 + l^-4 - 3)) (l^3 + 1) / l^5 dl
 
-(scipy ``quad`` at rtol 1e-13; ``compare.bench.fem_blastula.p_exact``), which puts the forward
+(scipy ``quad`` at rtol 1e-13; ``compare.reference.shell_pressure``), which puts the forward
 (p from lambda_a) and inverse (lambda_a from p) methods on one scale. Methods:
 
 * reduced, quadrature path: ``reduced.blastula.inner_stretch(p)`` (20-point Gauss-Legendre + Newton);
@@ -35,9 +35,12 @@ from collections.abc import Callable, Iterator, Sequence
 import numpy as np
 import pandas as pd
 
-UM = 1e-6
-A, B, C, ALPHA = 50e-6, 75e-6, 200.0, 0.2
-PRESSURES = (200.0, 500.0, 1000.0)
+from tissuemech.compare import cases
+from tissuemech.compare.reference import shell_inner_stretch, shell_pressure
+
+A, C = cases.BLASTULA_INNER_RADIUS, cases.BLASTULA_C
+B, ALPHA = cases.FIG3["outer_radius"], cases.FIG3["alpha"]
+PRESSURES = cases.ACCURACY_PRESSURES
 ODE_RTOLS = (1e-3, 1e-4, 1e-6, 1e-8, 1e-10)
 FE_MESHES = ((2, 4), (4, 8), (8, 16), (16, 32))
 FE_MESHES_QUICK = ((1, 2), (2, 4), (4, 8), (8, 16))
@@ -76,9 +79,12 @@ def _ode_rtol(rtol: float) -> Iterator[None]:
 
 
 def _pressure_error(stretch: Sequence[float], pressure: Sequence[float], alpha: float = ALPHA) -> float:
-    from tissuemech.compare.bench.fem_blastula import p_exact
-
-    return float(max(abs(p_exact(float(l), B, alpha) / float(p) - 1.0) for l, p in zip(stretch, pressure)))
+    return float(
+        max(
+            abs(shell_pressure(float(l), outer_radius=B, alpha=alpha) / float(p) - 1.0)
+            for l, p in zip(stretch, pressure)
+        )
+    )
 
 
 def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
@@ -90,12 +96,11 @@ def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
     """
     import jax
 
-    from tissuemech.compare.bench.fem_blastula import la_exact
     from tissuemech.fem.blastula import inflate
     from tissuemech.reduced import blastula as bl
 
     ps = np.asarray(PRESSURES)
-    la_ex = np.array([la_exact(p, B, ALPHA) for p in ps])
+    la_ex = np.array([shell_inner_stretch(p, outer_radius=B, alpha=ALPHA) for p in ps])
     geo = dict(inner_radius=A, outer_radius=B, C=C, alpha=ALPHA)
     rows = []
 
@@ -162,8 +167,8 @@ def pareto(df: pd.DataFrame, x: str = "wall_s", y: str = "error") -> np.ndarray:
 # Spheroid (optional: needs fem.spheroid and reduced.spheroid)
 # ---------------------------------------------------------------------------------------------
 
-FIG10 = dict(radius=500 * UM, C=150.0, alpha=0.2, branches=[(0.4, 200.0)], displacement=50 * UM, ramp_time=0.2)
-SPHEROID_TIMES = (0.2, 1500.0)
+FIG10 = cases.FIG10
+SPHEROID_TIMES = cases.FIG10_TIMES
 
 
 def spheroid_available() -> str | None:

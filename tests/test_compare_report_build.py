@@ -1,8 +1,7 @@
 """tissuemech report: the folder it promises, and the physics in its numbers.
 
-Fast tests check the pieces (Pareto front, the exact viscoelastic reference, update-formula orders,
-the CLI). The slow module fixture runs ``build(..., quick=True)`` once (about 1.5 minutes on 2 cores)
-and checks every figure and table, then the numbers in them against tolerances.
+The session fixture ``quick_report`` (conftest.py) runs ``build(..., quick=True)`` once (about 1.5
+minutes on 2 cores); these tests check every figure and table, then the numbers in them.
 """
 
 from __future__ import annotations
@@ -14,68 +13,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from tissuemech.compare import report, stability
-from tissuemech.compare.accuracy import pareto
-
-# ---------------------------------------------------------------------------------------------
-# fast
-# ---------------------------------------------------------------------------------------------
-
-
-def test_pareto_front_marks_non_dominated_rows():
-    df = pd.DataFrame(dict(wall_s=[1.0, 2.0, 0.5, 3.0, np.nan], error=[1e-3, 1e-6, 1e-2, 1e-6, 1e-9]))
-    assert pareto(df).tolist() == [True, True, True, False, False]
-
-
-def test_exact_lumped_force_matches_quadrature_and_limits():
-    from scipy.integrate import quad
-
-    beta, tau, tr = 1.2, 0.05, 0.2
-    t = np.array([0.03, 0.1, 0.2, 0.5])
-    F = stability.exact_lumped_force(t, beta=beta, tau=tau, ramp_time=tr)
-    for ti, Fi in zip(t, F):
-        tt = min(ti, tr)
-        q = beta * quad(lambda s: np.exp(-(tt - s) / tau) * 1.5 * np.sqrt(s) / tr**1.5, 0, tt, epsrel=1e-12)[0]
-        q *= np.exp(-max(ti - tr, 0) / tau)
-        assert Fi == pytest.approx(min(ti / tr, 1) ** 1.5 + q, rel=1e-10)
-    # glassy limit (tau >> ramp): F(t_r) = 1 + beta; relaxed (tau << ramp): F(t_r) = 1
-    assert stability.exact_lumped_force([tr], beta=beta, tau=1e9, ramp_time=tr)[0] == pytest.approx(1 + beta, rel=1e-8)
-    assert stability.exact_lumped_force([tr], beta=beta, tau=1e-9, ramp_time=tr)[0] == pytest.approx(1.0, rel=1e-6)
-
-
-def test_update_formulas_orders_and_stability():
-    df, bounds = stability.viscous_step_map([0.05, 0.1, 1.0, 10.0, 500.0])
-    e = df.pivot(index="step_s", columns="update", values="error")
-    # backward Euler is first order in the hold step: halving h halves the error
-    assert e.loc[0.1, "backward Euler"] / e.loc[0.05, "backward Euler"] == pytest.approx(2.0, rel=0.15)
-    # the exact-linear update is exact in the hold: only the ramp's curvature is left, for any hold step
-    assert e["exact-linear"].max() < 1e-4
-    # forward Euler is unstable beyond h = 2 tau
-    assert e.loc[500.0, "forward Euler"] > 1.0
-    b = bounds.set_index("update")
-    assert b.loc["exact-linear", "limited_by_range"]
-    assert b.loc["backward Euler", "largest_ok_step_s"] == 1.0
-
-
-def test_cli_has_report_subcommand(capsys):
-    from tissuemech.compare.cli import main
-
-    with pytest.raises(SystemExit) as exc:
-        main(["report", "--help"])
-    assert exc.value.code == 0
-    assert "--quick" in capsys.readouterr().out
-
-
-# ---------------------------------------------------------------------------------------------
-# slow: the whole quick report once
-# ---------------------------------------------------------------------------------------------
-
-
-@pytest.fixture(scope="module")
-def quick_report(tmp_path_factory):
-    out = tmp_path_factory.mktemp("report")
-    summary = report.build(out, quick=True, progress=False)
-    return out, summary
+from tissuemech.compare import report
 
 
 def _csv(out: Path, name: str) -> pd.DataFrame:
@@ -189,14 +127,3 @@ def test_spheroid_numbers(quick_report):
     assert fit["tau"] == pytest.approx(200.0, rel=0.15) and fit["beta"] == pytest.approx(0.4, rel=0.15)
     comp = _csv(out, "stability_compression.csv")
     assert comp[comp.converged].fraction.max() >= 0.4
-
-
-def test_bad_inputs_raise_clear_errors():
-    with pytest.raises(ValueError, match="tau must be a positive"):
-        stability.viscous_step_map([1.0], tau=0.0)
-    with pytest.raises(ValueError, match="steps must be"):
-        stability.viscous_step_map([-1.0])
-    with pytest.raises(ValueError, match="below 1"):
-        stability.compression_map([0.5, 1.2])
-    with pytest.raises(ValueError, match="inner radius"):
-        stability.limit_point_map([40.0])

@@ -1,7 +1,7 @@
 r"""A stability map: each method pushed until it fails, with the boundary measured.
 
-Every function returns a ``pandas.DataFrame`` (one row per attempt) that ``compare.figures`` charts
-and ``compare.report`` writes as CSV:
+Every function returns a ``pandas.DataFrame`` (one row per attempt) that ``compare.plots.charts``
+charts and ``compare.report`` writes as CSV (the exact references live in ``compare.reference``):
 
 ``limit_point_map``      neo-Hookean (alpha = 1e-5) blastula, B in {52, 60, 75} um: the largest
                          pressure that FE load control reaches (it stops at the limit point), the
@@ -35,8 +35,11 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-UM = 1e-6
-A, C = 50e-6, 200.0
+from tissuemech.compare import cases
+from tissuemech.compare.reference import exact_lumped_force, lumped_equilibrium, shell_inner_stretch
+
+UM = cases.UM
+A, C = cases.BLASTULA_INNER_RADIUS, cases.BLASTULA_C
 
 
 def _positive_list(name: str, values: Sequence[float], unit: str = "") -> np.ndarray:
@@ -80,7 +83,7 @@ def limit_point_map(
     _positive_list("outer_um (outer radii)", outer_um, " in um")
     if any(b <= A / UM for b in outer_um):
         raise ValueError(f"outer radii must exceed the inner radius {A / UM:g} um; got {list(outer_um)}")
-    alpha = 1e-5
+    alpha = cases.NEO_HOOKEAN_ALPHA
     rows, traces = [], {}
     for b in outer_um:
         B = b * UM
@@ -180,14 +183,13 @@ def kappa_map(
     contains the physical compressibility error ~ C/kappa as well as locking). A Newton failure is
     recorded (error NaN, failed True, the message).
     """
-    from tissuemech.compare.bench.fem_blastula import la_exact
     from tissuemech.fem.blastula import inflate
     from tissuemech.fem.newton import NewtonError
 
     _positive_list("ratios (kappa/C)", ratios)
     _positive_list("pressures", pressures, " in Pa")
     B, alpha = 75e-6, 0.2
-    ex = np.array([la_exact(p, B, alpha) for p in pressures])
+    ex = np.array([shell_inner_stretch(p, outer_radius=B, alpha=alpha) for p in pressures])
     rows = []
     for form in ("mixed", "displacement"):
         for k in ratios:
@@ -290,43 +292,6 @@ def compression_map(
 # ---------------------------------------------------------------------------------------------
 
 
-def _feq(t, ramp_time):
-    return np.clip(np.asarray(t, float) / ramp_time, 0.0, 1.0) ** 1.5
-
-
-def exact_lumped_force(t: np.ndarray, *, beta: float, tau: float, ramp_time: float) -> np.ndarray:
-    r"""Exact F(t) = F_eq(t) + beta int_0^t e^{-(t-s)/tau} F_eq'(s) ds, F_eq = (min(t, t_r)/t_r)^(3/2).
-
-    During the ramp (T = t/tau, D = Dawson's integral, scipy.special.dawsn)
-        q(t) = (3/2) beta (tau/t_r)^{3/2} (sqrt(T) - D(sqrt(T)))
-    (from int_0^T e^v sqrt(v) dv = e^T (sqrt(T) - D(sqrt(T)))); after it q(t) = q(t_r) e^{-(t - t_r)/tau}.
-    Dimensionless force (F_eq(t_r) = 1); accurate to round-off for any tau (no quadrature).
-    """
-    t = np.asarray(t, float)
-    tt = np.minimum(t, ramp_time)
-    x = np.sqrt(tt / tau)
-    q = 1.5 * beta * (tau / ramp_time) ** 1.5 * _x_minus_dawson(x)
-    q = q * np.exp(-np.maximum(t - ramp_time, 0.0) / tau)
-    return _feq(t, ramp_time) + q
-
-
-def _x_minus_dawson(x: np.ndarray) -> np.ndarray:
-    """x - D(x) without cancellation: the series sum_{n>=1} (-1)^(n+1) 2^n x^(2n+1) / (2n+1)!! for x < 0.5."""
-    from scipy.special import dawsn
-
-    x = np.asarray(x, float)
-    out = x - dawsn(x)
-    small = x < 0.5
-    if np.any(small):
-        xs = x[small]
-        term, acc = xs.copy(), np.zeros_like(xs)
-        for n in range(1, 20):  # 0.5^38 / 39!! is far below round-off
-            term = -term * 2.0 * xs * xs / (2 * n + 1)
-            acc -= term
-        out[small] = acc
-    return out
-
-
 def _step_grid(h: float, ramp_time: float, end_time: float) -> np.ndarray:
     n_r = max(1, int(np.ceil(ramp_time / h - 1e-9)))
     n_h = max(1, int(np.ceil((end_time - ramp_time) / h - 1e-9)))
@@ -337,7 +302,7 @@ def _lumped_steps(t: np.ndarray, update: str, beta: float, tau: float, ramp_time
     """F_n on the grid t by one update formula (piecewise-uniform steps, so a linear filter per piece)."""
     from scipy.signal import lfilter
 
-    F = _feq(t, ramp_time)
+    F = lumped_equilibrium(t, ramp_time)
     dF = np.diff(F)
     x = np.diff(t) / tau
     if update == "exact-linear":
@@ -504,7 +469,9 @@ def stiff_solver_map(
             ok = bool(sol.result == diffrax.RESULTS.successful)
             err, note = np.nan, ""
             if ok:
-                ex = exact_lumped_force(ts_out, beta=beta, tau=tau, ramp_time=ramp_time) - _feq(ts_out, ramp_time)
+                ex = exact_lumped_force(ts_out, beta=beta, tau=tau, ramp_time=ramp_time) - lumped_equilibrium(
+                    ts_out, ramp_time
+                )
                 err = float(np.max(np.abs(np.asarray(sol.ys) - ex)) / beta)
             else:
                 note = f"failed: {sol.result} (max_steps = {max_steps})"

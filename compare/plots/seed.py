@@ -1,16 +1,14 @@
-r"""The seed's figures and the report's charts, as functions of already computed data.
+r"""The seed's figures, as functions of already computed data.
 
-Every function takes results (FE result objects, numpy arrays, ``pandas.DataFrame`` tables from
-``compare.accuracy`` / ``compare.stability``) and returns a ``matplotlib.figure.Figure`` (Agg
-backend, nothing is shown or saved here; ``compare.report`` saves them). Units on the axes: um, Pa,
-s, as in the seed.
+Every function takes results (FE result objects, numpy arrays) and returns a
+``matplotlib.figure.Figure`` (Agg backend, nothing is shown or saved here; ``compare.report``
+saves them). Units on the axes: um, Pa, s, as in the seed.
 
 Blastula (scene 1): ``fig3`` (von Mises on the deformed wall + exact through-wall profile vs FE),
 ``fig_stretch_pressure`` (Figs 4 and 5: FE lines, exact markers, the arc-length trace through the
 neo-Hookean limit point). Spheroid (scene 2): ``fig8`` (von Mises on the deformed section at two
 times), ``fig9`` (mean von Mises vs time), ``fig10`` (nominal stress vs time, FE / reduced / a fit
-to a synthetic record). Charts: ``accuracy_chart`` (log-log error vs wall time, Pareto front),
-``stability_charts`` (the four/five panels of the stability map).
+to a synthetic record). The report's charts are in :mod:`tissuemech.compare.plots.charts`.
 """
 
 from __future__ import annotations
@@ -19,29 +17,11 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
-UM = 1e-6
+from tissuemech.compare.cases import UM
+from tissuemech.compare.plots import pyplot as _plt
 
-__all__ = [
-    "fig3",
-    "fig_stretch_pressure",
-    "fig8",
-    "fig9",
-    "fig10",
-    "accuracy_chart",
-    "stability_charts",
-    "element_radius",
-]
-
-
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+__all__ = ["fig3", "fig_stretch_pressure", "fig8", "fig9", "fig10", "element_radius"]
 
 
 def element_radius(mesh) -> np.ndarray:
@@ -182,139 +162,5 @@ def fig10(curves: Sequence[Mapping[str, Any]], synthetic: Mapping[str, Any] | No
             ax.set_xscale("log")
     axes[0].legend(fontsize=7)
     fig.suptitle(label)
-    fig.tight_layout()
-    return fig
-
-
-# ---------------------------------------------------------------------------------------------
-# Charts
-# ---------------------------------------------------------------------------------------------
-
-
-def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16):
-    """Log-log error vs wall time, one marker style per method family, Pareto front joined in red."""
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(7.5, 5))
-    d = df[np.isfinite(df.wall_s.to_numpy(float)) & np.isfinite(df.error.to_numpy(float))].copy()
-    d["err_plot"] = np.maximum(d.error.to_numpy(float), floor)
-    markers = iter("osD^vP*X")
-    for method, g in d.groupby("method", sort=False):
-        ax.plot(g.wall_s, g.err_plot, next(markers), ms=7, mfc="none", label=method)
-        for _, r in g.iterrows():
-            ax.annotate(
-                str(r.setting).replace("mesh ", ""),
-                (r.wall_s, r.err_plot),
-                textcoords="offset points",
-                xytext=(4, 3),
-                fontsize=6,
-            )
-    front = d[d.pareto.astype(bool)].sort_values("wall_s")
-    ax.plot(front.wall_s, front.err_plot, "r-", lw=1, alpha=0.7, label="Pareto front")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("wall time per solve (s)")
-    ax.set_ylabel("relative error")
-    ax.set_title(title, fontsize=10)
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    return fig
-
-
-def stability_charts(
-    *,
-    limit: pd.DataFrame,
-    kappa: pd.DataFrame,
-    viscous: pd.DataFrame,
-    stiff: pd.DataFrame,
-    compression: pd.DataFrame | None = None,
-    tolerance: float = 1e-3,
-):
-    """The stability map: limit point, locking vs kappa/C, viscous step, stiff solvers, compression depth."""
-    plt = _plt()
-    fig, axes = plt.subplots(2, 3, figsize=(16, 9))
-    ax = axes[0, 0]
-    for method, g in limit.groupby("method", sort=False):
-        ax.plot(g.B_um, g.p_reached_Pa / g.p_max_exact_Pa, "o-", label=method)
-    ax.axhline(1.0, color="k", lw=0.8)
-    ax.set_xlabel("outer radius B (um), neo-Hookean")
-    ax.set_ylabel("largest pressure reached / exact p_max")
-    ax.set_title("limit point: load control stops, arc-length passes")
-    ax.legend(fontsize=7)
-    ax.grid(alpha=0.3)
-
-    ax = axes[0, 1]
-    for form, g in kappa.groupby("formulation", sort=False):
-        ok = ~g.failed.astype(bool)
-        (ln,) = ax.loglog(g.kappa_over_C[ok], g.error[ok], "o-", label=form)
-        if (~ok).any():
-            ax.plot(
-                g.kappa_over_C[~ok],
-                np.full((~ok).sum(), 1.0),
-                "x",
-                color=ln.get_color(),
-                ms=10,
-                label=f"{form}: Newton failed",
-            )
-    k = np.geomspace(kappa.kappa_over_C.min(), kappa.kappa_over_C.max(), 50)
-    ax.loglog(
-        k,
-        1.0 / k * kappa.error[kappa.formulation == "mixed"].iloc[0] * kappa.kappa_over_C.iloc[0],
-        "k:",
-        lw=0.8,
-        label="~ C/kappa",
-    )
-    ax.set_xlabel("kappa / C")
-    ax.set_ylabel("inner-stretch error vs incompressible exact")
-    ax.set_title("locking: displacement-only vs mixed u-p")
-    ax.legend(fontsize=7)
-    ax.grid(alpha=0.3, which="both")
-
-    ax = axes[0, 2]
-    for u, g in viscous.groupby("update", sort=False):
-        ax.loglog(g.step_s, np.maximum(g.error, 1e-16), "o-", ms=3, label=u)
-    ax.axhline(tolerance, color="r", lw=0.8, label=f"tolerance {tolerance:g}")
-    ax.set_ylim(1e-10, 10)
-    ax.set_xlabel("time step h (s)  [tau = 200 s, ramp 0.2 s]")
-    ax.set_ylabel("max force error / max force")
-    ax.set_title("viscoelastic update: largest step keeping 1e-3")
-    ax.legend(fontsize=7)
-    ax.grid(alpha=0.3, which="both")
-
-    ax = axes[1, 0]
-    for s, g in stiff.groupby("solver", sort=False):
-        ok = ~g.failed.astype(bool)
-        (ln,) = ax.loglog(g.tau_over_ramp[ok], g.steps[ok] + g.rejected[ok], "o-", label=f"{s}")
-        if (~ok).any():
-            ax.plot(
-                g.tau_over_ramp[~ok],
-                g.steps[~ok] + g.rejected[~ok],
-                "x",
-                color=ln.get_color(),
-                ms=10,
-                label=f"{s}: failed (max_steps)",
-            )
-    ax.set_xlabel("tau / ramp time")
-    ax.set_ylabel("solver steps (accepted + rejected)")
-    ax.set_title("stiffness: explicit vs implicit diffrax")
-    ax.invert_xaxis()
-    ax.legend(fontsize=7)
-    ax.grid(alpha=0.3, which="both")
-
-    ax = axes[1, 1]
-    if compression is not None and len(compression):
-        ok = compression.converged.astype(bool)
-        ax.plot(100 * compression.fraction[ok], compression.force_N[ok] * 1e6, "o-", label="converged")
-        if (~ok).any():
-            ax.plot(100 * compression.fraction[~ok], np.zeros((~ok).sum()), "rx", ms=10, label="failed")
-        ax.axvline(40, color="k", ls=":", lw=0.8, label="target 40 %")
-        ax.set_xlabel("total approach / diameter (%)")
-        ax.set_ylabel("plate force (uN)")
-        ax.legend(fontsize=7)
-    else:
-        ax.text(0.5, 0.5, "spheroid FE not available", ha="center", va="center", transform=ax.transAxes)
-    ax.set_title("static compression depth (spheroid FE)")
-    ax.grid(alpha=0.3)
-    axes[1, 2].axis("off")
     fig.tight_layout()
     return fig

@@ -1,0 +1,70 @@
+"""The ``tissuemech`` command line: the seed's scenes from the fast reduced models, the report, the benchmarks.
+
+    tissuemech blastula [--out blastula.png] [--max-pressure 1000] [--step 100] [--fem]
+    tissuemech spheroid [--out spheroid.png] [--C 150] [--alpha 0.2] [--beta 0.4] [--tau 200] ...
+    tissuemech report [--out DIR] [--quick]     (figures, accuracy-vs-speed charts, stability map)
+    tissuemech bench NAME [options]             (benchmark suites)
+    tissuemech --version
+
+Tables go to stdout, figures to PNG. Bad arguments get a one-line error (exit code 2).
+
+Each command is a module with ``add_parser(sub)`` (registers the subcommand on an argparse
+subparsers object) and ``run(args)``; ``COMMANDS`` lists them in help order. To add a command,
+append ``(name, "module path")`` to ``COMMANDS``; the module is imported only when the parser is built.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Sequence
+
+from tissuemech.compare.cli.common import CLIError
+
+__all__ = ["main", "COMMANDS", "CLIError", "build_parser"]
+
+# (subcommand, module with add_parser(sub) and run(args)); extra commands (fit, scan, ...) go here.
+COMMANDS: list[tuple[str, str]] = [
+    ("blastula", "tissuemech.compare.cli.blastula"),
+    ("spheroid", "tissuemech.compare.cli.spheroid"),
+    ("report", "tissuemech.compare.cli.report"),
+    ("bench", "tissuemech.compare.cli.bench"),
+]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argparse root with every subcommand of ``COMMANDS`` registered."""
+    import tissuemech
+
+    p = argparse.ArgumentParser(
+        prog="tissuemech",
+        description="Mechanics of developing tissue: blastula inflation and spheroid "
+        "compression-relaxation (Peters & Iber scenes), fast reduced models with FE checks.",
+    )
+    p.add_argument("--version", action="version", version=f"tissuemech {tissuemech.__version__}")
+    sub = p.add_subparsers(dest="command", metavar="COMMAND")
+    for _, module in COMMANDS:
+        importlib.import_module(module).add_parser(sub)
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``tissuemech`` console script; returns the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        parser.print_help()
+        return 0
+    module = dict(COMMANDS)[args.command]
+    try:
+        importlib.import_module(module).run(args)
+    except (ValueError, CLIError, OSError) as exc:
+        msg = str(exc).replace("Use equilibrium='hertz'", "Use --equilibrium hertz")
+        print(f"tissuemech {args.command}: error: {msg}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

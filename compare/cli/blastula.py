@@ -1,0 +1,130 @@
+"""``tissuemech blastula``: pressure-stretch table of the seed's Fig. 4 and 5 sets, limit pressures, PNG plot."""
+
+from __future__ import annotations
+
+import argparse
+import time
+from argparse import Namespace
+from typing import Any
+
+import numpy as np
+
+from tissuemech.compare import cases
+from tissuemech.compare.cases import UM
+from tissuemech.compare.cli.common import positive, save_figure
+
+__all__ = ["add_parser", "run", "blastula_curves", "blastula_table"]
+
+
+def add_parser(sub: Any) -> argparse.ArgumentParser:
+    """Register ``blastula`` on an argparse subparsers object."""
+    b = sub.add_parser(
+        "blastula",
+        help="pressure-stretch table and plot for the seed's Fig. 4 and Fig. 5 sets",
+        description="Inflate a hollow incompressible Fung sphere (inner radius 50 um) by internal "
+        "pressure. Prints inner and outer stretch for the Fig. 4 sets (alpha = 1e-5, 0.1, 0.2, 0.3; "
+        "outer radius 75 um) and the Fig. 5 sets (outer radius 52, 60, 75 um; alpha = 0.2), and the "
+        "limit ('burst') pressure where one exists; writes the pressure-stretch plot to a PNG.",
+    )
+    b.add_argument("--out", default="blastula.png", help="PNG file for the plot (default: %(default)s)")
+    b.add_argument("--C", type=positive(), default=200.0, help="Fung stiffness C in Pa (default: 200)")
+    b.add_argument("--inner-radius-um", type=positive(), default=50.0, help="inner radius in um (default: 50)")
+    b.add_argument("--max-pressure", type=positive(), default=1000.0, help="largest pressure in Pa (default: 1000)")
+    b.add_argument("--step", type=positive(), default=100.0, help="pressure step of the table in Pa (default: 100)")
+    b.add_argument("--fem", action="store_true", help="also run the finite-element model (slower) and show its stretch")
+    return b
+
+
+def run(args: Namespace) -> None:
+    """Run ``tissuemech blastula`` with parsed arguments."""
+    blastula_table(args)
+
+
+def blastula_curves(C: float, inner_radius: float, max_pressure: float, step: float) -> list[dict[str, Any]]:
+    """Inner/outer stretch at pressures 0..max_pressure for the seed's Fig. 4 and Fig. 5 sets.
+
+    Returns one dict per set with keys figure, alpha, outer_radius (m), pressure (Pa),
+    inner_stretch, outer_stretch (NaN past the limit point), limit (p_max, stretch) or None.
+    """
+    from tissuemech.reduced import blastula
+
+    pressures = np.arange(0.0, max_pressure + 0.5 * step, step)
+    out = []
+    for fig, alpha, B in cases.BLASTULA_SETS:
+        geo = dict(inner_radius=inner_radius, outer_radius=B)
+        lim = blastula.limit_point(**geo, C=C, alpha=alpha)
+        ok = pressures < lim[0] if lim is not None else np.ones_like(pressures, bool)
+        la = np.full_like(pressures, np.nan)
+        if ok.any():
+            la[ok] = np.asarray(blastula.inner_stretch(pressures[ok], **geo, C=C, alpha=alpha))
+        lb = np.where(ok, np.asarray(blastula.outer_stretch(np.where(ok, la, 1.0), **geo)), np.nan)
+        out.append(
+            dict(
+                figure=fig,
+                alpha=alpha,
+                outer_radius=B,
+                pressure=pressures,
+                inner_stretch=la,
+                outer_stretch=lb,
+                limit=lim,
+            )
+        )
+    return out
+
+
+def _print_blastula(curves: list[dict[str, Any]]) -> None:
+    for fig in ("Fig. 4", "Fig. 5"):
+        sets = [c for c in curves if c["figure"] == fig]
+        heads = [f"a={c['alpha']:g},B={c['outer_radius'] / UM:g}um" for c in sets]
+        print(f"\n{fig}: inner / outer stretch (lambda_a / lambda_b); A = 50 um")
+        print(f"{'p [Pa]':>8} " + " ".join(f"{h:>19}" for h in heads))
+        for i, p in enumerate(sets[0]["pressure"]):
+            cells = []
+            for c in sets:
+                la, lb = c["inner_stretch"][i], c["outer_stretch"][i]
+                cells.append(f"{'burst':>19}" if np.isnan(la) else f"{la:9.5f} / {lb:7.5f}")
+            print(f"{p:8.1f} " + " ".join(cells))
+    print("\nLimit (burst) pressure under load control:")
+    for c in curves:
+        lim = c["limit"]
+        where = f"a={c['alpha']:g}, B={c['outer_radius'] / UM:g} um"
+        if lim is None:
+            print(f"  {where}: none (p rises monotonically)")
+        else:
+            print(f"  {where}: p_max = {float(lim[0]):.2f} Pa at lambda_a = {float(lim[1]):.4f}")
+
+
+def blastula_table(args: Namespace) -> None:
+    """``tissuemech blastula``: table of the Fig. 4/5 sets, limit pressures, PNG plot."""
+    A = args.inner_radius_um * UM
+    curves = blastula_curves(args.C, A, args.max_pressure, args.step)
+    _print_blastula(curves)
+    fem_runs = _blastula_fem(curves, args.C, A) if getattr(args, "fem", False) else {}
+
+    from tissuemech.compare.plots.scenes import blastula_figure
+
+    fig = blastula_figure(curves, C=args.C, inner_radius=A, max_pressure=args.max_pressure, fem_runs=fem_runs)
+    save_figure(fig, args.out)
+    print(f"\nwrote {args.out}")
+
+
+def _blastula_fem(curves: list[dict[str, Any]], C: float, A: float) -> dict:
+    """Run the FE blastula for every set (load control to the table's pressures below any limit)."""
+    from tissuemech.fem import blastula as fem_blastula
+
+    runs = {}
+    print("\nFE check (fem.blastula.inflate, default mesh, kappa = 2.2 GPa):")
+    for c in curves:
+        ok = ~np.isnan(c["inner_stretch"])
+        ps = c["pressure"][ok][1:]
+        t0 = time.perf_counter()
+        run = fem_blastula.inflate(inner_radius=A, outer_radius=c["outer_radius"], C=C, alpha=c["alpha"], pressures=ps)
+        wall = time.perf_counter() - t0
+        exact = np.interp(run.pressure, c["pressure"][ok], c["inner_stretch"][ok])
+        err = np.max(np.abs(run.inner_stretch / exact - 1.0))
+        print(
+            f"  alpha={c['alpha']:g}, B={c['outer_radius'] / UM:g} um: {len(run.pressure)} steps in "
+            f"{wall:.2f} s, max |FE/exact - 1| of inner stretch = {err:.1e}"
+        )
+        runs[(c["alpha"], c["outer_radius"])] = run
+    return runs

@@ -1,0 +1,179 @@
+"""Report section 1: the seed's blastula figures (Figs 3-5) and the table of every set."""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from tissuemech.compare import cases
+from tissuemech.compare.cases import UM
+from tissuemech.compare.report.common import Section, md_table
+
+A, C_BL = cases.BLASTULA_INNER_RADIUS, cases.BLASTULA_C
+
+
+def _blastula_set(alpha: float, B: float, mesh, max_pressure: float = 1000.0, n: int = 20):
+    """FE curve of one set: load control to max_pressure, or arc-length through a limit point."""
+    from tissuemech.fem.blastula import inflate
+    from tissuemech.reduced import blastula as bl
+
+    lim = bl.limit_point(inner_radius=A, outer_radius=B, C=C_BL, alpha=alpha)
+    t0 = time.perf_counter()
+    if lim is not None and float(lim[0]) < max_pressure:
+        fe = inflate(
+            inner_radius=A,
+            outer_radius=B,
+            C=C_BL,
+            alpha=alpha,
+            pressures=None,
+            method="arclength",
+            max_inner_stretch=1.3 * float(lim[1]),
+            mesh=mesh,
+        )
+    else:
+        fe = inflate(
+            inner_radius=A,
+            outer_radius=B,
+            C=C_BL,
+            alpha=alpha,
+            pressures=np.linspace(max_pressure / n, max_pressure, n),
+            mesh=mesh,
+        )
+    wall = time.perf_counter() - t0
+    la = np.linspace(1.0, float(fe.inner_stretch.max()), 12)
+    geo = dict(inner_radius=A, outer_radius=B)
+    p_ex = np.asarray(bl.pressure(la, **geo, C=C_BL, alpha=alpha))
+    keep = fe.pressure > 0
+    p_fe_ex = np.asarray(bl.pressure(fe.inner_stretch[keep], **geo, C=C_BL, alpha=alpha))
+    err = float(np.max(np.abs(p_fe_ex / fe.pressure[keep] - 1)))
+    return dict(
+        fe=fe,
+        exact_p=p_ex,
+        exact_inner=la,
+        exact_outer=np.asarray(bl.outer_stretch(la, **geo)),
+        limit=lim,
+        wall=wall,
+        error=err,
+    )
+
+
+def section(traces: dict, *, quick: bool = False) -> Section:
+    """Figs 3-5: von Mises through the wall at 1 kPa, the alpha and thickness sweeps (FE vs exact).
+
+    traces: FE arc-length results through the neo-Hookean limit point keyed by B in um (from
+    ``studies.stability.limit_point_map``); the B = 75 um one is drawn in Fig. 5.
+    """
+    sec = Section("blastula", quick)
+    from tissuemech.compare.plots import seed as figures
+    from tissuemech.fem.blastula import inflate
+    from tissuemech.reduced import blastula as bl
+
+    mesh = "default" if sec.quick else "fine"
+    # Fig. 3
+    B, alpha, p = cases.FIG3["outer_radius"], cases.FIG3["alpha"], cases.FIG3["pressure"]
+    t0 = time.perf_counter()
+    fe = inflate(inner_radius=A, outer_radius=B, C=C_BL, alpha=alpha, pressures=np.linspace(100, p, 10), mesh=mesh)
+    wall3 = time.perf_counter() - t0
+    la = float(bl.inner_stretch(p, inner_radius=A, outer_radius=B, C=C_BL, alpha=alpha))
+    prof = bl.profiles(la, inner_radius=A, outer_radius=B, C=C_BL, alpha=alpha, n=200)
+    R_el = figures.element_radius(fe.mesh)
+    vm_ex = np.interp(R_el, np.asarray(prof.R), np.asarray(prof.von_mises))
+    vm_err = float(np.max(np.abs(fe.von_mises - vm_ex)) / np.max(np.asarray(prof.von_mises)))
+    la_err = abs(float(fe.inner_stretch[-1]) / la - 1)
+    sec.save(figures.fig3(fe, prof, pressure=p, alpha=alpha, outer_radius=B), "fig3_blastula_von_mises.png")
+    sec.summary["fig3"] = dict(
+        mesh=str(mesh),
+        inner_stretch_fe=float(fe.inner_stretch[-1]),
+        inner_stretch_exact=la,
+        stretch_rel_err=la_err,
+        von_mises_rel_err=vm_err,
+        wall_s=wall3,
+        von_mises_range_Pa=[float(fe.von_mises.min()), float(fe.von_mises.max())],
+        exact_von_mises_range_Pa=[float(np.min(prof.von_mises)), float(np.max(prof.von_mises))],
+    )
+
+    rows: list[dict[str, Any]] = []
+    sets4: list[dict[str, Any]] = []
+    sets5: list[dict[str, Any]] = []
+    for fig, alpha_, B_ in cases.BLASTULA_SETS:
+        b = B_ / UM
+        s = _blastula_set(alpha_, B_, mesh)
+        s["label"] = f"alpha={alpha_:g}" if fig == "Fig. 4" else f"B={b:g} um"
+        (sets4 if fig == "Fig. 4" else sets5).append(s)
+        lim = s["limit"]
+        rows.append(
+            dict(
+                figure=fig,
+                alpha=alpha_,
+                B_um=b,
+                method=s["fe"].method,
+                steps=len(s["fe"].pressure),
+                final_pressure_Pa=float(s["fe"].pressure[-1]),
+                final_inner_stretch=float(s["fe"].inner_stretch[-1]),
+                final_outer_stretch=float(s["fe"].outer_stretch[-1]),
+                max_rel_pressure_err=s["error"],
+                limit_p_Pa=np.nan if lim is None else float(lim[0]),
+                limit_stretch=np.nan if lim is None else float(lim[1]),
+                wall_s=s["wall"],
+            )
+        )
+    df = pd.DataFrame(rows)
+    sec.table(df, "blastula_sets.csv")
+    sec.summary["blastula_sets_max_err"] = float(df.max_rel_pressure_err.max())
+    lim75 = bl.limit_point(inner_radius=A, outer_radius=cases.FIG4_OUTER_RADIUS, C=C_BL, alpha=cases.NEO_HOOKEAN_ALPHA)
+    sec.save(
+        figures.fig_stretch_pressure(
+            sets4,
+            title="Fig. 4: B = 75 um, alpha sweep (neo-Hookean traced through its limit point by arc-length)",
+            limit=(float(lim75[0]), float(lim75[1])),
+        ),
+        "fig4_alpha_sweep.png",
+    )
+    sec.save(
+        figures.fig_stretch_pressure(
+            sets5,
+            title="Fig. 5: alpha = 0.2, thickness sweep (black: neo-Hookean B = 75 um arc-length)",
+            limit_trace=traces.get(75.0),
+        ),
+        "fig5_thickness_sweep.png",
+    )
+    sec.md += [
+        "## 1. The seed's blastula figures (Figs 3-5)",
+        "",
+        "![Fig. 3](fig3_blastula_von_mises.png)",
+        "",
+        f"Fig. 3 (alpha = 0.2, B = 75 um, p = 1 kPa, {mesh} mesh, {wall3:.2f} s): FE inner stretch "
+        f"{fe.inner_stretch[-1]:.6f} vs exact {la:.6f} (relative error {la_err:.1e}); element-mean von Mises vs the "
+        f"exact profile at the element centre: max error {vm_err:.1e} of the peak; von Mises "
+        f"{fe.von_mises.min():.0f}..{fe.von_mises.max():.0f} Pa (exact {float(np.min(prof.von_mises)):.0f}.."
+        f"{float(np.max(prof.von_mises)):.0f} Pa through the wall; element means do not reach the wall values).",
+        "",
+        "![Fig. 4](fig4_alpha_sweep.png)",
+        "",
+        "![Fig. 5](fig5_thickness_sweep.png)",
+        "",
+        "Every set (lines FE, circles exact): `blastula_sets.csv`; error = max over the FE steps of "
+        "|p_exact(lambda_a,FE)/p_FE - 1|.",
+        "",
+        md_table(
+            df,
+            cols=[
+                "figure",
+                "alpha",
+                "B_um",
+                "method",
+                "steps",
+                "final_pressure_Pa",
+                "final_inner_stretch",
+                "max_rel_pressure_err",
+                "limit_p_Pa",
+                "limit_stretch",
+                "wall_s",
+            ],
+        ),
+        "",
+    ]
+    return sec

@@ -1,0 +1,218 @@
+r"""``tissuemech report [--out DIR] [--quick]``: the seed's figures, accuracy-vs-speed charts and a
+stability map, regenerated from this code into one folder.
+
+Writes into ``DIR`` (default ``tissuemech-report``):
+
+* PNG figures: ``fig3_blastula_von_mises.png``, ``fig4_alpha_sweep.png``, ``fig5_thickness_sweep.png``,
+  ``fig8_spheroid_von_mises.png``, ``fig9_mean_von_mises.png``, ``fig10_nominal_stress.png`` (spheroid
+  figures only when ``fem.spheroid`` and ``reduced.spheroid`` import), ``accuracy_blastula.png``,
+  ``accuracy_spheroid.png``, ``stability_map.png``;
+* CSV tables (one per PNG chart and per seed comparison): ``blastula_sets.csv``, ``accuracy_blastula.csv``,
+  ``accuracy_spheroid.csv``, ``stability_limit_point.csv``, ``stability_kappa.csv``,
+  ``stability_viscous_step.csv``, ``stability_viscous_boundary.csv``, ``stability_stiff_solvers.csv``,
+  ``stability_compression.csv``, ``spheroid_seed.csv``, ``seed_comparison.csv``;
+* ``report.md`` showing them with the measured numbers and where the reproduction agrees with the
+  seed and where it does not; ``summary.json`` (the headline numbers, for tests and scripts).
+
+``--quick``: coarse meshes and fewer levels (under 3 minutes on 2 cores); the default runs the
+finer meshes. All timings in one report come from the same run on the same machine.
+Programmatic use: ``build(out_dir, quick=False) -> dict`` (the summary).
+
+Each section is a module of this package whose ``section(...)`` returns a ``Section`` (markdown,
+figures, tables, summary entries); ``build`` computes them, then writes the files and joins the
+markdown in document order: seed comparison, blastula (Figs 3-5), blastula accuracy, spheroid
+(Figs 8-10 and its accuracy), stability map.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import sys
+import time
+import traceback
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tissuemech.compare.report.common import Section
+
+__all__ = ["build", "main", "add_parser", "run_cli", "FIGURES", "TABLES", "SPHEROID_FIGURES", "SPHEROID_TABLES"]
+
+FIGURES = (
+    "fig3_blastula_von_mises.png",
+    "fig4_alpha_sweep.png",
+    "fig5_thickness_sweep.png",
+    "accuracy_blastula.png",
+    "stability_map.png",
+)
+SPHEROID_FIGURES = (
+    "fig8_spheroid_von_mises.png",
+    "fig9_mean_von_mises.png",
+    "fig10_nominal_stress.png",
+    "accuracy_spheroid.png",
+)
+TABLES = (
+    "blastula_sets.csv",
+    "accuracy_blastula.csv",
+    "stability_limit_point.csv",
+    "stability_kappa.csv",
+    "stability_viscous_step.csv",
+    "stability_viscous_boundary.csv",
+    "stability_stiff_solvers.csv",
+    "seed_comparison.csv",
+)
+SPHEROID_TABLES = ("accuracy_spheroid.csv", "stability_compression.csv", "spheroid_seed.csv")
+
+
+def _guarded(key: str, fn: Callable[[], Section], *, quick: bool) -> Section:
+    """Run an optional section (the spheroid); a failure is reported in the report, not fatal."""
+    try:
+        return fn()
+    except Exception as exc:
+        msg = f"{type(exc).__name__}: {exc}"
+        sec = Section(key, quick, summary={"spheroid_error": msg})
+        sec.md += [
+            f"## 3. Spheroid figures (Figs 8-10): FAILED in this run ({msg[:300]})",
+            "",
+            "```",
+            traceback.format_exc()[-2000:],
+            "```",
+            "",
+        ]
+        return sec
+
+
+def _write(out: Path, sec: Section, written: list[str]) -> None:
+    from tissuemech.compare.plots import pyplot
+
+    plt = pyplot()
+    for name, fig in sec.figures.items():
+        fig.savefig(out / name, dpi=110)
+        plt.close(fig)
+        written.append(name)
+    for name, df in sec.tables.items():
+        df.to_csv(out / name, index=False)
+        written.append(name)
+
+
+def build(out_dir: str | Path = "tissuemech-report", *, quick: bool = False, progress: bool = True) -> dict:
+    """Run every section and write the report folder.
+
+    Args: out_dir the folder (created if missing); quick coarse meshes and fewer levels; progress
+    show a progress bar on stderr. Returns the summary dict (also written as ``summary.json``).
+    """
+    from tqdm.auto import tqdm
+
+    import tissuemech.reduced  # noqa: F401  (float64 JAX)
+    from tissuemech.compare.report import accuracy, blastula, seed_comparison, spheroid, stability
+    from tissuemech.compare.studies import stability as stability_study
+    from tissuemech.compare.studies.accuracy import spheroid_available
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    t_start = time.perf_counter()
+    reason = spheroid_available()
+    done: dict[str, Section] = {}
+    state: dict[str, Any] = {}
+    stages: list[tuple[str, Callable[[], Section]]] = [
+        (
+            "limit point",
+            lambda: Section("limit point", quick, data=dict(limit=stability_study.limit_point_map(mesh="default"))),
+        ),
+        ("stability map", lambda: stability.section(state["limit"], quick=quick, spheroid_reason=reason)),
+        ("blastula figures", lambda: blastula.section(state["limit"][1], quick=quick)),
+        ("blastula accuracy", lambda: accuracy.section(quick=quick)),
+    ]
+    if reason is None:
+        stages.append(
+            (
+                "spheroid figures + accuracy",
+                lambda: _guarded("spheroid", lambda: spheroid.section(quick=quick), quick=quick),
+            )
+        )
+    summary: dict[str, Any] = {"quick": quick}
+    written: list[str] = []
+    bar = tqdm(stages, desc="tissuemech report", disable=not progress, unit="stage")
+    for name, fn in bar:
+        bar.set_postfix_str(name)
+        sec = fn()
+        if name == "limit point":
+            state["limit"] = sec.data["limit"]
+        done[name] = sec
+        summary.update(sec.summary)
+    done["seed comparison"] = seed_comparison.section(state["limit"][0], summary, quick=quick)
+    summary.update(done["seed comparison"].summary)
+    if reason is not None:
+        done["spheroid figures + accuracy"] = Section(
+            "spheroid",
+            quick,
+            md=[f"## 3. Spheroid figures (Figs 8-10) and spheroid accuracy: not available ({reason})", ""],
+        )
+    order = ["seed comparison", "blastula figures", "blastula accuracy", "spheroid figures + accuracy", "stability map"]
+    md: list[str] = []
+    for key in order:
+        _write(out, done[key], written)
+        md += done[key].md
+    total = time.perf_counter() - t_start
+    summary["total_wall_s"] = total
+    summary["spheroid_available"] = reason is None
+    summary["files"] = sorted(set(written))
+    head = [
+        "# tissuemech report" + (" (quick)" if quick else ""),
+        "",
+        f"Made by `tissuemech report --out {out}{' --quick' if quick else ''}` in {total:.0f} s on "
+        f"{platform.machine()} / {platform.system()} (shared CPU: timings are pessimistic; all in this run). "
+        "CSV tables next to this file hold every number shown.",
+        "",
+    ]
+    (out / "report.md").write_text("\n".join(head + md) + "\n")
+    (out / "summary.json").write_text(json.dumps(summary, indent=1, default=_json_default))
+    return summary
+
+
+def _json_default(o):
+    if isinstance(o, (np.floating, np.integer)):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, np.bool_):
+        return bool(o)
+    return str(o)
+
+
+def add_parser(sub: Any) -> argparse.ArgumentParser:
+    """Register the ``report`` subcommand on an argparse subparsers object."""
+    r = sub.add_parser(
+        "report",
+        help="regenerate the seed's figures, accuracy-vs-speed charts and the stability map into a folder",
+        description="Runs the reduced and FE models for both scenes and writes PNG figures, CSV tables and "
+        "report.md (with the measured numbers and the comparison with the seed) into --out.",
+    )
+    r.add_argument("--out", default="tissuemech-report", help="output folder (default: %(default)s)")
+    r.add_argument("--quick", action="store_true", help="coarse meshes, fewer levels (under 3 minutes)")
+    return r
+
+
+def run_cli(args: argparse.Namespace) -> None:
+    """``tissuemech report``: build the folder and print where it went."""
+    summary = build(args.out, quick=args.quick)
+    out = Path(args.out).resolve()
+    print(
+        f"wrote {len(summary['files'])} files to {out} (report: {out / 'report.md'}) in {summary['total_wall_s']:.0f} s"
+    )
+    if not summary["spheroid_available"]:
+        print("note: spheroid sections not available (fem.spheroid / reduced.spheroid missing)")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m tissuemech.compare.report [--out DIR] [--quick]``."""
+    p = argparse.ArgumentParser(prog="python -m tissuemech.compare.report")
+    sub = p.add_subparsers(dest="command")
+    add_parser(sub)
+    args = p.parse_args(["report", *(argv if argv is not None else sys.argv[1:])])
+    run_cli(args)
+    return 0

@@ -1,0 +1,133 @@
+"""Report section 4: the stability map (each method pushed until it fails)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from tissuemech.compare.report.common import Section, md_table
+
+
+def section(limit: tuple[pd.DataFrame, dict], *, quick: bool = False, spheroid_reason: str | None = None) -> Section:
+    """Stability map: limit point, locking vs kappa/C, viscous step, stiff solvers, compression depth.
+
+    limit: ``studies.stability.limit_point_map()`` output (computed once by the builder, shared with
+    the blastula section); spheroid_reason: why the spheroid FE is unavailable, or None.
+    """
+    sec = Section("stability", quick)
+    from tissuemech.compare.plots import charts
+    from tissuemech.compare.studies import stability
+
+    lim, traces = limit
+    kap = stability.kappa_map(mesh=(4, 8) if sec.quick else (8, 16))
+    visc, bounds = stability.viscous_step_map(
+        np.geomspace(1e-2 if sec.quick else 1e-3, 1500.0, 24 if sec.quick else 34)
+    )
+    stiff = stability.stiff_solver_map()
+    comp = None
+    if spheroid_reason is None:
+        comp = stability.compression_map(
+            (0.3, 0.4, 0.5, 0.6, 0.7) if sec.quick else (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.75, 0.79),
+            mesh="coarse" if sec.quick else "default",
+        )
+        sec.table(comp, "stability_compression.csv")
+    for df, name in (
+        (lim, "stability_limit_point.csv"),
+        (kap, "stability_kappa.csv"),
+        (visc, "stability_viscous_step.csv"),
+        (bounds, "stability_viscous_boundary.csv"),
+        (stiff, "stability_stiff_solvers.csv"),
+    ):
+        sec.table(df, name)
+    sec.save(
+        charts.stability_charts(limit=lim, kappa=kap, viscous=visc, stiff=stiff, compression=comp), "stability_map.png"
+    )
+
+    k7 = kap[kap.kappa_over_C == kap.kappa_over_C.max()].set_index("formulation")
+    sec.summary["stability"] = dict(
+        limit={
+            f"{r.method}|{r.B_um:g}": dict(p=r.p_reached_Pa, rel=r.rel_err_p, passed=bool(r.passed_limit))
+            for r in lim.itertuples()
+        },
+        kappa_max=float(kap.kappa_over_C.max()),
+        kappa_error_mixed=float(k7.loc["mixed", "error"]),
+        kappa_error_displacement=float(k7.loc["displacement", "error"]),
+        kappa_displacement_failed=bool(k7.loc["displacement", "failed"]),
+        viscous={
+            r.update: dict(
+                step=r.largest_ok_step_s, error=r.error_at_boundary, limited_by_range=bool(r.limited_by_range)
+            )
+            for r in bounds.itertuples()
+        },
+        stiff={
+            f"{r.solver}|{r.tau_over_ramp:g}": dict(
+                steps=int(r.steps), rejected=int(r.rejected), failed=bool(r.failed), error=r.error
+            )
+            for r in stiff.itertuples()
+        },
+        compression=None
+        if comp is None
+        else dict(
+            largest_converged=float(comp[comp.converged].fraction.max()) if comp.converged.any() else 0.0,
+            tried=comp.fraction.tolist(),
+        ),
+    )
+    lc = lim[lim.method == "FE load control"]
+    sec.md += [
+        "## 4. Stability map: each method pushed until it fails",
+        "",
+        "![stability map](stability_map.png)",
+        "",
+        "### Neo-Hookean limit point (alpha = 1e-5, default mesh)",
+        "",
+        "Load control (`fem.blastula.inflate`, adaptive cut-back) stops just below the limit with a "
+        "`LimitPointError`; arc-length passes it (max of the trace by a parabola through the three steps "
+        "around it); the reduced model gives the limit in closed form and raises `ValueError` above it.",
+        "",
+        md_table(
+            lim,
+            cols=[
+                "B_um",
+                "method",
+                "p_reached_Pa",
+                "stretch_reached",
+                "p_max_exact_Pa",
+                "stretch_limit_exact",
+                "rel_err_p",
+                "passed_limit",
+                "wall_s",
+            ],
+            floatfmt=".6g",
+        ),
+        "",
+        f"### Locking: kappa/C from 1e2 to 1e7 (alpha = 0.2, B = 75 um, mesh {(4, 8) if sec.quick else (8, 16)})",
+        "",
+        "Error = max |lambda_a,FE / lambda_a,exact - 1| at p = 250, 500 Pa against the INCOMPRESSIBLE exact shell, "
+        "so it includes the true compressibility effect (~C/kappa, shared by both) plus locking.",
+        "",
+        md_table(kap, cols=["formulation", "kappa_over_C", "error", "failed", "wall_s"]),
+        "",
+        "### Viscoelastic update formulas (lumped Maxwell branch, beta = 1.2, tau = 200 s, ramp 0.2 s, hold to 1500 s)",
+        "",
+        "Error = max over the steps of |F_n - F(t_n)| / max F against the exact solution (Dawson-integral closed "
+        "form). Uniform step h in the hold, the ramp split into ceil(t_r/h) steps.",
+        "",
+        md_table(bounds),
+        "",
+        "### Explicit vs implicit diffrax (same ODE with tau << ramp; rtol = atol = 1e-8, max_steps = 20000)",
+        "",
+        md_table(stiff.drop(columns=["note"])),
+        "",
+    ]
+    if comp is not None:
+        sec.md += [
+            "### Static compression depth (spheroid FE, alpha = 0.2, C = 200 Pa; stops at the first failure)",
+            "",
+            md_table(comp),
+            "",
+        ]
+    else:
+        sec.md += [f"### Static compression depth: not available ({spheroid_reason})", ""]
+    sec.summary["limit_load_control_Pa"] = {f"{r.B_um:g}": r.p_reached_Pa for r in lc.itertuples()}
+    sec.data.update(limit=lim, traces=traces)
+    return sec

@@ -1,0 +1,10 @@
+"""The studies, each a set of functions returning tidy pandas tables (units in the column names).
+
+* :mod:`~tissuemech.compare.studies.checks`: how far the reduced models can be trusted, case by case
+  (reduced vs FE; ``python -m tissuemech.compare.studies.checks``);
+* :mod:`~tissuemech.compare.studies.accuracy`: every method's error against its wall time (error vs
+  an exact or finest-mesh reference);
+* :mod:`~tissuemech.compare.studies.stability`: each method pushed until it fails.
+
+They use :mod:`tissuemech.compare.cases` and :mod:`tissuemech.compare.reference`, never the benchmarks.
+"""
