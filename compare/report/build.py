@@ -170,17 +170,27 @@ def build(out_dir: str | Path = "tissuemech-report", *, quick: bool = False, pro
         "",
     ]
     (out / "report.md").write_text("\n".join(head + md) + "\n")
-    (out / "summary.json").write_text(json.dumps(summary, indent=1, default=_json_default))
+    (out / "summary.json").write_text(json.dumps(json_safe(summary), indent=1, allow_nan=False))
     return summary
 
 
-def _json_default(o):
-    if isinstance(o, (np.floating, np.integer)):
-        return o.item()
+def json_safe(o: Any) -> Any:
+    """``o`` with numpy scalars/arrays as Python values and NaN / +-inf as None (JSON ``null``)."""
+    if isinstance(o, dict):
+        return {str(k): json_safe(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [json_safe(v) for v in o]
     if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, np.bool_):
+        return json_safe(o.tolist())
+    if isinstance(o, (np.bool_, bool)):
         return bool(o)
+    if isinstance(o, (np.integer, int)):
+        return int(o)
+    if isinstance(o, (np.floating, float)):
+        v = float(o)
+        return v if np.isfinite(v) else None
+    if o is None or isinstance(o, str):
+        return o
     return str(o)
 
 
@@ -198,7 +208,10 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
 
 
 def run_cli(args: argparse.Namespace) -> None:
-    """``tissuemech report``: build the folder and print where it went."""
+    """``tissuemech report``: check the folder, build it and print where it went."""
+    from tissuemech.compare.cli.common import output_folder
+
+    output_folder("--out", args.out)
     summary = build(args.out, quick=args.quick)
     out = Path(args.out).resolve()
     print(
