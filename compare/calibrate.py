@@ -173,13 +173,51 @@ def load(path: str | Path = DEFAULT_OUT) -> tuple[MasterCurves, dict]:
         return MasterCurves(z["x"], z["alpha"], z["f"], z["g"]), json.loads(str(z["metadata"]))
 
 
+def _count(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if v < 2:
+        raise argparse.ArgumentTypeError(f"must be at least 2, got {v}")
+    return v
+
+
+def _fraction(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not 0 < v < 0.8:
+        raise argparse.ArgumentTypeError(f"must be in (0, 0.8), got {v}")
+    return v
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m tissuemech.compare.calibrate``: tabulate F_eq and r_mid from static FE runs (see --help)."""
     ap = argparse.ArgumentParser(prog="python -m tissuemech.compare.calibrate", description=__doc__.split("\n")[0])
-    ap.add_argument("--out", default=str(DEFAULT_OUT))
+    ap.add_argument(
+        "--out",
+        default="spheroid_master.npz",
+        help="table to write (default: %(default)s in the current folder; the shipped table "
+        f"{DEFAULT_OUT} is replaced only with --install)",
+    )
+    ap.add_argument("--install", action="store_true", help="write the shipped table reduced/data/spheroid_master.npz")
     ap.add_argument("--store", default=None, help="folder for per-run results (resume)")
-    ap.add_argument("--n-x", type=int, default=31)
-    ap.add_argument("--x-max", type=float, default=0.3)
-    ap.add_argument("--alphas", default=",".join(str(a) for a in DEFAULT_ALPHAS))
+    ap.add_argument(
+        "--n-x", type=_count, default=31, help="points in x = delta/(2 a0) per alpha (default: %(default)s)"
+    )
+    ap.add_argument(
+        "--x-max",
+        type=_fraction,
+        default=0.3,
+        help="largest x = delta/(2 a0) of the table, in (0, 0.8) (default: %(default)s)",
+    )
+    ap.add_argument(
+        "--alphas",
+        default=",".join(str(a) for a in DEFAULT_ALPHAS),
+        help="comma list of Fung exponents alpha >= 0 to tabulate (default: %(default)s)",
+    )
     ap.add_argument(
         "--mesh", default="3", help="FE mesh of the table: a fem.spheroid level or name (default: %(default)s)"
     )
@@ -188,7 +226,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     ap.add_argument("--degree", type=int, default=3, help="degree of the smoothing polynomials in x (0: none)")
     a = ap.parse_args(list(sys.argv[1:] if argv is None else argv))
-    alphas = [float(v) for v in a.alphas.split(",")]
+    try:
+        alphas = [float(v) for v in a.alphas.split(",")]
+    except ValueError:
+        ap.error(f"--alphas must be a comma list of numbers, got {a.alphas!r}")
+    if any(not (v >= 0) for v in alphas):
+        ap.error(f"--alphas must be >= 0, got {a.alphas!r}")
+    if a.install:
+        a.out = str(DEFAULT_OUT)
     a.mesh = int(a.mesh) if str(a.mesh).isdigit() else a.mesh  # "fine" or a level number of fem.spheroid
     a.error_mesh = int(a.error_mesh) if str(a.error_mesh).isdigit() else a.error_mesh
     kw = dict(alphas=alphas, n_x=a.n_x, x_max=a.x_max)

@@ -33,7 +33,9 @@ def test_spheroid_table_and_plot(tmp_path, capsys):
 @pytest.mark.parametrize(
     "argv, match",
     [
-        (["blastula", "--inner-radius-um", "80"], "inner_radius must be smaller than outer_radius"),
+        (["blastula", "--inner-radius-um", "80"], "--inner-radius-um 80 must be below 52 um"),
+        (["spheroid", "--alpha", "5"], "--alpha 5 is outside the FE-calibrated table"),
+        (["spheroid", "--end-time", "0.1"], "--end-time (0.1 s) must be >= --ramp-time (0.2 s)"),
         (["spheroid", "--displacement-um", "400"], "--equilibrium hertz"),
     ],
 )
@@ -55,3 +57,41 @@ def test_cli_has_report_subcommand(capsys):
         cli.main(["report", "--help"])
     assert exc.value.code == 0
     assert "--quick" in capsys.readouterr().out
+
+
+def test_output_paths_are_checked_before_computing(tmp_path, capsys):
+    folder = tmp_path / "adir"
+    folder.mkdir()
+    assert cli.main(["spheroid", "--out", str(folder)]) == 2
+    assert "is a folder" in capsys.readouterr().err
+    assert cli.main(["blastula", "--out", str(tmp_path / "missing" / "b.png")]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    assert cli.main(["report", "--out", str(afile)]) == 2
+    assert "exists and is a file" in capsys.readouterr().err
+    # a name without an extension is written, and reported, as .png
+    assert cli.main(["spheroid", "--equilibrium", "hertz", "--out", str(tmp_path / "noext")]) == 0
+    assert f"wrote {tmp_path / 'noext.png'}" in capsys.readouterr().out
+    assert (tmp_path / "noext.png").stat().st_size > 10_000
+
+
+def test_version_and_bench_help_do_not_run_anything(capsys):
+    import tissuemech
+
+    with pytest.raises(SystemExit) as e:
+        cli.main(["--version"])
+    assert e.value.code == 0 and tissuemech.__version__ in capsys.readouterr().out
+    assert cli.main(["bench", "fem-spheroid", "--help"]) == 0
+    out = capsys.readouterr().out
+    assert "Benchmark of the FE spheroid" in out and "wall time min" not in out
+
+
+def test_checks_cli_rejects_bad_options(capsys):
+    from tissuemech.compare.studies import checks
+
+    for argv in (["--mesh", "bogus"], ["--spheroid-random", "-3"], ["--skip", "foo"]):
+        with pytest.raises(SystemExit) as e:
+            checks.main(argv)
+        assert e.value.code == 2
+    assert "unknown table(s) foo" in capsys.readouterr().err

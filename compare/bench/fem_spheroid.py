@@ -239,4 +239,9 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    import sys
+
+    if "-h" in sys.argv or "--help" in sys.argv:  # describe, never start the benchmark
+        print(__doc__)
+        raise SystemExit(0)
+    raise SystemExit(main(sys.argv[1:]))

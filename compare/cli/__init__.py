@@ -61,6 +61,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         importlib.import_module(module).run(args)
     except (ValueError, CLIError, OSError) as exc:
         msg = str(exc).replace("Use equilibrium='hertz'", "Use --equilibrium hertz")
+        msg = msg.replace("use equilibrium='hertz'", "use --equilibrium hertz").replace(" or a callable,", ",")
+        if isinstance(exc, OSError) and exc.filename is not None:  # a raw errno: say which file, in words
+            msg = f"cannot write {exc.filename!r}: {exc.strerror}"
         print(f"tissuemech {args.command}: error: {msg}", file=sys.stderr)
         return 2
     return 0

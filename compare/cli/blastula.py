@@ -11,7 +11,7 @@ import numpy as np
 
 from tissuemech.compare import cases
 from tissuemech.compare.cases import UM
-from tissuemech.compare.cli.common import positive, save_figure
+from tissuemech.compare.cli.common import CLIError, figure_path, positive, save_figure
 
 __all__ = ["add_parser", "run", "blastula_curves", "blastula_table"]
 
@@ -72,11 +72,11 @@ def blastula_curves(C: float, inner_radius: float, max_pressure: float, step: fl
     return out
 
 
-def _print_blastula(curves: list[dict[str, Any]]) -> None:
+def _print_blastula(curves: list[dict[str, Any]], inner_radius: float) -> None:
     for fig in ("Fig. 4", "Fig. 5"):
         sets = [c for c in curves if c["figure"] == fig]
         heads = [f"a={c['alpha']:g},B={c['outer_radius'] / UM:g}um" for c in sets]
-        print(f"\n{fig}: inner / outer stretch (lambda_a / lambda_b); A = 50 um")
+        print(f"\n{fig}: inner / outer stretch (lambda_a / lambda_b); A = {inner_radius / UM:g} um")
         print(f"{'p [Pa]':>8} " + " ".join(f"{h:>19}" for h in heads))
         for i, p in enumerate(sets[0]["pressure"]):
             cells = []
@@ -96,16 +96,25 @@ def _print_blastula(curves: list[dict[str, Any]]) -> None:
 
 def blastula_table(args: Namespace) -> None:
     """``tissuemech blastula``: table of the Fig. 4/5 sets, limit pressures, PNG plot."""
+    out = figure_path("--out", args.out)
+    b_min = min(B for _, _, B in cases.BLASTULA_SETS) / UM
+    if not args.inner_radius_um < b_min:
+        raise CLIError(
+            f"--inner-radius-um {args.inner_radius_um:g} must be below {b_min:g} um, the smallest outer radius "
+            "of the seed's sets (52, 60, 75 um)"
+        )
+    if args.step > args.max_pressure:
+        raise CLIError(f"--step {args.step:g} Pa must not exceed --max-pressure {args.max_pressure:g} Pa")
     A = args.inner_radius_um * UM
     curves = blastula_curves(args.C, A, args.max_pressure, args.step)
-    _print_blastula(curves)
+    _print_blastula(curves, A)
     fem_runs = _blastula_fem(curves, args.C, A) if getattr(args, "fem", False) else {}
 
     from tissuemech.compare.plots.scenes import blastula_figure
 
     fig = blastula_figure(curves, C=args.C, inner_radius=A, max_pressure=args.max_pressure, fem_runs=fem_runs)
-    save_figure(fig, args.out)
-    print(f"\nwrote {args.out}")
+    save_figure(fig, out)
+    print(f"\nwrote {out}")
 
 
 def _blastula_fem(curves: list[dict[str, Any]], C: float, A: float) -> dict:

@@ -43,3 +43,54 @@ def save_figure(fig: Any, path: str, dpi: int = 130) -> None:
 
     fig.savefig(path, dpi=dpi)
     pyplot().close(fig)
+
+
+def figure_path(option: str, text: str) -> str:
+    """Check a figure output path before any computation; returns the path that will be written.
+
+    A name without an extension gets ``.png`` (what matplotlib would write anyway, now said aloud);
+    an existing folder, an unknown image format, a missing or read-only parent folder are CLIError
+    with a one-line message naming ``option``.
+    """
+    from pathlib import Path
+
+    p = Path(text)
+    if p.is_dir():
+        raise CLIError(f"{option} {text!r} is a folder; give a file name such as {str(p / 'figure.png')!r}")
+    if not p.suffix:
+        p = p.with_name(p.name + ".png")
+    formats = {"png", "pdf", "svg", "jpg", "jpeg", "eps", "ps", "tif", "tiff", "webp"}
+    if p.suffix.lower().lstrip(".") not in formats:
+        raise CLIError(f"{option} {text!r}: unknown image format {p.suffix!r}; use .png, .pdf or .svg")
+    _writable_parent(option, p)
+    return str(p)
+
+
+def output_folder(option: str, text: str) -> str:
+    """Check an output folder before any computation (it may exist or will be created)."""
+    from pathlib import Path
+
+    p = Path(text)
+    if p.exists() and not p.is_dir():
+        raise CLIError(f"{option} {text!r} exists and is a file, not a folder; give a folder name")
+    if not p.exists():
+        _writable_parent(option, p)
+    elif not _can_write(p):
+        raise CLIError(f"{option} {text!r}: the folder is not writable")
+    return str(p)
+
+
+def _can_write(folder: Any) -> bool:
+    import os
+
+    return os.access(folder, os.W_OK | os.X_OK)
+
+
+def _writable_parent(option: str, p: Any) -> None:
+    parent = p.parent if str(p.parent) else type(p)(".")
+    if not parent.exists():
+        raise CLIError(f"{option} {str(p)!r}: the folder {str(parent)!r} does not exist")
+    if not parent.is_dir():
+        raise CLIError(f"{option} {str(p)!r}: {str(parent)!r} is not a folder")
+    if not _can_write(parent):
+        raise CLIError(f"{option} {str(p)!r}: the folder {str(parent)!r} is not writable")

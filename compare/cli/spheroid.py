@@ -11,7 +11,7 @@ import numpy as np
 
 from tissuemech.compare import cases
 from tissuemech.compare.cases import UM
-from tissuemech.compare.cli.common import nonnegative, positive, save_figure
+from tissuemech.compare.cli.common import CLIError, figure_path, nonnegative, positive, save_figure
 
 __all__ = ["add_parser", "run", "spheroid_times", "spheroid_table"]
 
@@ -72,10 +72,51 @@ def spheroid_times(ramp_time: float, end_time: float, n: int = 200) -> np.ndarra
     return np.concatenate([ramp, hold])
 
 
+def _check(args: Namespace) -> str:
+    """Validate the options in their own units before anything runs; returns the figure path."""
+    out = figure_path("--out", args.out)
+    if args.end_time < args.ramp_time:
+        raise CLIError(f"--end-time ({args.end_time:g} s) must be >= --ramp-time ({args.ramp_time:g} s)")
+    x = args.displacement_um / (2 * args.radius_um)
+    if x >= 0.8:
+        raise CLIError(
+            f"--displacement-um {args.displacement_um:g} is {100 * x:.0f} % of the diameter (2 x --radius-um); "
+            "it must be below 80 %"
+        )
+    if args.equilibrium == "fem":
+        from tissuemech.reduced import spheroid
+
+        try:
+            mc = spheroid.master_curve()
+        except FileNotFoundError:
+            raise CLIError(
+                "no FE-calibrated table is installed; use --equilibrium hertz or run python -m tissuemech.compare.calibrate"
+            ) from None
+        if x > mc.x_max * (1 + 1e-12):
+            raise CLIError(
+                f"--displacement-um {args.displacement_um:g} is {100 * x:.3g} % of the diameter; the FE-calibrated "
+                f"table covers up to {100 * mc.x_max:.3g} %: use --equilibrium hertz (small strain) or extend the "
+                "table (python -m tissuemech.compare.calibrate --x-max ...)"
+            )
+        if mc.alpha is not None:
+            lo, hi = mc.alpha_range
+            if not lo - 1e-12 <= args.alpha <= hi + 1e-12:
+                raise CLIError(
+                    f"--alpha {args.alpha:g} is outside the FE-calibrated table ({lo:g} <= alpha <= {hi:g}): "
+                    "use --equilibrium hertz (small strain) or extend the table (python -m tissuemech.compare.calibrate)"
+                )
+    return out
+
+
 def spheroid_table(args: Namespace) -> None:
-    """``tissuemech spheroid``: force and nominal stress over time, PNG of the relaxation curve."""
+    """``tissuemech spheroid``: force and nominal stress over time, PNG of the relaxation curve.
+
+    With ``--fem`` the table compares reduced and FE at the FE's own step times (the reduced model is
+    evaluated there; nothing is interpolated).
+    """
     from tissuemech.reduced import spheroid
 
+    out = _check(args)
     kw = dict(
         radius=args.radius_um * UM,
         C=args.C,
@@ -86,7 +127,6 @@ def spheroid_table(args: Namespace) -> None:
         equilibrium=args.equilibrium,
     )
     t = spheroid_times(args.ramp_time, args.end_time)
-    force = np.asarray(spheroid.force(t, **kw))
     sigma = np.asarray(spheroid.nominal_stress(t, **kw))
     fe = None
     if getattr(args, "fem", False):
@@ -102,26 +142,48 @@ def spheroid_table(args: Namespace) -> None:
             ramp_time=args.ramp_time,
             end_time=args.end_time,
         )
-        print(f"FE run: {len(fe.time)} steps in {time.perf_counter() - t0:.1f} s")
+        print(f"FE run (fem.spheroid.compress, default mesh): {len(fe.time)} steps in {time.perf_counter() - t0:.1f} s")
 
     print(
         f"Spheroid a0 = {args.radius_um:g} um, C = {args.C:g} Pa, alpha = {args.alpha:g}, "
         f"beta = {args.beta:g}, tau = {args.tau:g} s; approach {args.displacement_um:g} um in "
         f"{args.ramp_time:g} s, held to {args.end_time:g} s; equilibrium: {args.equilibrium}"
     )
-    show = [t_ for t_ in (0.05, 0.1, 0.2, 1, 10, 50, 100, 200, 400, 800, 1200, args.end_time) if t_ <= args.end_time]
-    head = f"{'t [s]':>8} {'F [uN]':>10} {'sigma~ [Pa]':>12}"
-    print(head + (f" {'FE sigma~ [Pa]':>15}" if fe is not None else ""))
-    for ts in show:
-        row = f"{ts:8.2f} {np.interp(ts, t, force) * 1e6:10.4f} {np.interp(ts, t, sigma):12.4f}"
-        if fe is not None:
-            row += f" {np.interp(ts, fe.time, fe.nominal_stress):15.4f}"
+    if fe is None:
+        show = [v for v in (0.05, 0.1, 0.2, 1, 10, 50, 100, 200, 400, 800, 1200) if v < args.end_time]
+        show = np.array([v * args.ramp_time / 0.2 if v <= 0.2 else v for v in show] + [args.end_time])
+        show = np.unique(show[show <= args.end_time])
+    else:
+        show = np.asarray(fe.time)[np.asarray(fe.time) > 0]
+    F_show = np.asarray(spheroid.force(show, **kw))
+    s_show = np.asarray(spheroid.nominal_stress(show, **kw))
+    head = f"{'t [s]':>9} {'F [uN]':>10} {'sigma~ [Pa]':>12}"
+    if fe is not None:
+        head += f" {'FE sigma~ [Pa]':>15} {'reduced/FE - 1':>15}"
+        print("(rows: the FE step times)")
+    print(head)
+    s_fe = np.asarray(fe.nominal_stress)[np.asarray(fe.time) > 0] if fe is not None else None
+    for k, ts in enumerate(show):
+        row = (f"{ts:9.4g}" if s_fe is not None else f"{ts:9.2f}") + f" {F_show[k] * 1e6:10.4f} {s_show[k]:12.4f}"
+        if s_fe is not None:
+            row += f" {s_fe[k]:15.4f} {s_show[k] / s_fe[k] - 1:+15.2e}"
         print(row)
+    if s_fe is not None:
+        ramp = show <= args.ramp_time * (1 + 1e-12)
+        dev = np.abs(s_show / s_fe - 1)
+        print(
+            f"max |reduced/FE - 1| at the FE step times: {dev[ramp].max():.2e} during the ramp, "
+            + (f"{dev[~ramp].max():.2e} in the hold" if (~ramp).any() else "no hold steps")
+        )
 
     from tissuemech.compare.plots.scenes import spheroid_figure
 
-    fig = spheroid_figure(
-        t, sigma, equilibrium=args.equilibrium, ramp_time=args.ramp_time, end_time=args.end_time, fe=fe
+    title = (
+        f"Spheroid a0 = {args.radius_um:g} um, C = {args.C:g} Pa, alpha = {args.alpha:g}, beta = {args.beta:g}, "
+        f"tau = {args.tau:g} s; {args.displacement_um:g} um in {args.ramp_time:g} s"
     )
-    save_figure(fig, args.out)
-    print(f"\nwrote {args.out}")
+    fig = spheroid_figure(
+        t, sigma, equilibrium=args.equilibrium, ramp_time=args.ramp_time, end_time=args.end_time, fe=fe, title=title
+    )
+    save_figure(fig, out)
+    print(f"\nwrote {out}")

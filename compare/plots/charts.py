@@ -24,73 +24,134 @@ __all__ = [
 ]
 
 
-def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16):
-    """Log-log error vs wall time, one marker style per method family, Pareto front joined in red."""
+def _spread_labels(y: np.ndarray, min_sep: float) -> np.ndarray:
+    """Label positions (log10) at least ``min_sep`` apart, as close to ``y`` as the order allows."""
+    order = np.argsort(y)
+    out = np.array(y, float)
+    for k in range(1, len(order)):
+        a, b = order[k - 1], order[k]
+        out[b] = max(out[b], out[a] + min_sep)
+    shift = np.mean(out - y)  # re-centre the stack on the points
+    return out - shift
+
+
+def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16, note: str = ""):
+    """Log-log error vs wall time: one marker per method, timing spread as horizontal bars, Pareto front.
+
+    Labels sit to the right of their points, stacked so they never overlap, with a leader line.
+    ``df`` columns: method, setting, wall_s, error, pareto and optionally wall_min_s / wall_max_s.
+    """
     plt = _plt()
-    fig, ax = plt.subplots(figsize=(7.5, 5))
+    fig, ax = plt.subplots(figsize=(9, 6))
     d = df[np.isfinite(df.wall_s.to_numpy(float)) & np.isfinite(df.error.to_numpy(float))].copy()
     d["err_plot"] = np.maximum(d.error.to_numpy(float), floor)
     markers = iter("osD^vP*X")
+    span = np.log10(d.err_plot.max()) - np.log10(d.err_plot.min())
+    min_sep = max(0.06 * span, 0.25)  # decades between stacked labels: about one line of text
     for method, g in d.groupby("method", sort=False):
-        ax.plot(g.wall_s, g.err_plot, next(markers), ms=7, mfc="none", label=method)
-        for _, r in g.iterrows():
+        x = g.wall_s.to_numpy(float)
+        y = g.err_plot.to_numpy(float)
+        if "wall_min_s" in g and "wall_max_s" in g:
+            xerr = np.vstack([x - g.wall_min_s.to_numpy(float), g.wall_max_s.to_numpy(float) - x])
+            (ln,) = ax.plot(x, y, next(markers), ms=7, mfc="none", label=method)
+            ax.errorbar(x, y, xerr=np.maximum(xerr, 0), fmt="none", ecolor=ln.get_color(), lw=0.8, capsize=2)
+        else:
+            (ln,) = ax.plot(x, y, next(markers), ms=7, mfc="none", label=method)
+        ly = 10 ** _spread_labels(np.log10(y), min_sep)
+        lx = x.max() * 2.2
+        for xi, yi, lyi, text in zip(x, y, ly, g.setting.astype(str)):
             ax.annotate(
-                str(r.setting).replace("mesh ", ""),
-                (r.wall_s, r.err_plot),
-                textcoords="offset points",
-                xytext=(4, 3),
-                fontsize=6,
+                text.replace("mesh ", ""),
+                (xi, yi),
+                xytext=(lx, lyi),
+                textcoords="data",
+                fontsize=7,
+                color=ln.get_color(),
+                va="center",
+                arrowprops=dict(arrowstyle="-", color=ln.get_color(), lw=0.5, alpha=0.6),
             )
     front = d[d.pareto.astype(bool)].sort_values("wall_s")
-    ax.plot(front.wall_s, front.err_plot, "r-", lw=1, alpha=0.7, label="Pareto front")
+    ax.plot(
+        front.wall_s,
+        front.err_plot,
+        "o-",
+        color="r",
+        ms=12,
+        mfc="none",
+        lw=1,
+        alpha=0.7,
+        label="Pareto front (dominance beyond the timing spread)",
+    )
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("wall time per solve (s)")
+    xmin, xmax = d.wall_s.min(), d.wall_s.max()
+    ax.set_xlim(xmin / 3, xmax * 30)
+    ax.set_xlabel("wall time per solve (s): median of repeated calls after a warm-up; bars: min..max")
     ax.set_ylabel("relative error")
     ax.set_title(title, fontsize=10)
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7)
-    fig.tight_layout()
+    ax.legend(fontsize=7, loc="upper center")
+    if note:
+        import textwrap
+
+        fig.text(0.01, 0.01, "\n".join(textwrap.wrap(note, 150)), fontsize=7, va="bottom")
+    fig.tight_layout(rect=(0, 0.06 if note else 0, 1, 1))
     return fig
 
 
 def limit_point_panel(ax, limit: pd.DataFrame) -> None:
-    """Largest pressure reached / exact p_max per outer radius and method (neo-Hookean limit point)."""
-    for method, g in limit.groupby("method", sort=False):
-        ax.plot(g.B_um, g.p_reached_Pa / g.p_max_exact_Pa, "o-", label=method)
-    ax.axhline(1.0, color="k", lw=0.8)
-    ax.set_xlabel("outer radius B (um), neo-Hookean")
-    ax.set_ylabel("largest pressure reached / exact p_max")
-    ax.set_title("limit point: load control stops, arc-length passes")
+    """Relative distance of the largest pressure reached from the exact p_max, per geometry and method.
+
+    Three separate geometries: markers side by side per outer radius (no lines between them); symlog
+    y so that the sign (below / past the limit) and the size (1e-6 .. 1e-2) both read.
+    """
+    bs = sorted(limit.B_um.unique())
+    methods = list(dict.fromkeys(limit.method))
+    width = 0.7 / max(len(methods), 1)
+    for k, (method, mk) in enumerate(zip(methods, "so^Dv")):
+        g = limit[limit.method == method].set_index("B_um")
+        xs = [bs.index(b) - 0.35 + width * (k + 0.5) for b in g.index]
+        ax.plot(xs, g.p_reached_Pa / g.p_max_exact_Pa - 1, mk, ms=8, mfc="none", ls="none", label=method)
+    ax.set_yscale("symlog", linthresh=1e-7)
+    ax.axhline(0.0, color="k", lw=0.8)
+    ax.set_xticks(range(len(bs)), [f"B = {b:g} um" for b in bs])
+    ax.set_xlim(-0.6, len(bs) - 0.4)
+    ax.set_ylabel("p_reached / p_max,exact - 1 (symlog)")
+    ax.set_title("neo-Hookean limit point: load control stops below (< 0), arc-length passes it", fontsize=9)
     ax.legend(fontsize=7)
-    ax.grid(alpha=0.3)
+    ax.grid(alpha=0.3, axis="y")
 
 
 def kappa_panel(ax, kappa: pd.DataFrame) -> None:
-    """Inner-stretch error vs kappa/C, mixed u-p against displacement-only."""
+    """Inner-stretch error vs kappa/C, mixed u-p against displacement-only; Newton failures on a top band."""
+    ok_all = ~kappa.failed.astype(bool)
+    top = 3.0 * float(np.nanmax(kappa.error[ok_all])) if ok_all.any() else 1.0
     for form, g in kappa.groupby("formulation", sort=False):
         ok = ~g.failed.astype(bool)
         (ln,) = ax.loglog(g.kappa_over_C[ok], g.error[ok], "o-", label=form)
         if (~ok).any():
             ax.plot(
                 g.kappa_over_C[~ok],
-                np.full((~ok).sum(), 1.0),
+                np.full((~ok).sum(), top),
                 "x",
                 color=ln.get_color(),
                 ms=10,
-                label=f"{form}: Newton failed",
+                ls="none",
+                label=f"{form}: Newton failed (no error; drawn on the top band)",
             )
+    if (~ok_all).any():
+        ax.axhline(top, color="0.6", lw=0.6, ls=":")
     k = np.geomspace(kappa.kappa_over_C.min(), kappa.kappa_over_C.max(), 50)
     ax.loglog(
         k,
         1.0 / k * kappa.error[kappa.formulation == "mixed"].iloc[0] * kappa.kappa_over_C.iloc[0],
         "k:",
         lw=0.8,
-        label="~ C/kappa",
+        label="~ C/kappa (physical compressibility)",
     )
     ax.set_xlabel("kappa / C")
     ax.set_ylabel("inner-stretch error vs incompressible exact")
-    ax.set_title("locking: displacement-only vs mixed u-p")
+    ax.set_title("locking: displacement-only vs mixed u-p", fontsize=9)
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3, which="both")
 
@@ -110,9 +171,9 @@ def viscous_step_panel(ax, viscous: pd.DataFrame, tolerance: float = 1e-3) -> No
 
 def stiff_solver_panel(ax, stiff: pd.DataFrame) -> None:
     """Accepted + rejected diffrax steps vs tau / ramp time, explicit against implicit."""
-    for s, g in stiff.groupby("solver", sort=False):
+    for name, g in stiff.groupby("solver", sort=False):
         ok = ~g.failed.astype(bool)
-        (ln,) = ax.loglog(g.tau_over_ramp[ok], g.steps[ok] + g.rejected[ok], "o-", label=f"{s}")
+        (ln,) = ax.loglog(g.tau_over_ramp[ok], g.steps[ok] + g.rejected[ok], "o-", label=f"{name}")
         if (~ok).any():
             ax.plot(
                 g.tau_over_ramp[~ok],
@@ -120,30 +181,42 @@ def stiff_solver_panel(ax, stiff: pd.DataFrame) -> None:
                 "x",
                 color=ln.get_color(),
                 ms=10,
-                label=f"{s}: failed (max_steps)",
+                ls="none",
+                label=f"{name}: gave up (steps taken when max_steps was hit)",
             )
     ax.set_xlabel("tau / ramp time")
     ax.set_ylabel("solver steps (accepted + rejected)")
-    ax.set_title("stiffness: explicit vs implicit diffrax")
+    ax.set_title("stiffness: explicit vs implicit diffrax", fontsize=9)
     ax.invert_xaxis()
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3, which="both")
 
 
-def compression_panel(ax, compression: pd.DataFrame | None) -> None:
-    """Static compression depth: plate force vs total approach / diameter."""
+def compression_panel(ax, compression: pd.DataFrame | None, seed_depth: float = 0.3, cap: float = 0.8) -> None:
+    """Static compression depth: plate force vs total approach / diameter, how the push ended."""
     if compression is not None and len(compression):
         ok = compression.converged.astype(bool)
         ax.plot(100 * compression.fraction[ok], compression.force_N[ok] * 1e6, "o-", label="converged")
-        if (~ok).any():
-            ax.plot(100 * compression.fraction[~ok], np.zeros((~ok).sum()), "rx", ms=10, label="failed")
-        ax.axvline(40, color="k", ls=":", lw=0.8, label="target 40 %")
+        for _, r in compression[~ok].iterrows():
+            ax.plot(100 * r.fraction, 0.0, "rx", ms=10, ls="none")
+            ax.annotate(
+                f"{r.failure}",
+                (100 * r.fraction, 0.0),
+                textcoords="offset points",
+                xytext=(-10, 8),
+                fontsize=7,
+                color="r",
+            )
+        ax.axvline(100 * seed_depth, color="k", ls=":", lw=0.8, label=f"seed: static runs to {100 * seed_depth:.0f} %")
+        ax.axvline(
+            100 * cap, color="r", ls="--", lw=0.8, label=f"fem.spheroid refuses >= {100 * cap:.0f} % (stated cap)"
+        )
         ax.set_xlabel("total approach / diameter (%)")
         ax.set_ylabel("plate force (uN)")
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=7, loc="upper left")
     else:
         ax.text(0.5, 0.5, "spheroid FE not available", ha="center", va="center", transform=ax.transAxes)
-    ax.set_title("static compression depth (spheroid FE)")
+    ax.set_title("static compression depth (spheroid FE): pushed to failure or cap", fontsize=9)
     ax.grid(alpha=0.3)
 
 

@@ -17,27 +17,30 @@ def blastula_figure(
 ):
     """Pressure-stretch curves of the Fig. 4 (left) and Fig. 5 (right) sets: exact lines, FE markers.
 
-    curves: ``cli.blastula.blastula_curves`` output; C (Pa); inner_radius (m); max_pressure (Pa);
-    fem_runs: {(alpha, outer_radius): FE result} (may be empty).
+    curves: ``cli.blastula.blastula_curves`` output; C (Pa); inner_radius (m); max_pressure (Pa), the
+    top of the plotted pressure range; fem_runs: {(alpha, outer_radius): FE result} (may be empty).
+    Each exact curve runs from (1, 0) to max_pressure, or past the limit point to 1.6 x its stretch.
     """
     from tissuemech.reduced import blastula
 
-    A = inner_radius
     plt = _plt()
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.3), sharey=True)
     for ax, name in zip(axes, ("Fig. 4", "Fig. 5")):
         for c in (c for c in curves if c["figure"] == name):
             label = f"alpha={c['alpha']:g}" if name == "Fig. 4" else f"B={c['outer_radius'] / UM:g} um"
+            geo = dict(inner_radius=inner_radius, outer_radius=c["outer_radius"], C=C, alpha=c["alpha"])
             lim = c["limit"]
-            la_top = 4.0 if lim is None else 2.2 * float(lim[1])
-            la = np.linspace(1.0, la_top, 400)
-            geo = dict(inner_radius=A, outer_radius=c["outer_radius"])
-            p = np.asarray(blastula.pressure(la, **geo, C=C, alpha=c["alpha"]))
-            keep = p <= max_pressure * 1.02
+            if lim is None or float(lim[0]) >= max_pressure:
+                la_top = float(blastula.inner_stretch(max_pressure, **geo))
+            else:
+                la_top = 1.6 * float(lim[1])
+            la = np.linspace(1.0, la_top, 600)
+            p = np.asarray(blastula.pressure(la, **geo))
+            keep = p <= max_pressure * 1.0001
             (line,) = ax.plot(la[keep], p[keep], label=label + " (inner)")
-            lb = np.asarray(blastula.outer_stretch(la, **geo))
+            lb = np.asarray(blastula.outer_stretch(la, inner_radius=inner_radius, outer_radius=c["outer_radius"]))
             ax.plot(lb[keep], p[keep], "--", color=line.get_color(), lw=1)
-            if lim is not None:
+            if lim is not None and float(lim[0]) < max_pressure:
                 ax.plot(float(lim[1]), float(lim[0]), "kx", ms=8)
                 ax.annotate(
                     f"limit {float(lim[0]):.0f} Pa",
@@ -50,16 +53,17 @@ def blastula_figure(
             if run is not None:
                 ax.plot(run.inner_stretch, run.pressure, "o", color=line.get_color(), ms=3, mfc="none")
         ax.set_xlabel("stretch (solid: inner a/A, dashed: outer b/B)")
-        ax.set_title(f"{name}" + (" (markers: FE)" if fem_runs else ""))
+        ax.set_title(f"{name}" + (" (circles: FE)" if fem_runs else ""))
+        ax.set_ylim(0, max_pressure * 1.05)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
     axes[0].set_ylabel("pressure p [Pa]")
-    fig.suptitle("Blastula inflation: exact incompressible Fung shell, A = 50 um, C = %g Pa" % C)
+    fig.suptitle(f"Blastula inflation: exact incompressible Fung shell, A = {inner_radius / UM:g} um, C = {C:g} Pa")
     fig.tight_layout()
     return fig
 
 
-def spheroid_figure(t, sigma, *, equilibrium: str, ramp_time: float, end_time: float, fe: Any = None):
+def spheroid_figure(t, sigma, *, equilibrium: str, ramp_time: float, end_time: float, fe: Any = None, title: str = ""):
     """Nominal stress vs time: the ramp (left, linear time) and the relaxation (right, log time).
 
     t (s), sigma (Pa): the reduced curve; fe: an FE result with ``time`` and ``nominal_stress`` or None.
@@ -79,6 +83,6 @@ def spheroid_figure(t, sigma, *, equilibrium: str, ramp_time: float, end_time: f
     axes[1].set_title("relaxation (log time)")
     axes[0].set_ylabel("nominal stress F / A_mid [Pa]")
     axes[0].legend()
-    fig.suptitle("Spheroid compression-relaxation (seed Fig. 10 case by default)")
+    fig.suptitle(title or "Spheroid compression-relaxation")
     fig.tight_layout()
     return fig

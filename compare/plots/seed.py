@@ -4,9 +4,10 @@ Every function takes results (FE result objects, numpy arrays) and returns a
 ``matplotlib.figure.Figure`` (Agg backend, nothing is shown or saved here; ``compare.report``
 saves them). Units on the axes: um, Pa, s, as in the seed.
 
-Blastula (scene 1): ``fig3`` (von Mises on the deformed wall + exact through-wall profile vs FE),
-``fig_stretch_pressure`` (Figs 4 and 5: FE lines, exact markers, the arc-length trace through the
-neo-Hookean limit point). Spheroid (scene 2): ``fig8`` (von Mises on the deformed section at two
+Blastula (scene 1): ``fig3`` (von Mises on the deformed section, a zoom on the wall, the reference
+section, the exact through-wall profile vs FE), ``fig_stretch_pressure`` (Figs 4 and 5: exact lines,
+FE steps as markers from the unloaded state, the arc-length trace through the neo-Hookean limit point).
+Fields are drawn smooth on the curved Q2 geometry (:mod:`.fields`). Spheroid (scene 2): ``fig8`` (von Mises on the deformed section at two
 times), ``fig9`` (mean von Mises vs time), ``fig10`` (nominal stress vs time, FE / reduced / a fit
 to a synthetic record). The report's charts are in :mod:`tissuemech.compare.plots.charts`.
 """
@@ -35,31 +36,80 @@ def element_radius(mesh) -> np.ndarray:
 # ---------------------------------------------------------------------------------------------
 
 
-def fig3(result: Any, profile: Any, *, pressure: float, alpha: float, outer_radius: float):
-    """Seed Fig. 3: von Mises on the deformed wall (left) and the exact through-wall profile vs FE (right).
+def fig3(
+    result: Any,
+    profile: Any,
+    *,
+    pressure: float,
+    alpha: float,
+    outer_radius: float,
+    inner_stretch: float | None = None,
+):
+    """Seed Fig. 3: von Mises in the inflated wall, four panels with one colour scale.
 
-    result   ``fem.blastula`` result at the final pressure (element means of von Mises, Pa)
-    profile  ``reduced.blastula.profiles`` at the exact inner stretch (R in m, von_mises in Pa)
+    (a) the deformed quarter section (the wall is thin at this stretch: the box marks the zoom),
+    (b) the zoom on the deformed wall at 45 degrees, where the through-thickness gradient shows,
+    (c) the same field on the reference section (R, Z), (d) the exact through-wall profile against
+    the FE element means. result: ``fem.blastula`` result at the final pressure; profile:
+    ``reduced.blastula.profiles`` at the exact inner stretch (R in m, von_mises in Pa).
     """
+    from matplotlib.patches import Rectangle
+
+    from tissuemech.compare.plots.fields import draw_field
+
     plt = _plt()
-    fig, (a0, a1) = plt.subplots(1, 2, figsize=(11, 4.6))
-    result.plot(ax=a0)
-    a0.set_title(f"FE von Mises, p = {pressure / 1e3:g} kPa, alpha = {alpha:g}, B = {outer_radius / UM:g} um")
-    R = np.asarray(profile.R).ravel() / UM
-    a1.plot(R, np.asarray(profile.von_mises).ravel(), "k-", label="exact (incompressible shell)")
-    a1.plot(
-        element_radius(result.mesh) / UM,
-        result.von_mises,
-        "o",
-        ms=4,
-        mfc="none",
-        label="FE element means (all elements)",
+    fig, axes = plt.subplots(2, 2, figsize=(11, 9.5))
+    (a0, a1), (a2, a3) = axes
+    mesh, vm = result.mesh, np.asarray(result.von_mises)
+    R_prof, vm_prof = np.asarray(profile.R).ravel(), np.asarray(profile.von_mises).ravel()
+    from tissuemech.compare.plots.fields import nodal_average
+
+    nodal = nodal_average(mesh, vm)
+    lo, hi = float(nodal.min()), float(nodal.max())  # the colour scale of what is drawn
+    A = mesh.length_scale
+    la = float(result.inner_stretch[-1]) if inner_stretch is None else inner_stretch
+    lb = float(result.outer_stretch[-1])
+    a, b = la * A / UM, lb * outer_radius / UM
+    coll = draw_field(a0, mesh, result.displacement, vm, vmin=lo, vmax=hi)
+    rc, w = 0.5 * (a + b), max(1.6 * (b - a), 2.0)
+    cx, cy = rc / np.sqrt(2), rc / np.sqrt(2)
+    a0.add_patch(Rectangle((cx - w, cy - w), 2 * w, 2 * w, fill=False, ec="r", lw=1.2))
+    a0.set_title(f"(a) deformed section, p = {pressure / 1e3:g} kPa (wall {b - a:.1f} um thick)", fontsize=9)
+    draw_field(a1, mesh, result.displacement, vm, vmin=lo, vmax=hi, n_sub=6)
+    a1.set_xlim(cx - w, cx + w)
+    a1.set_ylim(cy - w, cy + w)
+    a1.set_title("(b) zoom on the deformed wall (red box in (a))", fontsize=9)
+    draw_field(a2, mesh, None, vm, vmin=lo, vmax=hi)
+    a2.set_title(
+        f"(c) the same field on the reference section (A = {A / UM:g} um, B = {outer_radius / UM:g} um)", fontsize=9
     )
-    a1.set_xlabel("reference radius R (um)")
-    a1.set_ylabel("von Mises stress |sigma_theta - sigma_r| (Pa)")
-    a1.set_title("through-wall profile (not in the seed)")
-    a1.grid(alpha=0.3)
-    a1.legend(fontsize=8)
+    for ax, xl, yl in ((a0, "r (um)", "z (um)"), (a1, "r (um)", "z (um)"), (a2, "R (um)", "Z (um)")):
+        ax.set_xlabel(xl)
+        ax.set_ylabel(yl)
+    fig.colorbar(coll, ax=a1, label="von Mises stress (Pa)")
+    fig.colorbar(coll, ax=a2, label="von Mises stress (Pa)")
+    a3.plot(R_prof / UM, vm_prof, "k-", label="exact (incompressible shell)")
+    a3.plot(element_radius(mesh) / UM, vm, "o", ms=4, mfc="none", label="FE element means")
+    on_axis = np.abs(mesh.X[1]) < 1e-12  # nodes on Z = 0: what the colour maps show along a radius
+    order = np.argsort(mesh.X[0][on_axis])
+    a3.plot(
+        (mesh.X[0][on_axis] * A / UM)[order],
+        nodal[on_axis][order],
+        "s--",
+        ms=3,
+        lw=0.8,
+        color="C1",
+        label="FE nodal values drawn in (a)-(c) (element means averaged to nodes)",
+    )
+    a3.set_xlabel("reference radius R (um)")
+    a3.set_ylabel("von Mises stress |sigma_theta - sigma_r| (Pa)")
+    a3.set_title("(d) through-wall profile (not in the seed)", fontsize=9)
+    a3.grid(alpha=0.3)
+    a3.legend(fontsize=8)
+    fig.suptitle(
+        f"Fig. 3: blastula at p = {pressure:g} Pa, alpha = {alpha:g}, C = 200 Pa; inner stretch {la:.4f}, "
+        f"outer {lb:.4f}"
+    )
     fig.tight_layout()
     return fig
 
@@ -67,23 +117,28 @@ def fig3(result: Any, profile: Any, *, pressure: float, alpha: float, outer_radi
 def fig_stretch_pressure(
     sets: Sequence[Mapping[str, Any]], *, title: str, limit_trace: Any = None, limit: tuple[float, float] | None = None
 ):
-    """Seed Figs 4/5: inner and outer stretch vs pressure; FE lines, exact markers.
+    """Seed Figs 4/5: inner (left) and outer (right) stretch vs pressure; exact lines, FE markers.
 
-    sets         dicts with label, fe (FE result: pressure, inner_stretch, outer_stretch),
-                 exact_p (Pa), exact_inner, exact_outer (arrays)
+    sets         dicts with label, fe (FE result: pressure, inner_stretch, outer_stretch), exact_p (Pa),
+                 exact_inner, exact_outer (dense arrays from the unloaded state, drawn as lines)
     limit_trace  an FE arc-length result through the neo-Hookean limit point (drawn in black)
     limit        (p_max Pa, lambda_a at the limit) of the exact solution, marked
+    Every FE series starts at the unloaded state (stretch 1, p = 0), which the FE also satisfies.
     """
     plt = _plt()
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.4), sharey=True)
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.6), sharey=True)
     for s in sets:
-        (ln,) = axes[0].plot(s["fe"].inner_stretch, s["fe"].pressure, "-", label=f"{s['label']} FE")
-        axes[0].plot(s["exact_inner"], s["exact_p"], "o", color=ln.get_color(), ms=4, mfc="none")
-        axes[1].plot(s["fe"].outer_stretch, s["fe"].pressure, "-", color=ln.get_color(), label=f"{s['label']} FE")
-        axes[1].plot(s["exact_outer"], s["exact_p"], "o", color=ln.get_color(), ms=4, mfc="none")
+        fe = s["fe"]
+        p_fe = np.r_[0.0, fe.pressure]
+        (ln,) = axes[0].plot(s["exact_inner"], s["exact_p"], "-", lw=1.3, label=f"{s['label']}")
+        axes[0].plot(np.r_[1.0, fe.inner_stretch], p_fe, "o", color=ln.get_color(), ms=3.5, mfc="none")
+        axes[1].plot(s["exact_outer"], s["exact_p"], "-", lw=1.3, color=ln.get_color())
+        axes[1].plot(np.r_[1.0, fe.outer_stretch], p_fe, "o", color=ln.get_color(), ms=3.5, mfc="none")
     if limit_trace is not None:
-        axes[0].plot(limit_trace.inner_stretch, limit_trace.pressure, "k-", lw=1.2, label="neo-Hookean FE arc-length")
-        axes[1].plot(limit_trace.outer_stretch, limit_trace.pressure, "k-", lw=1.2)
+        axes[0].plot(
+            limit_trace.inner_stretch, limit_trace.pressure, "k.-", lw=0.8, ms=3, label="neo-Hookean, FE arc-length"
+        )
+        axes[1].plot(limit_trace.outer_stretch, limit_trace.pressure, "k.-", lw=0.8, ms=3)
     if limit is not None:
         axes[0].plot(limit[1], limit[0], "r*", ms=12, label=f"limit point {limit[0]:.2f} Pa (exact)")
     axes[0].set_xlabel("inner stretch a/A")
@@ -91,8 +146,9 @@ def fig_stretch_pressure(
     axes[0].set_ylabel("pressure p (Pa)")
     for ax in axes:
         ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7, title="lines: FE, circles: exact", title_fontsize=7)
-    fig.suptitle(title)
+        ax.set_ylim(bottom=0)
+    axes[0].legend(fontsize=7, title="lines: exact; circles: FE steps", title_fontsize=7)
+    fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     return fig
 
@@ -102,65 +158,140 @@ def fig_stretch_pressure(
 # ---------------------------------------------------------------------------------------------
 
 
-def fig8(result: Any, times: Sequence[float]):
-    """Seed Fig. 8: von Mises on the deformed quarter section at the stored field times (one panel each)."""
+def fig8(result: Any, times: Sequence[float], *, title: str = ""):
+    """Seed Fig. 8: von Mises on the deformed full section (the FE quarter mirrored) at the field times.
+
+    One panel per time with one colour scale (the relaxation shows as a colour change), smooth on
+    the curved Q2 geometry, the two rigid plates drawn at z = +-(a0 - delta(t)/2).
+    """
+    from tissuemech.compare.plots.fields import draw_field
+
     plt = _plt()
-    fig, axes = plt.subplots(1, len(times), figsize=(5.5 * len(times), 4.6))
+    fig, axes = plt.subplots(1, len(times), figsize=(5.6 * len(times), 4.2), layout="constrained")
     axes = np.atleast_1d(axes)
-    for ax, t in zip(axes, times):
-        result.plot_von_mises(t, ax=ax)
-    # one colour scale for all panels, so the relaxation is visible as a colour change
-    vms = [result.field_at(t).von_mises for t in times]
-    lo, hi = float(min(v.min() for v in vms)), float(max(v.max() for v in vms))
-    for ax in axes:
-        for coll in ax.collections:
-            coll.set_clim(lo, hi)
-    fig.tight_layout()
+    fields = [result.field_at(t) for t in times]
+    lo = float(min(np.min(f.von_mises) for f in fields))
+    hi = float(max(np.max(f.von_mises) for f in fields))
+    a0 = result.mesh.length_scale / UM
+    coll = None
+    for ax, f in zip(axes, fields):
+        coll = draw_field(ax, result.mesh, f.displacement, f.von_mises, mirror=True, vmin=lo, vmax=hi)
+        d = float(np.interp(f.time, result.time, result.approach)) / UM
+        zp = a0 - d / 2
+        half = 1.35 * a0
+        for sgn in (1, -1):
+            ax.fill_between([-half, half], sgn * zp, sgn * (zp + 0.06 * a0), color="0.55", lw=0)
+        ax.set_xlim(-half, half)
+        ax.set_ylim(-(zp + 0.1 * a0), zp + 0.1 * a0)
+        ax.set_xlabel("r (um)")
+        ax.set_ylabel("z (um)")
+        ax.set_title(f"t = {f.time:g} s: approach {d:.0f} um, plates at z = +-{zp:.0f} um", fontsize=9)
+    fig.colorbar(coll, ax=list(axes), label="von Mises stress (Pa)", shrink=0.85)
+    if title:
+        fig.suptitle(title, fontsize=10)
     return fig
 
 
-def fig9(fe: Any, reduced_t: np.ndarray | None = None, reduced_vm: np.ndarray | None = None, *, label: str = ""):
+def fig9(
+    fe: Any,
+    reduced_t: np.ndarray | None = None,
+    reduced_vm: np.ndarray | None = None,
+    *,
+    label: str = "",
+    reduced_label: str = "FE static mean x reduced relaxation factor (hybrid, not independent)",
+):
     """Seed Fig. 9: volume-averaged von Mises vs time (ramp, left; relaxation, right, log time)."""
     plt = _plt()
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
     ramp_end = float(fe.parameters.get("ramp_time", 0.2)) if getattr(fe, "parameters", None) else 0.2
     for ax, sel in zip(axes, (fe.time <= ramp_end * 1.0001, fe.time >= ramp_end * 0.9999)):
-        ax.plot(fe.time[sel], fe.mean_von_mises[sel], "o-", ms=3, label="FE")
-        if reduced_t is not None:
+        ax.plot(fe.time[sel], fe.mean_von_mises[sel], "o-", ms=3, label="FE (transient run)")
+        if reduced_t is not None and reduced_vm is not None:
             rs = (reduced_t <= ramp_end * 1.0001) if ax is axes[0] else (reduced_t >= ramp_end * 0.9999)
-            ax.plot(reduced_t[rs], reduced_vm[rs], "k--", label="reduced (lumped relaxation x FE static mean)")
+            ax.plot(reduced_t[rs], reduced_vm[rs], "k--", label=reduced_label)
         ax.set_xlabel("time t (s)")
+        ax.set_ylabel("volume-averaged von Mises stress (Pa)")
         ax.grid(alpha=0.3)
     axes[1].set_xscale("log")
     axes[0].set_title("ramp")
     axes[1].set_title("relaxation (hold)")
-    axes[0].set_ylabel("volume-averaged von Mises stress (Pa)")
     axes[0].legend(fontsize=8)
-    fig.suptitle(label)
+    fig.suptitle(label, fontsize=10)
     fig.tight_layout()
     return fig
 
 
-def fig10(curves: Sequence[Mapping[str, Any]], synthetic: Mapping[str, Any] | None = None, *, label: str = ""):
-    """Seed Fig. 10: nominal stress sigma~ = F / A_mid vs time.
+def fig10(
+    curves: Sequence[Mapping[str, Any]],
+    synthetic: Mapping[str, Any] | None = None,
+    *,
+    label: str = "",
+    reference: Mapping[str, Any] | None = None,
+    ramp_time: float = 0.2,
+):
+    """Seed Fig. 10: nominal stress sigma~ = F / A_mid vs time, and each model's deviation from the FE.
 
-    curves     dicts with label, t (s), sigma (Pa), style (matplotlib format string)
+    curves     dicts with label, t (s), sigma (Pa), style (matplotlib format string); optionally
+               sigma_at_ref (the curve at ``reference["t"]``) for the deviation panel
     synthetic  dict with t, sigma (the noisy synthetic record), fit_t, fit_sigma, fit_label
+    reference  dict with t, sigma, label: what the bottom panels divide by (the FE)
     """
     plt = _plt()
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
-    for ax, log in zip(axes, (False, True)):
+    rows = 2 if reference is not None else 1
+    fig, axes = plt.subplots(rows, 2, figsize=(11.5, 4.2 * rows), squeeze=False, sharex="col")
+    for col, log in enumerate((False, True)):
+        ax = axes[0, col]
         for c in curves:
-            ax.plot(c["t"], c["sigma"], c.get("style", "-"), label=c["label"], ms=3)
+            ax.plot(c["t"], c["sigma"], c.get("style", "-"), label=c["label"], ms=4, mfc="none", lw=1.4)
         if synthetic is not None:
-            ax.plot(synthetic["t"], synthetic["sigma"], ".", color="0.5", label="SYNTHETIC record (FE + 1 % noise)")
-            ax.plot(synthetic["fit_t"], synthetic["fit_sigma"], "r:", lw=1.5, label=synthetic["fit_label"])
-        ax.set_xlabel("time t (s)")
+            ax.plot(
+                synthetic["t"],
+                synthetic["sigma"],
+                ".",
+                color="0.6",
+                ms=3,
+                label="SYNTHETIC record (FE + 1 % noise)",
+                zorder=0,
+            )
+            ax.plot(synthetic["fit_t"], synthetic["fit_sigma"], "r-", lw=0.9, label=synthetic["fit_label"])
         ax.set_ylabel("nominal stress F / A_mid (Pa)")
         ax.grid(alpha=0.3)
         if log:
             ax.set_xscale("log")
-    axes[0].legend(fontsize=7)
-    fig.suptitle(label)
+        else:
+            ax.set_xlim(0, 3 * ramp_time)
+        if reference is not None:
+            bx = axes[1, col]
+            for c in curves:
+                if c.get("sigma_at_ref") is not None:
+                    bx.plot(
+                        reference["t"],
+                        100 * (np.asarray(c["sigma_at_ref"]) / reference["sigma"] - 1),
+                        c.get("style", "-"),
+                        ms=4,
+                        mfc="none",
+                        lw=1.2,
+                        label=c["label"],
+                    )
+            if synthetic is not None and synthetic.get("fit_at_ref") is not None:
+                bx.plot(
+                    reference["t"],
+                    100 * (np.asarray(synthetic["fit_at_ref"]) / reference["sigma"] - 1),
+                    "r-",
+                    lw=0.9,
+                    label="fit",
+                )
+            bx.axhline(0, color="k", lw=0.6)
+            bx.set_ylabel(f"model / {reference.get('label', 'FE')} - 1 (%)")
+            bx.grid(alpha=0.3)
+            bx.set_xlabel("time t (s)")
+            if log:
+                bx.set_xscale("log")
+        else:
+            ax.set_xlabel("time t (s)")
+    axes[0, 0].set_title("ramp and early hold", fontsize=9)
+    axes[0, 1].set_title("relaxation (log time)", fontsize=9)
+    axes[0, 0].legend(fontsize=7, loc="lower right")
+    fig.suptitle(label, fontsize=10)
     fig.tight_layout()
     return fig

@@ -117,34 +117,29 @@ def build(out_dir: str | Path = "tissuemech-report", *, quick: bool = False, pro
     t_start = time.perf_counter()
     reason = spheroid_available()
     done: dict[str, Section] = {}
-    state: dict[str, Any] = {}
-    stages: list[tuple[str, Callable[[], Section]]] = [
-        (
-            "limit point",
-            lambda: Section("limit point", quick, data=dict(limit=stability_study.limit_point_map(mesh="default"))),
-        ),
-        ("stability map", lambda: stability.section(state["limit"], quick=quick, spheroid_reason=reason)),
-        ("blastula figures", lambda: blastula.section(state["limit"][1], quick=quick)),
-        ("blastula accuracy", lambda: accuracy.section(quick=quick)),
-    ]
-    if reason is None:
-        stages.append(
-            (
-                "spheroid figures + accuracy",
-                lambda: _guarded("spheroid", lambda: spheroid.section(quick=quick), quick=quick),
-            )
-        )
+    bar = tqdm(total=11 if reason is None else 7, desc="tissuemech report", disable=not progress, unit="step")
+
+    def step(label: str) -> None:  # one tick per milestone inside the sections, so long stages show progress
+        bar.set_postfix_str(label)
+        bar.update(1)
+
     summary: dict[str, Any] = {"quick": quick}
     written: list[str] = []
-    bar = tqdm(stages, desc="tissuemech report", disable=not progress, unit="stage")
-    for name, fn in bar:
-        bar.set_postfix_str(name)
-        sec = fn()
-        if name == "limit point":
-            state["limit"] = sec.data["limit"]
-        done[name] = sec
+    step("limit point: load control, arc-length, exact (3 geometries)")
+    limit = stability_study.limit_point_map(mesh="default")
+    done["stability map"] = stability.section(limit, quick=quick, spheroid_reason=reason, progress=step)
+    done["blastula figures"] = blastula.section(limit[1], quick=quick, progress=step)
+    step("blastula accuracy")
+    done["blastula accuracy"] = accuracy.section(quick=quick)
+    if reason is None:
+        done["spheroid figures + accuracy"] = _guarded(
+            "spheroid", lambda: spheroid.section(quick=quick, progress=step), quick=quick
+        )
+    for sec in done.values():
         summary.update(sec.summary)
-    done["seed comparison"] = seed_comparison.section(state["limit"][0], summary, quick=quick)
+    step("seed comparison, writing")
+    bar.close()
+    done["seed comparison"] = seed_comparison.section(limit[0], summary, quick=quick)
     summary.update(done["seed comparison"].summary)
     if reason is not None:
         done["spheroid figures + accuracy"] = Section(
@@ -170,17 +165,27 @@ def build(out_dir: str | Path = "tissuemech-report", *, quick: bool = False, pro
         "",
     ]
     (out / "report.md").write_text("\n".join(head + md) + "\n")
-    (out / "summary.json").write_text(json.dumps(summary, indent=1, default=_json_default))
+    (out / "summary.json").write_text(json.dumps(json_safe(summary), indent=1, allow_nan=False))
     return summary
 
 
-def _json_default(o):
-    if isinstance(o, (np.floating, np.integer)):
-        return o.item()
+def json_safe(o: Any) -> Any:
+    """``o`` with numpy scalars/arrays as Python values and NaN / +-inf as None (JSON ``null``)."""
+    if isinstance(o, dict):
+        return {str(k): json_safe(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [json_safe(v) for v in o]
     if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, np.bool_):
+        return json_safe(o.tolist())
+    if isinstance(o, (np.bool_, bool)):
         return bool(o)
+    if isinstance(o, (np.integer, int)):
+        return int(o)
+    if isinstance(o, (np.floating, float)):
+        v = float(o)
+        return v if np.isfinite(v) else None
+    if o is None or isinstance(o, str):
+        return o
     return str(o)
 
 
@@ -198,7 +203,10 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
 
 
 def run_cli(args: argparse.Namespace) -> None:
-    """``tissuemech report``: build the folder and print where it went."""
+    """``tissuemech report``: check the folder, build it and print where it went."""
+    from tissuemech.compare.cli.common import output_folder
+
+    output_folder("--out", args.out)
     summary = build(args.out, quick=args.quick)
     out = Path(args.out).resolve()
     print(

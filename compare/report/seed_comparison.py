@@ -60,8 +60,8 @@ def section(lim: pd.DataFrame, summary: dict[str, Any], *, quick: bool = False) 
                 claim="static compression depth",
                 seed="up to 30 % of the height (static); transient runs hard to tune (penalty contact)",
                 this_work=f"largest converged {100 * comp['largest_converged']:.0f} % of the diameter (tried "
-                f"{', '.join(f'{100 * f:.0f}' for f in comp['tried'])} %); transient runs with exact "
-                "active-set contact",
+                f"{', '.join(f'{100 * f:.0f}' for f in comp['tried'])} %; ended by: {comp['ended_by']}); "
+                "transient runs with exact active-set contact",
                 agrees="yes (exceeded)" if comp["largest_converged"] >= 0.3 else "NO",
             )
         )
@@ -87,7 +87,8 @@ def section(lim: pd.DataFrame, summary: dict[str, Any], *, quick: bool = False) 
         if comp:
             extra = (
                 f" Static elastic compression converges up to {100 * comp['largest_converged']:.0f} % of the "
-                "diameter (the seed: 30 %)."
+                f"diameter (the seed: 30 %); what ended the push: {comp['ended_by']}"
+                + (" (fem.spheroid's stated 80 % cap)." if comp["ended_by"] == "refused (cap)" else ".")
             )
         sec.md.append(
             f"* **Spheroid:** the seed found transient runs hard (penalty contact); here the transient Figs 8-9 case "

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import time
+from collections.abc import Callable
 
 import numpy as np
 import pandas as pd
@@ -24,9 +25,10 @@ def _calibrated_tables(x_max: float, alpha: float, mesh) -> tuple[tuple, tuple, 
     return (x, f), (x, g), run
 
 
-def section(*, quick: bool = False) -> Section:
+def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: None) -> Section:
     """Figs 8-10 (FE von Mises fields, mean von Mises, nominal stress with a fit) and spheroid accuracy."""
     sec = Section("spheroid", quick)
+    progress("spheroid: calibration run (Fig. 10 case)")
     import jax.numpy as jnp
 
     from tissuemech.compare.fit import relaxation
@@ -44,20 +46,36 @@ def section(*, quick: bool = False) -> Section:
     t0 = time.perf_counter()
     eq10, mid10, _ = _calibrated_tables(x10, fig10["alpha"], ref_level)
     calib_wall = time.perf_counter() - t0
-    laws = {"hertz": dict(equilibrium="hertz"), "calibrated": dict(equilibrium=eq10, midplane=mid10)}
+    # the calibrated law comes from a static run on the REFERENCE mesh itself: its row measures the lumped-
+    # relaxation assumption alone, not an independent prediction (labelled so); the shipped table is independent
+    laws = {
+        "hertz": dict(equilibrium="hertz"),
+        "calibrated on the reference mesh": dict(equilibrium=eq10, midplane=mid10),
+    }
     if rs.DATA_FILE.exists():  # the master curves shipped with the package (python -m tissuemech.compare.calibrate)
         laws["shipped FE table"] = dict(equilibrium="fem")
+    progress("spheroid: FE levels and reduced laws (Fig. 10 case)")
     df, fe_runs = accuracy.spheroid_accuracy(meshes=levels, equilibria=laws)
+    nel = {m: int(r.mesh.mesh.nelements) for m, r in fe_runs.items()}
+    df["setting"] = [
+        (f"level {int(st.split()[1])} ({nel[int(st.split()[1])]} el.)" + (" reference" if "reference" in st else ""))
+        if str(st).startswith("level")
+        else ("jitted, after compile" if st == "jit" else st)
+        for st in df.setting
+    ]
     sec.table(df, "accuracy_spheroid.csv")
     sec.save(
         charts.accuracy_chart(
             df,
             title=f"Spheroid Fig. 10 case: sigma~ at t = 0.2 s and 1500 s vs the finest FE (level {ref_level})",
             floor=1e-8,
+            note="FE labels: fem.spheroid mesh level (number of Q2/P1 elements); reduced: the lumped Maxwell model "
+            "(jitted, timed after compile); 'calibrated on the reference mesh' is not independent of the reference.",
         ),
         "accuracy_spheroid.png",
     )
     ref = fe_runs[ref_level]
+    t_ref = ref.time[ref.time > 0]
     t_dense = np.concatenate([np.linspace(0, 0.2, 21)[1:], np.geomspace(0.2, 1500, 80)[1:]])
     hertz = np.asarray(rs.nominal_stress(t_dense, **fig10, equilibrium="hertz"))
     cal = np.asarray(rs.nominal_stress(t_dense, **fig10, equilibrium=eq10, midplane=mid10))
@@ -91,30 +109,59 @@ def section(*, quick: bool = False) -> Section:
     sec.save(
         figures.fig10(
             [
-                dict(label=f"FE (level {ref_level})", t=ref.time, sigma=ref.nominal_stress, style="ko-"),
-                dict(label="reduced, Hertz law", t=t_dense, sigma=hertz, style="b--"),
-                dict(label="reduced, FE-calibrated law", t=t_dense, sigma=cal, style="g-"),
+                dict(
+                    label=f"FE, finest mesh of the study (level {ref_level}, {nel[ref_level]} elements)",
+                    t=ref.time,
+                    sigma=ref.nominal_stress,
+                    style="ko",
+                ),
+                dict(
+                    label="reduced, Hertz law",
+                    t=t_dense,
+                    sigma=hertz,
+                    style="b--",
+                    sigma_at_ref=np.asarray(rs.nominal_stress(t_ref, **fig10, equilibrium="hertz")),
+                ),
+                dict(
+                    label="reduced, law calibrated on the reference mesh",
+                    t=t_dense,
+                    sigma=cal,
+                    style="g-.",
+                    sigma_at_ref=np.asarray(rs.nominal_stress(t_ref, **fig10, equilibrium=eq10, midplane=mid10)),
+                ),
             ],
+            reference=dict(t=t_ref, sigma=ref.nominal_stress[ref.time > 0], label="FE"),
             synthetic=dict(
                 t=ts,
                 sigma=ys,
                 fit_t=t_dense,
                 fit_sigma=fit_curve,
-                fit_label=f"fit to SYNTHETIC record: C={pf['C']:.4g} Pa, beta={pf['beta']:.3g}, tau={pf['tau']:.4g} s",
+                fit_label="fit to the SYNTHETIC record (95 % intervals):\n"
+                + ", ".join(
+                    f"{n} = {pf[n]:.3g} [{fit.intervals[n][0]:.3g}, {fit.intervals[n][1]:.3g}]{u}"
+                    for n, u in (("C", " Pa"), ("alpha", ""), ("beta", ""), ("tau", " s"))
+                ),
+                fit_at_ref=np.interp(t_ref, t_dense, fit_curve),
             ),
-            label="Fig. 10 case: C = 150 Pa, alpha = 0.2, beta = 0.4, tau = 200 s, 50 um in 0.2 s",
+            label="Fig. 10 case: " + cases.describe_spheroid(fig10),
         ),
         "fig10_nominal_stress.png",
     )
 
     # ---- Figs 8-9 case
     mesh89 = "coarse" if quick else "default"
+    progress("spheroid: Figs 8-9 case")
     t0 = time.perf_counter()
     fe89 = fes.compress(**FIG89, end_time=FIG89_END, field_times=FIG89_FIELDS, mesh=mesh89)
     wall89 = time.perf_counter() - t0
     x89 = FIG89["displacement"] / (2 * FIG89["radius"])
     eq89, mid89, static89 = _calibrated_tables(x89, FIG89["alpha"], mesh89)
-    sec.save(figures.fig8(fe89, FIG89_FIELDS), "fig8_spheroid_von_mises.png")
+    sec.save(
+        figures.fig8(
+            fe89, FIG89_FIELDS, title=f"Fig. 8, Figs 8-9 case: {cases.describe_spheroid(FIG89)}; FE {mesh89} mesh"
+        ),
+        "fig8_spheroid_von_mises.png",
+    )
     # reduced mean von Mises: the FE static mean von Mises at delta(t) times the lumped relaxation factor F/F_eq
     t89 = np.concatenate([np.linspace(0, 0.2, 21)[1:], np.geomspace(0.2, FIG89_END, 60)[1:]])
     st = fes.compress(
@@ -142,7 +189,8 @@ def section(*, quick: bool = False) -> Section:
             fe89,
             t89,
             vm_red,
-            label=f"Figs 8-9 case: C = 200 Pa, alpha = 0.2, beta = 1.2, tau = 200 s, 200 um in 0.2 s ({mesh89} mesh)",
+            label=f"Fig. 9, Figs 8-9 case: {cases.describe_spheroid(FIG89)} ({mesh89} mesh). Dashed: not an independent "
+            "model (FE static field x lumped factor, law calibrated on the same mesh)",
         ),
         "fig9_mean_von_mises.png",
     )
@@ -153,32 +201,32 @@ def section(*, quick: bool = False) -> Section:
     seed_rows = [
         dict(
             case="Figs 8-9",
-            quantity="mean von Mises at t = 0.2 s (Pa)",
+            quantity="mean von Mises at t = 0.2 s (Pa); reduced = FE static x lumped factor",
             fe=at(fe89, 0.2, fe89.mean_von_mises),
             reduced=float(np.interp(0.2, t89, vm_red)),
         ),
         dict(
             case="Figs 8-9",
-            quantity="mean von Mises at t = 1497 s (Pa)",
+            quantity="mean von Mises at t = 1497 s (Pa); reduced = FE static x lumped factor",
             fe=at(fe89, 1497, fe89.mean_von_mises),
             reduced=float(np.interp(1497, t89, vm_red)),
         ),
         dict(
             case="Figs 8-9",
-            quantity="plate force at t = 0.2 s (uN)",
+            quantity="plate force at t = 0.2 s (uN); law calibrated on the same mesh",
             fe=at(fe89, 0.2, fe89.force) * 1e6,
             reduced=float(np.interp(0.2, t89, F_red)) * 1e6,
         ),
         dict(case="Figs 8-9", quantity="FE wall time (s)", fe=wall89, reduced=np.nan),
         dict(
             case="Fig. 10",
-            quantity="sigma~ at t = 0.2 s (Pa)",
+            quantity="sigma~ at t = 0.2 s (Pa); law calibrated on the reference mesh",
             fe=at(ref, 0.2, ref.nominal_stress),
             reduced=float(np.interp(0.2, t_dense, cal)),
         ),
         dict(
             case="Fig. 10",
-            quantity="sigma~ at t = 1500 s (Pa)",
+            quantity="sigma~ at t = 1500 s (Pa); law calibrated on the reference mesh",
             fe=at(ref, 1500, ref.nominal_stress),
             reduced=float(np.interp(1500, t_dense, cal)),
         ),
@@ -206,7 +254,7 @@ def section(*, quick: bool = False) -> Section:
     sec.summary["spheroid"] = dict(
         fe_errors=df[df.method.str.startswith("FE")].error.tolist(),
         hertz_error=float(df[df.method == "reduced (hertz)"].error.iloc[0]),
-        calibrated_error=float(df[df.method == "reduced (calibrated)"].error.iloc[0]),
+        calibrated_error=float(df[df.method == "reduced (calibrated on the reference mesh)"].error.iloc[0]),
         fit=dict(pf),
         fig89_vm=[at(fe89, 0.2, fe89.mean_von_mises), at(fe89, 1497, fe89.mean_von_mises)],
         fig89_wall_s=wall89,
@@ -218,8 +266,11 @@ def section(*, quick: bool = False) -> Section:
         "",
         "![Fig. 9](fig9_mean_von_mises.png)",
         "",
-        "Fig. 9 'reduced': the FE static mean von Mises at delta(t) times the lumped relaxation factor "
-        "F_reduced(t)/F_eq(delta(t)). Why the lumped model can match the FE this closely: the plates prescribe "
+        "Fig. 9 dashed line: NOT an independent model. It is the FE static mean von Mises at delta(t) times the "
+        "lumped relaxation factor F_reduced(t)/F_eq(delta(t)), with F_eq calibrated by a static run on the same "
+        "mesh; it shows that one relaxation factor carries the whole field (agreement to ~1e-5), not a "
+        "prediction. Likewise the Figs 8-9 and Fig. 10 rows of the table below use laws calibrated on the FE mesh "
+        "they are compared with. Why the lumped model can match the FE this closely: the plates prescribe "
         "the displacement, the body is (nearly) incompressible and the branches act on the isochoric stress, so "
         "multiplying every stress by one factor leaves the deformation unchanged; during the hold the branch "
         "stress only decays (Q = e^{-(t - t_r)/tau} Q(t_r)) and during the short ramp (t_r/tau = 1e-3) it is "
@@ -238,7 +289,8 @@ def section(*, quick: bool = False) -> Section:
         "![accuracy spheroid](accuracy_spheroid.png)",
         "",
         "error = max over t in {0.2 s, 1500 s} of |sigma~/sigma~_ref - 1|; reduced = the lumped Maxwell model "
-        "(reduced.spheroid, exact-kernel quadrature path, jitted). The calibrated reduced model uses "
+        "(reduced.spheroid, exact-kernel quadrature path, jitted; wall time after compile). The row 'calibrated on "
+        "the reference mesh' uses "
         f"an equilibrium table from one static FE run on the reference mesh ({calib_wall:.1f} s, not counted "
         "in its wall time), so its error measures the lumped-relaxation assumption alone; 'shipped FE table' "
         "uses the package's master curves (reduced/data, their own mesh and alpha interpolation) when present.",

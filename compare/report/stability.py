@@ -2,13 +2,21 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pandas as pd
 
 from tissuemech.compare.report.common import Section, md_table
 
 
-def section(limit: tuple[pd.DataFrame, dict], *, quick: bool = False, spheroid_reason: str | None = None) -> Section:
+def section(
+    limit: tuple[pd.DataFrame, dict],
+    *,
+    quick: bool = False,
+    spheroid_reason: str | None = None,
+    progress: Callable[[str], None] = lambda _: None,
+) -> Section:
     """Stability map: limit point, locking vs kappa/C, viscous step, stiff solvers, compression depth.
 
     limit: ``studies.stability.limit_point_map()`` output (computed once by the builder, shared with
@@ -19,15 +27,18 @@ def section(limit: tuple[pd.DataFrame, dict], *, quick: bool = False, spheroid_r
     from tissuemech.compare.studies import stability
 
     lim, traces = limit
+    progress("stability: locking vs kappa/C")
     kap = stability.kappa_map(mesh=(4, 8) if sec.quick else (8, 16))
+    progress("stability: viscous step, stiff solvers")
     visc, bounds = stability.viscous_step_map(
         np.geomspace(1e-2 if sec.quick else 1e-3, 1500.0, 24 if sec.quick else 34)
     )
     stiff = stability.stiff_solver_map()
     comp = None
     if spheroid_reason is None:
+        progress("stability: compression depth")
         comp = stability.compression_map(
-            (0.3, 0.4, 0.5, 0.6, 0.7) if sec.quick else (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.75, 0.79),
+            (0.3, 0.5, 0.7, 0.79) if sec.quick else (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.75, 0.79),
             mesh="coarse" if sec.quick else "default",
         )
         sec.table(comp, "stability_compression.csv")
@@ -70,6 +81,7 @@ def section(limit: tuple[pd.DataFrame, dict], *, quick: bool = False, spheroid_r
         else dict(
             largest_converged=float(comp[comp.converged].fraction.max()) if comp.converged.any() else 0.0,
             tried=comp.fraction.tolist(),
+            ended_by=(comp.failure[~comp.converged].iloc[0] if (~comp.converged).any() else "not reached"),
         ),
     )
     lc = lim[lim.method == "FE load control"]
@@ -80,9 +92,13 @@ def section(limit: tuple[pd.DataFrame, dict], *, quick: bool = False, spheroid_r
         "",
         "### Neo-Hookean limit point (alpha = 1e-5, default mesh)",
         "",
-        "Load control (`fem.blastula.inflate`, adaptive cut-back) stops just below the limit with a "
-        "`LimitPointError`; arc-length passes it (max of the trace by a parabola through the three steps "
-        "around it); the reduced model gives the limit in closed form and raises `ValueError` above it.",
+        "Load control (`fem.blastula.inflate`, adaptive cut-back) runs one sweep fixed in advance for every B "
+        "(60 geometric steps from 1 Pa to 1 kPa; it is not told the exact limit) and stops just below the limit "
+        "with a `LimitPointError`: p_reached is its last converged load and stretch_reached the FE inner stretch "
+        "there, both from the FE alone. Arc-length passes the limit (its p_reached: the maximum of the trace by a "
+        "parabola through the three steps around it; stretch_reached: where the trace ends). The exact columns "
+        "(`reduced.blastula.limit_point`, closed form; `inner_stretch` raises `ValueError` above it) are only "
+        "compared with afterwards.",
         "",
         md_table(
             lim,
@@ -123,6 +139,8 @@ def section(limit: tuple[pd.DataFrame, dict], *, quick: bool = False, spheroid_r
         sec.md += [
             "### Static compression depth (spheroid FE, alpha = 0.2, C = 200 Pa; stops at the first failure)",
             "",
+            _compression_text(comp),
+            "",
             md_table(comp),
             "",
         ]
@@ -131,3 +149,25 @@ def section(limit: tuple[pd.DataFrame, dict], *, quick: bool = False, spheroid_r
     sec.summary["limit_load_control_Pa"] = {f"{r.B_um:g}": r.p_reached_Pa for r in lc.itertuples()}
     sec.data.update(limit=lim, traces=traces)
     return sec
+
+
+def _compression_text(comp: pd.DataFrame) -> str:
+    """Say what ended the push: a failure of the method (and how), or the model's stated cap."""
+    ok = comp[comp.converged]
+    top = f"{100 * ok.fraction.max():.0f} %" if len(ok) else "none"
+    bad = comp[~comp.converged]
+    if not len(bad):
+        return f"Every approach tried converged (largest {top} of the diameter); no failure was reached."
+    first = bad.iloc[0]
+    if first.failure == "refused (cap)":
+        return (
+            f"Every approach tried below the cap converged (largest {top} of the diameter). The push ends at "
+            f"{100 * first.fraction:.0f} % because `fem.spheroid.compress` refuses an approach of 80 % of the "
+            "diameter or more up front (the ball would be squeezed below 20 % of its height; the model is not "
+            "meant for that): the cap, not a failure of the method, ends this map. Not shown: how the method "
+            "would fail beyond it."
+        )
+    return (
+        f"Converged up to {top} of the diameter; at {100 * first.fraction:.0f} % it fails by "
+        f"**{first.failure}** ({first.note})."
+    )

@@ -15,8 +15,10 @@ pressure residual of that state against the exact incompressible shell,
   tolerance set to rtol in {1e-3 .. 1e-10} (``_ode_rtol``);
 * FE: ``fem.blastula.inflate`` (load control, kappa = 2.2 GPa) on 4 mesh levels (n_radial, n_circ).
 
-Wall times: best of ``repeats`` calls after one warm-up call (the reduced paths are ``jax.jit``-ed;
-JIT compile and mesh set-up of the warm-up call are reported separately in ``first_s``). The machine is shared: times are pessimistic.
+Wall times: the median of ``repeats`` calls after one warm-up call (``wall_s``; 21 calls for the
+jitted reduced paths), with their spread ``wall_min_s`` .. ``wall_max_s``; JIT compile and mesh
+set-up of the warm-up call are in ``first_s``. The machine is shared: times are pessimistic, and
+``pareto`` only lets a row dominate another when it is faster beyond the spread.
 
 Spheroid (``spheroid_accuracy``, needs ``fem.spheroid`` and ``reduced.spheroid``): the seed's Fig. 10
 case; the reference is the finest FE mesh; error = max over t in {0.2 s, 1500 s} of
@@ -45,7 +47,31 @@ ODE_RTOLS = (1e-3, 1e-4, 1e-6, 1e-8, 1e-10)
 FE_MESHES = ((2, 4), (4, 8), (8, 16), (16, 32))
 FE_MESHES_QUICK = ((1, 2), (2, 4), (4, 8), (8, 16))
 
-__all__ = ["blastula_accuracy", "spheroid_accuracy", "pareto", "timed", "FE_MESHES", "FE_MESHES_QUICK"]
+__all__ = ["blastula_accuracy", "spheroid_accuracy", "pareto", "timed", "timed_stats", "FE_MESHES", "FE_MESHES_QUICK"]
+
+
+def timed_stats(fn: Callable[[], object], repeats: int = 5) -> tuple[float, np.ndarray, object]:
+    """(first-call seconds, seconds of each of ``repeats`` further calls, last result)."""
+    t0 = time.perf_counter()
+    out = fn()
+    first = time.perf_counter() - t0
+    walls = []
+    for _ in range(max(int(repeats), 1)):
+        t0 = time.perf_counter()
+        out = fn()
+        walls.append(time.perf_counter() - t0)
+    return first, np.asarray(walls), out
+
+
+def _wall_columns(first: float, walls: np.ndarray) -> dict:
+    """wall_s (median of the repeats), wall_min_s / wall_max_s (their spread), first_s, repeats."""
+    return dict(
+        wall_s=float(np.median(walls)),
+        wall_min_s=float(np.min(walls)),
+        wall_max_s=float(np.max(walls)),
+        first_s=first,
+        repeats=int(walls.size),
+    )
 
 
 def timed(fn: Callable[[], object], repeats: int = 3) -> tuple[float, float, object]:
@@ -90,8 +116,9 @@ def _pressure_error(stretch: Sequence[float], pressure: Sequence[float], alpha: 
 def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
     """Error against wall time for the reduced (quadrature, diffrax) and FE blastula paths.
 
-    Returns a DataFrame with columns method, setting, wall_s (best of ``repeats`` after warm-up),
-    first_s (first call, includes JIT compile / mesh set-up), error (see the module docstring),
+    Returns a DataFrame with columns method, setting, wall_s (median of ``repeats`` calls after a
+    warm-up), wall_min_s, wall_max_s (their spread), first_s (first call, includes JIT compile / mesh
+    set-up), repeats, error (see the module docstring),
     stretch_error (max |lambda_a / lambda_exact - 1|) and pareto (bool).
     """
     import jax
@@ -105,14 +132,13 @@ def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
     rows = []
 
     inv = jax.jit(lambda q: bl.inner_stretch(q, **geo))
-    first, wall, la = timed(lambda: jax.block_until_ready(inv(ps)), max(repeats, 20))
+    first, walls, la = timed_stats(lambda: jax.block_until_ready(inv(ps)), max(repeats, 21))
     la = np.asarray(la)
     rows.append(
         dict(
             method="reduced quadrature",
             setting="20-pt Gauss-Legendre",
-            wall_s=wall,
-            first_s=first,
+            **_wall_columns(first, walls),
             error=_pressure_error(la, ps),
             stretch_error=float(np.max(np.abs(la / la_ex - 1))),
         )
@@ -121,14 +147,13 @@ def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
     for rtol in ODE_RTOLS:
         fwd = jax.jit(lambda x: bl.pressure(x, **geo, method="ode"))
         with _ode_rtol(rtol):  # the tolerance is read when the call is traced (first call, in the block)
-            first, wall, p = timed(lambda: jax.block_until_ready(fwd(la_ex)), max(repeats, 20))
+            first, walls, p = timed_stats(lambda: jax.block_until_ready(fwd(la_ex)), max(repeats, 21))
         p = np.asarray(p)
         rows.append(
             dict(
                 method="reduced diffrax (Dopri8)",
                 setting=f"rtol={rtol:.0e}",
-                wall_s=wall,
-                first_s=first,
+                **_wall_columns(first, walls),
                 error=float(np.max(np.abs(ps / p - 1))),
                 stretch_error=np.nan,
             )
@@ -136,13 +161,12 @@ def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
 
     for m in FE_MESHES_QUICK if quick else FE_MESHES:
         run = lambda m=m: inflate(inner_radius=A, outer_radius=B, C=C, alpha=ALPHA, pressures=ps, mesh=m)
-        first, wall, r = timed(run, 1 if m[0] >= 8 else repeats)
+        first, walls, r = timed_stats(run, repeats)
         rows.append(
             dict(
                 method="FE Q2/P1 mixed",
                 setting=f"mesh {m[0]}x{m[1]}",
-                wall_s=wall,
-                first_s=first,
+                **_wall_columns(first, walls),
                 error=_pressure_error(r.inner_stretch, r.pressure),
                 stretch_error=float(np.max(np.abs(r.inner_stretch / la_ex - 1))),
             )
@@ -153,12 +177,23 @@ def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
 
 
 def pareto(df: pd.DataFrame, x: str = "wall_s", y: str = "error") -> np.ndarray:
-    """Boolean mask of rows on the Pareto front: no other row is both faster and more accurate."""
+    """Boolean mask of rows on the Pareto front: no other row is both faster and more accurate.
+
+    With ``wall_min_s`` / ``wall_max_s`` columns (the spread of the repeated timings), row j
+    dominates row i when it is more accurate and not slower beyond the spread (j's fastest call no
+    slower than i's slowest), or as accurate and faster beyond the spread (j's slowest call faster
+    than i's fastest). Timing noise inside the measured spreads cannot change the flags.
+    """
     xs, ys = df[x].to_numpy(float), df[y].to_numpy(float)
+    lo = df["wall_min_s"].to_numpy(float) if "wall_min_s" in df else xs
+    hi = df["wall_max_s"].to_numpy(float) if "wall_max_s" in df else xs
     ok = np.isfinite(xs) & np.isfinite(ys)
     mask = np.zeros(len(df), bool)
     for i in np.flatnonzero(ok):
-        dominated = ok & (xs <= xs[i]) & (ys <= ys[i]) & ((xs < xs[i]) | (ys < ys[i]))
+        better_not_slower = (ys < ys[i]) & (lo <= hi[i])
+        as_good_faster = (ys <= ys[i]) & (hi < lo[i])
+        dominated = ok & (better_not_slower | as_good_faster)
+        dominated[i] = False
         mask[i] = not dominated.any()
     return mask
 

@@ -293,17 +293,57 @@ def hertz_table(
     return pd.DataFrame(rows)
 
 
+TABLE_NAMES = ("blastula", "creep", "spheroid", "hertz")
+
+
+def _count(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"must not be negative, got {v}")
+    return v
+
+
+def _spheroid_mesh(text: str) -> str | int:
+    from tissuemech.fem.spheroid import LEVELS, MESHES
+
+    if text.isdigit() and int(text) in LEVELS:
+        return int(text)
+    if text in MESHES:
+        return text
+    raise argparse.ArgumentTypeError(
+        f"unknown mesh {text!r}; choose {', '.join(MESHES)} or a level {min(LEVELS)}..{max(LEVELS)}"
+    )
+
+
+def _skip_list(text: str) -> set[str]:
+    names = set(filter(None, (v.strip() for v in text.split(","))))
+    bad = sorted(names - set(TABLE_NAMES))
+    if bad:
+        raise argparse.ArgumentTypeError(f"unknown table(s) {', '.join(bad)}; choose from {', '.join(TABLE_NAMES)}")
+    return names
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m tissuemech.compare.studies.checks``: print the reduced-vs-FE tables (see --help)."""
     ap = argparse.ArgumentParser(prog="python -m tissuemech.compare.studies.checks", description=__doc__.split("\n")[0])
-    ap.add_argument("--spheroid-random", type=int, default=10)
-    ap.add_argument("--blastula-random", type=int, default=10)
-    ap.add_argument("--mesh", default="default", help="FE mesh for the spheroid checks")
+    ap.add_argument("--spheroid-random", type=_count, default=10, help="random spheroid cases (default: %(default)s)")
+    ap.add_argument("--blastula-random", type=_count, default=10, help="random blastula cases (default: %(default)s)")
+    ap.add_argument(
+        "--mesh",
+        type=_spheroid_mesh,
+        default="default",
+        help="FE mesh for the spheroid checks: coarse, default, fine or a level 0..4 (default: %(default)s)",
+    )
     ap.add_argument("--out", default=None, help="folder for CSV tables")
     ap.add_argument("--fit", action="store_true", help="also fit FE-made synthetic records (SYNTHETIC data)")
-    ap.add_argument("--skip", default="", help="comma list of: blastula,creep,spheroid,hertz")
+    ap.add_argument("--skip", type=_skip_list, default=set(), help="comma list of: " + ",".join(TABLE_NAMES))
     a = ap.parse_args(list(sys.argv[1:] if argv is None else argv))
-    skip = set(filter(None, a.skip.split(",")))
-    a.mesh = int(a.mesh) if str(a.mesh).isdigit() else a.mesh  # a fem.spheroid level number or name
+    skip = a.skip
+    if a.out and Path(a.out).exists() and not Path(a.out).is_dir():
+        ap.error(f"--out {a.out!r} exists and is a file, not a folder")
     pd.set_option("display.width", 200)
     pd.set_option("display.max_columns", 20)
     tables = {}

@@ -68,13 +68,22 @@ TOLERANCE = 1e-3  # the accuracy a viscoelastic step must keep
 
 
 def limit_point_map(
-    outer_um: Sequence[float] = (52.0, 60.0, 75.0), mesh="default", n_load_steps: int = 40
+    outer_um: Sequence[float] = (52.0, 60.0, 75.0),
+    mesh="default",
+    n_load_steps: int = 60,
+    sweep_range: tuple[float, float] = (1.0, 1000.0),
 ) -> tuple[pd.DataFrame, dict]:
     """Load control vs arc-length vs reduced at the neo-Hookean limit point (alpha = 1e-5).
 
+    Load control runs the same geometric sweep (``n_load_steps`` pressures over ``sweep_range``, Pa)
+    for every B, with adaptive cut-back; it is not told the exact limit. Its p_reached is the last
+    converged load and its stretch_reached the FE inner stretch there (both from the FE alone); the
+    exact columns are only compared with afterwards.
+
     Returns (table, arc-length results keyed by B in um). Table columns: B_um, method, p_reached_Pa
     (largest converged pressure; for arc-length the maximum along the trace), stretch_reached
-    (largest inner stretch reached), p_max_exact_Pa, stretch_limit_exact, rel_err_p (p_reached /
+    (FE inner stretch at p_reached for load control; the last traced stretch for arc-length; NaN for
+    the closed form, which has no "reached"), p_max_exact_Pa, stretch_limit_exact, rel_err_p (p_reached /
     p_max - 1), passed_limit (bool), wall_s, note.
     """
     from tissuemech.fem.blastula import LimitPointError, inflate
@@ -106,7 +115,7 @@ def limit_point_map(
                 base,
                 method="reduced (exact)",
                 p_reached_Pa=pmax,
-                stretch_reached=np.inf,
+                stretch_reached=np.nan,
                 rel_err_p=0.0,
                 passed_limit=True,
                 wall_s=wall,
@@ -114,15 +123,20 @@ def limit_point_map(
             )
         )
 
+        # load control on a sweep fixed in advance (the same for every B, not built from the exact p_max);
+        # p_reached and stretch_reached are the FE's own: the last converged load step, re-run to read its stretch
+        sweep = np.geomspace(sweep_range[0], sweep_range[1], n_load_steps)
         t0 = time.perf_counter()
         try:
-            r = inflate(**geo, pressures=np.linspace(pmax / n_load_steps, 1.2 * pmax, n_load_steps), mesh=mesh)
-            p_last, note = float(r.pressure[-1]), "reached 1.2 p_max (unexpected)"
+            r = inflate(**geo, pressures=sweep, mesh=mesh)
+            p_last, note = float(r.pressure[-1]), f"reached the end of the sweep ({sweep_range[1]:g} Pa)"
+            la_last = float(r.inner_stretch[-1])
         except LimitPointError as e:
             p_last = float(e.last_converged)
             note = "LimitPointError: " + str(e).split(" (load level")[0][:160]
+            r = inflate(**geo, pressures=np.r_[sweep[sweep < p_last * (1 - 1e-9)], p_last], mesh=mesh)
+            la_last = float(r.inner_stretch[-1])
         wall = time.perf_counter() - t0
-        la_last = float(bl.inner_stretch(min(p_last, pmax * (1 - 1e-12)), **geo))
         rows.append(
             dict(
                 base,
@@ -228,25 +242,37 @@ def kappa_map(
 # ---------------------------------------------------------------------------------------------
 
 
+CAP_FRACTION = 0.8  # fem.spheroid.compress refuses displacement >= 1.6 a0 (80 % of the diameter)
+
+
 def compression_map(
     fractions: Sequence[float] = (0.2, 0.3, 0.4, 0.5, 0.6),
     mesh="default",
     radius: float = 500 * UM,
     C_: float = 200.0,
     alpha: float = 0.2,
+    probe_cap: bool = True,
 ) -> pd.DataFrame:
     """Static elastic compression to increasing total approach (fraction of the diameter) until it fails.
 
-    Needs ``fem.spheroid``. Columns: fraction, approach_um, converged, force_N, steps, wall_s, note.
-    Stops at the first failure.
+    Needs ``fem.spheroid``. Columns: fraction, approach_um, converged, force_N, steps,
+    newton_iterations, failure (how it failed: "Newton", "contact check", "refused (cap)", ...),
+    wall_s, note. Stops at the first failure. With ``probe_cap`` and no failure below it, one more
+    attempt at ``CAP_FRACTION`` records that ``fem.spheroid.compress`` refuses it up front (the
+    model's stated cap: the ball squeezed below 20 % of its height), so a reader sees whether the
+    method or the cap ended the push.
     """
     fr = _positive_list("fractions (approach / diameter)", fractions)
     if np.any(fr >= 1):
         raise ValueError(f"fractions are total approach / diameter and must be below 1; got {list(fractions)}")
     from tissuemech.fem import spheroid as fes
+    from tissuemech.fem.newton import NewtonError
 
+    tries = [float(f) for f in fractions]
+    if probe_cap and max(tries) < CAP_FRACTION:
+        tries.append(CAP_FRACTION)
     rows = []
-    for f in fractions:
+    for f in tries:
         t0 = time.perf_counter()
         try:
             r = fes.compress(
@@ -267,11 +293,21 @@ def compression_map(
                     converged=True,
                     force_N=float(r.force[-1]),
                     steps=len(r.force),
+                    newton_iterations=int(np.sum(r.newton_iterations)),
+                    failure="",
                     wall_s=time.perf_counter() - t0,
                     note="",
                 )
             )
-        except Exception as e:  # NewtonError or a contact failure: the boundary
+        except Exception as e:  # the boundary: say how it failed
+            if isinstance(e, NewtonError):
+                how = "Newton"
+            elif isinstance(e, ValueError) and f >= CAP_FRACTION:
+                how = "refused (cap)"
+            elif isinstance(e, RuntimeError):
+                how = "contact check"
+            else:
+                how = type(e).__name__
             rows.append(
                 dict(
                     fraction=f,
@@ -279,6 +315,8 @@ def compression_map(
                     converged=False,
                     force_N=np.nan,
                     steps=0,
+                    newton_iterations=0,
+                    failure=how,
                     wall_s=time.perf_counter() - t0,
                     note=f"{type(e).__name__}: {str(e)[:160]}",
                 )
