@@ -19,8 +19,8 @@ local processes, 0 (default) in this process.
 
 API: ``add_parser(subparsers)``, ``run(args)``, ``main(argv)`` (``python -m tissuemech.compare.batch_cli``),
 ``chunk(n_points, index, chunks)``, ``read_points(path)``, ``collect(points, store, function)``,
-``worker_env(threads)``, ``pin_threads(threads)``, ``resolve_function(spec)``, ``fe_spheroid``,
-``fe_blastula``.
+``worker_env(threads)``, ``pin_threads(threads)``, ``jobqueue_cluster(system, ...)`` (dask-jobqueue),
+``resolve_function(spec)``, ``fe_spheroid``, ``fe_blastula``.
 """
 
 from __future__ import annotations
@@ -42,6 +42,7 @@ __all__ = [
     "collect",
     "worker_env",
     "pin_threads",
+    "jobqueue_cluster",
     "resolve_function",
     "fe_spheroid",
     "fe_blastula",
@@ -81,6 +82,51 @@ def pin_threads(threads: int = 1) -> dict[str, str]:
     env = worker_env(threads)
     os.environ.update(env)
     return env
+
+
+_JOBQUEUE = {
+    "slurm": "SLURMCluster",
+    "pbs": "PBSCluster",
+    "sge": "SGECluster",
+    "lsf": "LSFCluster",
+    "htcondor": "HTCondorCluster",
+}
+
+
+def jobqueue_cluster(
+    system: str, *, cores: int, memory: str, walltime: str, threads_per_worker: int = 1, **kwargs: Any
+):
+    """A dask-jobqueue cluster whose jobs each run ``cores // threads_per_worker`` pinned workers.
+
+    system              "slurm", "pbs", "sge", "lsf" or "htcondor" (needs ``pip install tissuemech[cluster]``).
+    cores, memory       per job (e.g. 8, "16GB"); walltime per job ("02:00:00").
+    threads_per_worker  threads of each worker; BLAS and XLA are pinned to it (:func:`worker_env`) by
+                        exports prepended to ``job_script_prologue``.
+    kwargs              passed on (``queue``, ``account``, ``job_extra_directives``, ``job_script_prologue``
+                        lines to run after the exports, e.g. activating the environment, ...).
+    Scale it with ``cluster.scale(jobs=n)`` and pass ``dask.distributed.Client(cluster)`` as the executor of
+    ``compare.batch.run``. Raises ValueError for an unknown system or cores not divisible by the threads,
+    ImportError without dask-jobqueue.
+    """
+    if system.lower() not in _JOBQUEUE:
+        raise ValueError(f"system must be one of {sorted(_JOBQUEUE)}, got {system!r}")
+    if cores < 1 or threads_per_worker < 1 or cores % threads_per_worker:
+        raise ValueError(
+            f"cores per job ({cores}) must be a positive multiple of threads_per_worker ({threads_per_worker})"
+        )
+    import dask_jobqueue
+
+    env = worker_env(threads_per_worker)
+    prologue = [f"export {k}='{v}'" for k, v in env.items()] + list(kwargs.pop("job_script_prologue", []))
+    cls = getattr(dask_jobqueue, _JOBQUEUE[system.lower()])
+    return cls(
+        cores=cores,
+        processes=cores // threads_per_worker,
+        memory=memory,
+        walltime=walltime,
+        job_script_prologue=prologue,
+        **kwargs,
+    )
 
 
 def fe_spheroid(

@@ -117,3 +117,24 @@ def test_bad_arguments_exit_2_with_one_line(tmp_path, capsys):
     assert "--index must be in 0..1" in capsys.readouterr().err
     assert batch_cli.main([*base, "--index", "0", "--function", "nowhere"]) == 2
     assert "--function" in capsys.readouterr().err
+
+
+def test_jobqueue_recipe_pins_every_worker():
+    pytest.importorskip("dask_jobqueue")
+    with batch_cli.jobqueue_cluster(
+        "slurm",
+        cores=8,
+        memory="16GB",
+        walltime="01:00:00",
+        queue="normal",
+        job_script_prologue=["source ~/venv/bin/activate"],
+        scheduler_options={"dashboard_address": None},
+    ) as cluster:
+        script = cluster.job_script()
+    lines = script.splitlines()
+    assert "#SBATCH -p normal" in lines and "#SBATCH --cpus-per-task=8" in lines
+    assert "export OMP_NUM_THREADS='1'" in lines and "export OPENBLAS_NUM_THREADS='1'" in lines
+    assert lines.index("export OMP_NUM_THREADS='1'") < lines.index("source ~/venv/bin/activate")
+    assert "--nworkers 8" in script and "--nthreads 1" in script  # 8 single-threaded workers per job
+    with pytest.raises(ValueError, match="multiple"):
+        batch_cli.jobqueue_cluster("slurm", cores=8, memory="1GB", walltime="1:00:00", threads_per_worker=3)
