@@ -28,7 +28,7 @@ import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -191,6 +191,8 @@ def _add_field_data(vtu: Path, field_data: dict) -> None:
     for name, value in field_data.items():
         da = ET.SubElement(fd, "DataArray", type="Float64", Name=name, NumberOfTuples="1", format="ascii")
         da.text = repr(float(value))
+    if grid is None:
+        raise ValueError(f"{vtu}: not a VTK UnstructuredGrid file")
     grid.insert(0, fd)
     tree.write(vtu, xml_declaration=True, encoding="utf-8")
 
@@ -228,7 +230,7 @@ def read_pvd(path: str | os.PathLike) -> list[tuple[float, Path]]:
     """The (time value, VTU path) entries of a PVD collection, in file order (plain XML parse)."""
     p = Path(path)
     root = ET.parse(p).getroot()
-    return [(float(d.get("timestep")), p.parent / d.get("file")) for d in root.iter("DataSet")]
+    return [(float(d.get("timestep", "nan")), p.parent / d.get("file", "")) for d in root.iter("DataSet")]
 
 
 def contact_pressure(mesh, deformed_nodes: np.ndarray, nodal_force: np.ndarray, nodes: np.ndarray) -> np.ndarray:
@@ -374,7 +376,7 @@ class SpheroidResult:
     def _contact_nodes(self, f: SpheroidField) -> np.ndarray:
         if f.contact_nodes is not None:
             return np.asarray(f.contact_nodes, int)
-        m = self.mesh  # fem.spheroid's candidates: the surface off the midplane, from the pole outward
+        m: Any = self.mesh  # fem.spheroid's candidates: the surface off the midplane, from the pole outward
         cand = np.setdiff1d(m.nodes["outer"], m.nodes["symmetry"])
         cand = cand[np.argsort(np.arctan2(m.X[0, cand], m.X[1, cand]))]
         if cand.size != np.size(f.contact_nodal_force):
@@ -397,7 +399,7 @@ class SpheroidResult:
         not end in ``.pvd``.
         """
         frames = []
-        n = self.mesh.n_nodes
+        n = int(getattr(self.mesh, "n_nodes"))  # noqa: B009 (mesh is typed as object)
         for f in self.fields:
             nodes = self._contact_nodes(f)
             fc = np.asarray(f.contact_nodal_force, float)
