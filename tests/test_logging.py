@@ -87,3 +87,22 @@ def test_batch_progress_bar_can_be_switched_off(tmp_path, capsys):
     assert [float(r["a"]) for r in res] == [1.0, 2.0]
     cap = capsys.readouterr()
     assert cap.out == "" and cap.err == ""
+
+
+def test_cut_back_steps_raise_no_runtime_warnings():
+    import warnings
+
+    from tissuemech.fem.blastula import inflate
+
+    # large load steps: trial states whose residual overflows are cut back silently (no numpy warnings)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        r = inflate(
+            inner_radius=50e-6,
+            outer_radius=75e-6,
+            C=200.0,
+            alpha=0.2,
+            pressures=np.linspace(100.0, 1000.0, 4),
+            mesh=(2, 4),
+        )
+    assert r.inner_stretch[-1] > 3.0
