@@ -1,7 +1,7 @@
 r"""FE blastula: a hollow Fung sphere inflated by a follower pressure (seed Figs 1-5).
 
 ``inflate(*, inner_radius, outer_radius, C, alpha, pressures, kappa=2.2e9, mesh="default",
-method="load", max_inner_stretch=None, rtol=1e-10) -> BlastulaResult``
+method="load", max_inner_stretch=None, rtol=1e-10, store_fields=False) -> BlastulaResult``
 
 Quarter wall section A <= rho <= B, 0 <= theta <= 90 deg (u_z = 0 on Z = 0, u_r = 0 on the axis),
 mixed Q2/P1-discontinuous elements (perturbed Lagrangian, condensed), follower pressure on the
@@ -15,7 +15,7 @@ reference radius over the inner (outer) surface. Mesh: "coarse", "default", "fin
 (n_radial, n_circ) or an ``AxiMesh`` from ``fem.mesh.shell_section``.
 
 ``creep(*, inner_radius, outer_radius, C, alpha, branches, pressure, ramp_time, end_time, kappa=2.2e9,
-mesh="default", times=(), n_ramp=8, n_hold=60, first_hold=None, rtol=1e-10) -> BlastulaResult``
+mesh="default", times=(), n_ramp=8, n_hold=60, first_hold=None, rtol=1e-10, store_fields=False) -> BlastulaResult``
 
 The same shell with generalized Maxwell branches (beta_m, tau_m [s]) on the isochoric stress
 (``fem.viscoelastic``: dQ_m/dt + Q_m/tau_m = beta_m dS_iso/dt, exact exponential update for S_iso
@@ -43,7 +43,7 @@ from tissuemech.fem.forms import Assembler, Material
 from tissuemech.fem.kinematics import invariants
 from tissuemech.fem.mesh import AxiMesh, shell_section
 from tissuemech.fem.newton import NewtonError, newton, sparse_solve
-from tissuemech.fem.output import BlastulaResult
+from tissuemech.fem.output import BlastulaField, BlastulaResult
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
 from tissuemech.reduced.material import validate_branches, validate_material, validate_positive, validate_radii
 
@@ -132,16 +132,32 @@ class _Problem:
             self.asm.surface_mean_stretch(u, self.m.edges["outer"]),
         )
 
-    def result(self, lam, xs, its, wall, C, method, iso_scale: float = 1.0, extra_S=None, **extra) -> BlastulaResult:
-        """BlastulaResult (SI) from the scaled states ``xs`` (free dofs) at scaled pressures ``lam``;
-        the fields are those of the last state (with its step's branch stresses)."""
+    def field(self, x, C, iso_scale: float = 1.0, extra_S=None):
+        """(displacement (N, 2) [m], element von Mises [Pa], element hydrostatic pressure [Pa]) of the
+        scaled state ``x`` (free dofs), with its step's branch stresses."""
         A = self.m.length_scale
-        st = np.array([self.stretches(x) for x in xs])
-        x_end = self.full(xs[-1])
-        u = x_end[: self.asm.n_u].reshape(-1, 2) * A
-        f, P, _, q = self.asm.stress(x_end, self.mat, extra_S, iso_scale)
+        xf = self.full(x)
+        u = xf[: self.asm.n_u].reshape(-1, 2) * A
+        f, P, _, q = self.asm.stress(xf, self.mat, extra_S, iso_scale)
         vm = cm.von_mises(cm.cauchy(f, P)) * C
         wq = self.asm.w
+        return u, (vm * wq).sum(1) / wq.sum(1), -(q * wq).sum(1) / wq.sum(1) * C
+
+    def result(
+        self, lam, xs, its, wall, C, method, iso_scale: float = 1.0, extra_S=None, all_fields=None, **extra
+    ) -> BlastulaResult:
+        """BlastulaResult (SI) from the scaled states ``xs`` (free dofs) at scaled pressures ``lam``;
+        the fields are those of the last state (with its step's branch stresses). ``all_fields``: None,
+        or one (time [s] or None, iso_scale, extra_S) per state to keep the fields of every step."""
+        A = self.m.length_scale
+        st = np.array([self.stretches(x) for x in xs])
+        u, vm, ph = self.field(xs[-1], C, iso_scale, extra_S)
+        fields = None
+        if all_fields is not None:
+            fields = []
+            for x, l, (t, isc, ex) in zip(xs, lam, all_fields):
+                uk, vmk, phk = self.field(x, C, isc, ex)
+                fields.append(BlastulaField(float(l) * C, t, uk, self.m.X.T * A + uk, vmk, phk))
         return BlastulaResult(
             pressure=np.asarray(lam, float) * C,
             inner_stretch=st[:, 0],
@@ -151,9 +167,10 @@ class _Problem:
             mesh=self.m,
             displacement=u,
             deformed_nodes=self.m.X.T * A + u,
-            hydrostatic_pressure=-(q * wq).sum(1) / wq.sum(1) * C,
-            von_mises=(vm * wq).sum(1) / wq.sum(1),
+            hydrostatic_pressure=ph,
+            von_mises=vm,
             method=method,
+            fields=fields,
             **extra,
         )
 
@@ -180,8 +197,13 @@ def inflate(
     max_inner_stretch: float | None = None,
     rtol: float = 1e-10,
     formulation: str = "mixed",
+    store_fields: bool = False,
 ) -> BlastulaResult:
-    """Inflate the hollow sphere; see the module docstring. SI units (m, Pa)."""
+    """Inflate the hollow sphere; see the module docstring. SI units (m, Pa).
+
+    ``store_fields=True`` keeps the fields (displacement, von Mises, pressure) of every converged step in
+    ``result.fields`` (``BlastulaField``; for ``result.to_pvd``); by default only the final ones are kept.
+    """
     if method not in ("load", "arclength"):
         raise ValueError(f"method must be 'load' or 'arclength', got {method!r}")
     if pressures is not None:
@@ -235,7 +257,9 @@ def inflate(
         xs = [u0] + [s[1] for s in steps]
         its = np.array([0] + [s[2] for s in steps])
         wall = np.array([0.0] + [s[3] for s in steps])
-    return prob.result(lam, xs, its, wall, C, method)
+    return prob.result(
+        lam, xs, its, wall, C, method, all_fields=[(None, 1.0, None)] * len(xs) if store_fields else None
+    )
 
 
 class _CreepState(NamedTuple):
@@ -263,6 +287,7 @@ def creep(
     n_hold: int = 60,
     first_hold: float | None = None,
     rtol: float = 1e-10,
+    store_fields: bool = False,
 ) -> BlastulaResult:
     r"""Creep of the viscoelastic shell under p(t) = pressure min(t / ramp_time, 1); see the module docstring.
 
@@ -270,7 +295,8 @@ def creep(
     Every step solves the equilibrium r(u, t_{n+1}) = f_int(u; iso_scale, extra_S) - p(t_{n+1}) f_p(u) = 0
     with the algorithmic Maxwell stress S = S_vol + (1 + sum beta_m g_m) S_iso + sum (e^{-h_m} Q_m^n -
     beta_m g_m S_iso^n) (``fem.viscoelastic``), then updates Q_m. Returns a BlastulaResult with ``time``
-    and ``method="creep"`` (``parameters`` records the inputs).
+    and ``method="creep"`` (``parameters`` records the inputs). ``store_fields=True`` keeps the fields of
+    every converged step in ``result.fields`` (``BlastulaField`` with its time; for ``result.to_pvd``).
     """
     br = validate_branches(branches)
     validate_positive("pressure (the held cavity pressure)", pressure, "Pa")
@@ -351,6 +377,7 @@ def creep(
         "creep",
         last.iso_scale,
         last.extra_S,
+        all_fields=[(float(st.t), st.state.iso_scale, st.state.extra_S) for st in steps] if store_fields else None,
         time=np.array([st.t for st in steps]),
         parameters=dict(
             inner_radius=float(inner_radius),

@@ -16,6 +16,7 @@ r"""Path following: adaptive load control and Riks arc-length (through limit poi
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Callable, Sequence
 
@@ -25,6 +26,8 @@ import scipy.sparse as sp
 from tissuemech.fem.newton import NewtonError, NewtonResult, sparse_solve
 
 __all__ = ["LimitPointError", "load_control", "arc_length"]
+
+log = logging.getLogger(__name__)
 
 
 class LimitPointError(NewtonError):
@@ -90,6 +93,15 @@ def load_control(
                         hint=err.hint,
                     ) from None
                 dlam *= 0.5
+                log.debug(
+                    "load step to %.6g%s failed (%s); cut back to %.3g%s (cut %d)",
+                    lam_t * scale,
+                    unit,
+                    err.args[0],
+                    dlam * scale,
+                    unit,
+                    cuts,
+                )
                 continue
             x_old, lam_old = x_c, lam_c
             x_c, lam_c = res.x, lam_t
@@ -163,6 +175,7 @@ def arc_length(
             if ok:
                 break
             ds *= 0.5
+            log.debug("arc-length step from load %.6g failed; step length halved to %.3g", lam, ds)
             if ds < ds_min:
                 raise NewtonError(
                     "arc-length step failed at the minimum step length",

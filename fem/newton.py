@@ -114,7 +114,8 @@ def newton(
             hint="reduce the load step (the predictor overshot)",
         )
     r, K = fun(x)
-    res = [float(np.linalg.norm(r[free]))]
+    with np.errstate(over="ignore", invalid="ignore"):  # a non-finite residual is handled below
+        res = [float(np.linalg.norm(r[free]))]
     if not np.isfinite(res[0]):
         raise NewtonError(
             "the residual of the initial guess is not finite",
@@ -140,7 +141,8 @@ def newton(
             why = admissible(xt) if admissible is not None else None
             if why is None:
                 rt, Kt = fun(xt)
-                rn = float(np.linalg.norm(rt[free]))
+                with np.errstate(over="ignore", invalid="ignore"):  # overflow = exploding: cut the step
+                    rn = float(np.linalg.norm(rt[free]))
                 if np.isfinite(rn) and rn <= growth * max(res[-1], rtol * ref):
                     break
                 why = "non-finite or exploding residual"

@@ -1,21 +1,63 @@
-r"""Result containers, VTU export (meshio) and the von Mises figure on the deformed section.
+r"""Result containers, VTU / PVD export (ParaView) and the von Mises figure on the deformed section.
 
 API: ``SpheroidResult`` (spheroid compression, see its docstring), ``SpheroidField``,
 ``BlastulaResult`` (dataclass; arrays per converged step: ``pressure`` [Pa], ``inner_stretch``,
 ``outer_stretch``, ``newton_iterations``, ``wall_time`` [s]; final fields: ``mesh`` (AxiMesh),
 ``displacement`` (N, 2) [m], ``deformed_nodes`` (N, 2) [m], ``hydrostatic_pressure`` and
 ``von_mises`` per element (mean over its quadrature points) [Pa]; creep runs (``fem.blastula.creep``,
-``method="creep"``) also have ``time`` [s] per step and ``parameters`` (the inputs)),
-``write_vtu(path, mesh, displacement, cell_data)`` and ``plot_von_mises(mesh, displacement, vm, ax=None)``.
+``method="creep"``) also have ``time`` [s] per step and ``parameters`` (the inputs); with
+``store_fields=True`` also ``fields``: one ``BlastulaField`` per converged step),
+``write_vtu(path, mesh, displacement, cell_data)``, ``write_pvd(path, mesh, frames)`` and
+``plot_von_mises(mesh, displacement, vm, ax=None)``.
+
+Time series for ParaView: ``BlastulaResult.to_pvd(path)`` and ``SpheroidResult.to_pvd(path)`` write a
+PVD collection ``path`` (open it in ParaView: File > Open, then *Warp By Vector* on ``displacement``)
+and one VTU per stored state next to it (``<stem>_0000.vtu``, ...). Each VTU holds the full Q2 section
+(VTK biquadratic quads, 9 nodes, so curved edges stay curved) in reference coordinates (m) with point
+data ``displacement`` [m] (warp-ready, 3 components, z = 0) and ``deformed_coordinates`` [m], cell data
+``von_mises_Pa`` and ``hydrostatic_pressure_Pa`` (element means, hydrostatic pressure = -mean Cauchy
+stress), for the spheroid point data ``contact_pressure_Pa`` and ``contact_nodal_force_N``, and field
+data with the state's time (s), load and step. ``deformed=True`` writes deformed coordinates instead
+(the displacement stays as point data).
 """
 
 from __future__ import annotations
 
+import os
+import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, NamedTuple
 
 import numpy as np
 
-__all__ = ["BlastulaResult", "SpheroidResult", "SpheroidField", "write_vtu", "plot_von_mises"]
+__all__ = [
+    "BlastulaResult",
+    "BlastulaField",
+    "SpheroidResult",
+    "SpheroidField",
+    "Frame",
+    "write_vtu",
+    "write_pvd",
+    "read_pvd",
+    "contact_pressure",
+    "plot_von_mises",
+]
+
+
+@dataclass
+class BlastulaField:
+    """Fields of one converged blastula step: ``pressure`` [Pa], ``time`` [s] (creep runs; None for
+    load-controlled and arc-length runs), ``displacement``/``deformed_nodes`` (N, 2) [m] at the mesh
+    dofs, element means of ``von_mises`` and ``hydrostatic_pressure`` (= -mean Cauchy stress) [Pa]."""
+
+    pressure: float
+    time: float | None
+    displacement: np.ndarray
+    deformed_nodes: np.ndarray
+    von_mises: np.ndarray
+    hydrostatic_pressure: np.ndarray
 
 
 @dataclass
@@ -33,6 +75,56 @@ class BlastulaResult:
     method: str = "load"
     time: np.ndarray | None = None
     parameters: dict | None = None
+    fields: list | None = None
+
+    def _frames(self) -> list[Frame]:
+        fields = self.fields
+        if not fields:  # only the final state was kept
+            t_end = None if self.time is None else float(self.time[-1])
+            fields = [
+                BlastulaField(
+                    float(self.pressure[-1]),
+                    t_end,
+                    self.displacement,
+                    self.deformed_nodes,
+                    self.von_mises,
+                    self.hydrostatic_pressure,
+                )
+            ]
+        frames = []
+        for k, f in enumerate(fields):
+            if self.method == "creep" and f.time is not None:
+                t = float(f.time)
+            elif self.method == "load":
+                t = float(f.pressure)
+            else:  # arc-length: the pressure falls past the limit point; the step number is the time axis
+                t = float(k if fields is self.fields else len(self.pressure) - 1)
+            frames.append(
+                Frame(
+                    time=t,
+                    displacement=f.displacement,
+                    cell_data={"von_mises_Pa": f.von_mises, "hydrostatic_pressure_Pa": f.hydrostatic_pressure},
+                    point_data={},
+                    field_data={
+                        "pressure_Pa": float(f.pressure),
+                        **({} if f.time is None else {"time_s": float(f.time)}),
+                    },
+                )
+            )
+        return frames
+
+    def to_pvd(self, path: str | os.PathLike, *, deformed: bool = False) -> list[Path]:
+        """Write the run as a ParaView time series: a PVD collection ``path`` and one VTU per state.
+
+        States: every converged step if the run kept them (``inflate(..., store_fields=True)``,
+        ``creep(..., store_fields=True)``), else the final state only. ParaView's time value is the
+        time (s) for creep runs, the pressure (Pa) for load-controlled runs and the step number for
+        arc-length runs (whose pressure falls past the limit point); each VTU also carries
+        ``pressure_Pa`` (and for creep runs ``time_s``) as field data. ``deformed``: write deformed coordinates (m)
+        instead of reference ones. Returns the paths written (the PVD first).
+        Raises ValueError if ``path`` does not end in ``.pvd``.
+        """
+        return write_pvd(path, self.mesh, self._frames(), deformed=deformed)
 
     def to_vtu(self, path: str) -> None:
         """Write the final deformed state (ParaView) with displacement and element fields."""
@@ -50,6 +142,144 @@ class BlastulaResult:
 
 def _quads(mesh) -> np.ndarray:
     return mesh.mesh.t[:4].T  # corner nodes (counterclockwise) of each element
+
+
+def _cells(mesh) -> tuple[str, np.ndarray]:
+    """meshio cell block of the full section: 9-node quads (VTK order: corners, mid-edges 01 12 23 30,
+    centre; the same as scikit-fem's ElementQuad2 dofs) for Q2 meshes, 4-node quads for Q1."""
+    ed = np.asarray(mesh.basis.element_dofs)
+    if ed.shape[0] == 9:
+        return "quad9", ed.T.copy()
+    return "quad", ed[:4].T.copy()
+
+
+class Frame(NamedTuple):
+    """One state of a time series: ``time`` (ParaView's time value), ``displacement`` (N, 2) [m] at the
+    mesh dofs, ``cell_data``/``point_data`` (name -> per element / per dof arrays), ``field_data``
+    (name -> number)."""
+
+    time: float
+    displacement: np.ndarray
+    cell_data: dict
+    point_data: dict
+    field_data: dict
+
+
+def _frame_mesh(mesh, frame: Frame, deformed: bool):
+    import meshio
+
+    L = mesh.length_scale
+    X = mesh.X.T * L
+    u = np.asarray(frame.displacement, float)
+    if u.shape != X.shape:
+        raise ValueError(f"displacement (m) must have shape {X.shape} (one (u_r, u_z) per mesh dof), got {u.shape}")
+    pad = lambda a: np.column_stack([a, np.zeros(len(a))])
+    pts = pad(X + u if deformed else X)
+    pdata = {"displacement": pad(u), "deformed_coordinates": pad(X + u)}
+    pdata.update({k: np.asarray(v, float) for k, v in frame.point_data.items()})
+    ctype, conn = _cells(mesh)
+    cdata = {k: [np.asarray(v, float)] for k, v in frame.cell_data.items()}
+    return meshio.Mesh(pts, [(ctype, conn)], point_data=pdata, cell_data=cdata)
+
+
+def _add_field_data(vtu: Path, field_data: dict) -> None:
+    """Insert ``<FieldData>`` (one ascii Float64 value per name) into a VTU written by meshio, which
+    does not write meshio's ``field_data`` (it reads it back, as ParaView does)."""
+    tree = ET.parse(vtu)
+    grid = tree.getroot().find("UnstructuredGrid")
+    fd = ET.Element("FieldData")
+    for name, value in field_data.items():
+        da = ET.SubElement(fd, "DataArray", type="Float64", Name=name, NumberOfTuples="1", format="ascii")
+        da.text = repr(float(value))
+    if grid is None:
+        raise ValueError(f"{vtu}: not a VTK UnstructuredGrid file")
+    grid.insert(0, fd)
+    tree.write(vtu, xml_declaration=True, encoding="utf-8")
+
+
+def write_pvd(path: str | os.PathLike, mesh, frames: Sequence[Frame], *, deformed: bool = False) -> list[Path]:
+    """Write ``frames`` as a PVD collection (``path``, ending in .pvd) and one VTU per frame beside it.
+
+    The VTUs are ``<stem>_0000.vtu``, ``<stem>_0001.vtu``, ... in the PVD's folder (existing ones with
+    those names are overwritten), referenced by relative names, each with its frame's ``time`` as
+    ParaView's time value. Points: the mesh dofs in reference (``deformed=False``) or deformed
+    coordinates (m); see the module docstring for the fields. Returns [pvd, vtu_0, vtu_1, ...].
+    Raises ValueError for a path without the .pvd suffix or an empty list of frames.
+    """
+    p = Path(path)
+    if p.suffix.lower() != ".pvd":
+        raise ValueError(f"the time-series path must end in .pvd, got {str(path)!r}")
+    if not len(frames):
+        raise ValueError("no states to write (frames is empty)")
+    p.parent.mkdir(parents=True, exist_ok=True)
+    root = ET.Element("VTKFile", type="Collection", version="0.1", byte_order="LittleEndian")
+    coll = ET.SubElement(root, "Collection")
+    written = [p]
+    for k, fr in enumerate(frames):
+        vtu = p.with_name(f"{p.stem}_{k:04d}.vtu")
+        _frame_mesh(mesh, fr, deformed).write(vtu)
+        _add_field_data(vtu, {**fr.field_data, "time": fr.time, "step": k})
+        ET.SubElement(coll, "DataSet", timestep=repr(float(fr.time)), group="", part="0", file=vtu.name)
+        written.append(vtu)
+    ET.indent(root)
+    ET.ElementTree(root).write(p, xml_declaration=True, encoding="utf-8")
+    return written
+
+
+def read_pvd(path: str | os.PathLike) -> list[tuple[float, Path]]:
+    """The (time value, VTU path) entries of a PVD collection, in file order (plain XML parse)."""
+    p = Path(path)
+    root = ET.parse(p).getroot()
+    return [(float(d.get("timestep", "nan")), p.parent / d.get("file", "")) for d in root.iter("DataSet")]
+
+
+def contact_pressure(mesh, deformed_nodes: np.ndarray, nodal_force: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+    r"""Nodal contact pressure (Pa) on the surface ``edges["outer"]`` of an axisymmetric section.
+
+    mesh           AxiMesh with boundary edges ``edges["outer"]`` (3 dofs per edge for Q2, 2 for Q1).
+    deformed_nodes (N, 2) deformed dof coordinates (m).
+    nodal_force    compressive contact force (N) per node of ``nodes`` (the axisymmetric nodal reaction,
+                   2 pi r included), 0 off contact.
+    nodes          dof indices the forces belong to.
+
+    The pressure p = sum_j p_j phi_j on the deformed surface whose consistent nodal forces are the given
+    ones: M p = F with the surface mass matrix M_ij = \int phi_i phi_j 2 pi r ds (Gauss-Legendre,
+    4 points per edge). Exact for any pressure field the surface elements can represent (e.g. uniform),
+    its L2 projection otherwise (a Hertz-like profile shows small over- and undershoots next to the
+    contact edge; negative values of the projection are set to 0); sum_i F_i is the plate force.
+    Dividing F_i by the consistent area instead fails on the axis, where that area of a quadratic
+    element vanishes. Returns one value per entry of ``nodes``.
+    """
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+
+    ed = np.asarray(mesh.edges["outer"])
+    x = np.asarray(deformed_nodes, float)
+    xi, w = np.polynomial.legendre.leggauss(4)
+    if ed.shape[1] == 3:
+        N = np.stack([xi * (xi - 1) / 2, 1 - xi**2, xi * (xi + 1) / 2])  # (3, q)
+        dN = np.stack([xi - 0.5, -2 * xi, xi + 0.5])
+    else:
+        N = np.stack([(1 - xi) / 2, (1 + xi) / 2])
+        dN = np.stack([-0.5 + 0 * xi, 0.5 + 0 * xi])
+    xe = x[ed]  # (ne, nen, 2)
+    pos = np.einsum("aq,ead->eqd", N, xe)
+    tang = np.einsum("aq,ead->eqd", dN, xe)
+    jac = 2 * np.pi * pos[..., 0] * np.linalg.norm(tang, axis=-1) * w  # (ne, q)
+    Me = np.einsum("aq,bq,eq->eab", N, N, jac)
+    surf, loc = np.unique(ed, return_inverse=True)
+    loc = loc.reshape(ed.shape)
+    n = surf.size
+    rows = np.repeat(loc, ed.shape[1], axis=1).ravel()
+    cols = np.tile(loc, (1, ed.shape[1])).ravel()
+    M = sp.csc_matrix((Me.ravel(), (rows, cols)), shape=(n, n))
+    nodes = np.asarray(nodes, int)
+    where = np.searchsorted(surf, nodes)
+    if np.any(where >= n) or np.any(surf[np.minimum(where, n - 1)] != nodes):
+        raise ValueError("contact nodes must lie on the surface edges['outer'] of the mesh")
+    F = np.zeros(n)
+    F[where] = np.asarray(nodal_force, float)
+    return np.maximum(spla.spsolve(M, F)[where], 0.0)
 
 
 def write_vtu(path: str, mesh, displacement: np.ndarray, cell_data: dict | None = None) -> None:
@@ -98,6 +328,7 @@ class SpheroidField:
     von_mises: np.ndarray
     hydrostatic_pressure: np.ndarray
     contact_nodal_force: np.ndarray
+    contact_nodes: np.ndarray | None = None  # dof indices of contact_nodal_force (None: outer minus midplane)
 
 
 @dataclass
@@ -141,6 +372,51 @@ class SpheroidResult:
         if time is None:
             return self.fields[-1]
         return min(self.fields, key=lambda f: abs(f.time - float(time)))
+
+    def _contact_nodes(self, f: SpheroidField) -> np.ndarray:
+        if f.contact_nodes is not None:
+            return np.asarray(f.contact_nodes, int)
+        m: Any = self.mesh  # fem.spheroid's candidates: the surface off the midplane, from the pole outward
+        cand = np.setdiff1d(m.nodes["outer"], m.nodes["symmetry"])
+        cand = cand[np.argsort(np.arctan2(m.X[0, cand], m.X[1, cand]))]
+        if cand.size != np.size(f.contact_nodal_force):
+            raise ValueError(
+                f"contact_nodal_force (N) has {np.size(f.contact_nodal_force)} entries for {cand.size} "
+                "surface nodes: set SpheroidField.contact_nodes"
+            )
+        return cand
+
+    def to_pvd(self, path: str | os.PathLike, *, deformed: bool = False) -> list[Path]:
+        """Write the stored states as a ParaView time series: a PVD collection ``path`` and one VTU each.
+
+        States: ``fields`` (those at ``compress(..., field_times=...)`` and the last step;
+        ``field_times="all"`` keeps every converged step). ParaView's time value is the time (s), for
+        static runs the load fraction. Besides displacement, von Mises and hydrostatic pressure each VTU
+        has the point data ``contact_pressure_Pa`` (nodal contact force over its consistent deformed area,
+        :func:`contact_pressure`; 0 off contact) and ``contact_nodal_force_N``, and the field data
+        ``approach_m`` and ``force_N`` of the step. ``deformed``: deformed coordinates (m) instead of
+        reference ones. Returns the paths written (the PVD first). Raises ValueError if ``path`` does
+        not end in ``.pvd``.
+        """
+        frames = []
+        n = int(getattr(self.mesh, "n_nodes"))  # noqa: B009 (mesh is typed as object)
+        for f in self.fields:
+            nodes = self._contact_nodes(f)
+            fc = np.asarray(f.contact_nodal_force, float)
+            pc = contact_pressure(self.mesh, f.deformed_nodes, fc, nodes)
+            p_full, f_full = np.zeros(n), np.zeros(n)
+            p_full[nodes], f_full[nodes] = pc, fc
+            k = int(np.argmin(np.abs(self.time - f.time)))
+            frames.append(
+                Frame(
+                    time=float(f.time),
+                    displacement=f.displacement,
+                    cell_data={"von_mises_Pa": f.von_mises, "hydrostatic_pressure_Pa": f.hydrostatic_pressure},
+                    point_data={"contact_pressure_Pa": p_full, "contact_nodal_force_N": f_full},
+                    field_data={"approach_m": float(self.approach[k]), "force_N": float(self.force[k])},
+                )
+            )
+        return write_pvd(path, self.mesh, frames, deformed=deformed)
 
     def to_vtu(self, path: str, time: float | None = None) -> None:
         """Write the stored state closest to ``time`` (default: the last) as VTU (ParaView)."""

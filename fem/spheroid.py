@@ -25,7 +25,8 @@ Inside, lengths are scaled by a0, stresses by C, forces by C a0^2.
   toward the pole, e.g. pole_grading = 30, for Hertz-scale approaches delta < 1 % of the radius).
 * ``field_times``: times (s) at which the deformed mesh, von Mises and pressure fields are stored
   (they become step times; static runs: load fractions delta/displacement in (0, 1], the stored field is
-  the closest step); the last step is always stored.
+  the closest step); the last step is always stored. ``field_times="all"``: every converged step
+  (for ``SpheroidResult.to_pvd``).
 
 Outputs per converged step: plate force from the contact multipliers (sum of the nodal reactions of the
 active nodes; they include the 2 pi R of the axisymmetric volume element, so this is the force on the
@@ -221,7 +222,7 @@ def compress(
     kappa: float = 2.2e9,
     mesh="default",
     static: bool = False,
-    field_times: Sequence[float] = (),
+    field_times: Sequence[float] | str = (),
     n_ramp: int | None = None,
     n_hold: int | None = None,
     n_static: int | None = None,
@@ -257,7 +258,14 @@ def compress(
         if d_max is not None:
             tr = float(ramp_time)
             delta_fn = lambda t: d_max * min(float(t) / tr, 1.0)
-    ft = np.atleast_1d(np.asarray(field_times, float)) if len(np.atleast_1d(field_times)) else np.array([])
+    store_all = isinstance(field_times, str) and field_times == "all"
+    if isinstance(field_times, str) and not store_all:
+        raise ValueError(f"field_times must be times in s or 'all', got {field_times!r}")
+    ft = (
+        np.array([])
+        if store_all or not len(np.atleast_1d(field_times))
+        else np.atleast_1d(np.asarray(field_times, float))
+    )
     t_max = 1.0 if static else float(end_time)
     if ft.size and (not np.all(np.isfinite(ft)) or np.any(ft <= 0) or np.any(ft > t_max * (1 + 1e-12))):
         raise ValueError(
@@ -312,6 +320,8 @@ def compress(
     for tf in ft:
         want.add(int(np.argmin([abs(s.t - tf) for s in steps])))
     want.add(len(steps) - 1)
+    if store_all:
+        want = set(range(len(steps)))
     for k, st in enumerate(steps):
         s = st.state
         F, Fr, rm, rc, rcn, vmm, vm, q, N, gmin, nmin = prob.observe(s)
@@ -349,6 +359,7 @@ def compress(
                     von_mises=(vm * w).sum(1) / w.sum(1) * C,
                     hydrostatic_pressure=-(q * w).sum(1) / w.sum(1) * C,
                     contact_nodal_force=N * L2,
+                    contact_nodes=prob.plane.nodes,
                 )
             )
     a = np.array(rows, float)

@@ -23,6 +23,7 @@ with ``step(t_old, state_old, t_new, previous) -> (state_new, newton_iterations)
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Callable, Sequence
 from typing import NamedTuple
@@ -30,6 +31,8 @@ from typing import NamedTuple
 import numpy as np
 
 from tissuemech.fem.newton import NewtonError
+
+log = logging.getLogger(__name__)
 
 __all__ = ["Step", "ramp_hold_schedule", "march"]
 
@@ -128,10 +131,14 @@ def march(
                         hint=err.hint,
                     ) from None
                 dt *= 0.5
+                log.debug(
+                    "time step %.6g s -> %.6g s failed (%s); cut back to dt = %.3g s", t_c, t_new, err.args[0], dt
+                )
                 continue
             out.append(Step(t_new, s_new, int(its), time.perf_counter() - w0))
             prev = (t_c, s_c)
             t_c, s_c = t_new, s_new
+            log.debug("converged t = %.6g s in %d iterations (%.3g s)", t_new, its, out[-1].wall_s)
             if cuts:
                 dt *= growth
     return out
