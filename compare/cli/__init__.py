@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import logging
 import sys
 from collections.abc import Sequence
 
@@ -30,6 +31,7 @@ COMMANDS: list[tuple[str, str]] = [
     ("spheroid", "tissuemech.compare.cli.spheroid"),
     ("report", "tissuemech.compare.cli.report"),
     ("bench", "tissuemech.compare.cli.bench"),
+    ("batch", "tissuemech.compare.batch_cli"),
 ]
 
 
@@ -43,6 +45,13 @@ def build_parser() -> argparse.ArgumentParser:
         "compression-relaxation (Peters & Iber scenes), fast reduced models with FE checks.",
     )
     p.add_argument("--version", action="version", version=f"tissuemech {tissuemech.__version__}")
+    p.add_argument(
+        "-v",
+        "--verbose",
+        action="count",
+        default=0,
+        help="log what the solvers do (-v: INFO, -vv: DEBUG: every load/time step and cut-back)",
+    )
     sub = p.add_subparsers(dest="command", metavar="COMMAND")
     for _, module in COMMANDS:
         importlib.import_module(module).add_parser(sub)
@@ -56,9 +65,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return 0
+    if args.verbose:
+        logging.basicConfig(
+            level=logging.DEBUG if args.verbose > 1 else logging.INFO,
+            format="%(levelname)s %(name)s: %(message)s",
+        )
     module = dict(COMMANDS)[args.command]
     try:
-        importlib.import_module(module).run(args)
+        rc = importlib.import_module(module).run(args)
     except (ValueError, CLIError, OSError) as exc:
         msg = str(exc).replace("Use equilibrium='hertz'", "Use --equilibrium hertz")
         msg = msg.replace("use equilibrium='hertz'", "use --equilibrium hertz").replace(" or a callable,", ",")
@@ -66,7 +80,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             msg = f"cannot write {exc.filename!r}: {exc.strerror}"
         print(f"tissuemech {args.command}: error: {msg}", file=sys.stderr)
         return 2
-    return 0
+    return rc if isinstance(rc, int) else 0
 
 
 if __name__ == "__main__":
