@@ -150,9 +150,9 @@ def spheroid_table(args: Namespace) -> None:
         f"{args.ramp_time:g} s, held to {args.end_time:g} s; equilibrium: {args.equilibrium}"
     )
     if fe is None:
-        show = [v for v in (0.05, 0.1, 0.2, 1, 10, 50, 100, 200, 400, 800, 1200) if v < args.end_time]
-        show = np.array([v * args.ramp_time / 0.2 if v <= 0.2 else v for v in show] + [args.end_time])
-        show = np.unique(show[show <= args.end_time])
+        picks = [v for v in (0.05, 0.1, 0.2, 1, 10, 50, 100, 200, 400, 800, 1200) if v < args.end_time]
+        grid = np.array([v * args.ramp_time / 0.2 if v <= 0.2 else v for v in picks] + [args.end_time])
+        show = np.unique(grid[grid <= args.end_time])
     else:
         show = np.asarray(fe.time)[np.asarray(fe.time) > 0]
     F_show = np.asarray(spheroid.force(show, **kw))

@@ -90,7 +90,7 @@ def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16, note: 
     ax.set_ylabel("relative error")
     ax.set_title(title, fontsize=10)
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7, loc="upper center")
+    ax.legend(fontsize=7, loc="center right")
     if note:
         import textwrap
 

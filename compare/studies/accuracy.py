@@ -33,6 +33,7 @@ from __future__ import annotations
 import contextlib
 import time
 from collections.abc import Callable, Iterator, Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -104,7 +105,7 @@ def _ode_rtol(rtol: float) -> Iterator[None]:
         blastula._ODE_RTOL = old
 
 
-def _pressure_error(stretch: Sequence[float], pressure: Sequence[float], alpha: float = ALPHA) -> float:
+def _pressure_error(stretch: Any, pressure: Any, alpha: float = ALPHA) -> float:
     return float(
         max(
             abs(shell_pressure(float(l), outer_radius=B, alpha=alpha) / float(p) - 1.0)
