@@ -96,6 +96,9 @@ def _parser() -> argparse.ArgumentParser:
     from tissuemech.compare.report import add_parser as add_report_parser
 
     add_report_parser(sub)
+    from tissuemech.compare.fit_cli import add_parser as add_fit_parser
+
+    add_fit_parser(sub)
     return p
 
 
@@ -118,6 +121,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             from tissuemech.compare.report import run_cli
 
             run_cli(args)
+        elif args.command == "fit":
+            from tissuemech.compare.fit_cli import run as run_fit
+
+            run_fit(args)
     except (ValueError, CLIError, OSError) as exc:
         msg = str(exc).replace("Use equilibrium='hertz'", "Use --equilibrium hertz")
         print(f"tissuemech {args.command}: error: {msg}", file=sys.stderr)

@@ -74,6 +74,7 @@ def synthetic(displacements, noise=0.0, seed=0, params=TRUE, times=TIMES):
 
 
 def _fit(records, **kw):
+    kw.setdefault("model_error", 0.0)  # the fake law is exact: no model-error term
     return fit.relaxation(records, radius=A0, ramp_time=TR, model=fake_nominal_stress, **kw)
 
 
@@ -92,10 +93,14 @@ def test_fake_model_limits():
 
 def test_exact_data_recovered_two_levels():
     res = _fit(synthetic([50e-6, 200e-6]), initial=dict(C=80.0, alpha=0.05, beta=1.0, tau=50.0))
-    assert res.success
     for k, v in TRUE.items():
         assert res.params[k] == pytest.approx(v, rel=1e-6), k
     assert res.residual < 1e-8
+    # noise-free data: flagged, no zero-width interval, not reported as success
+    assert not res.success
+    assert any("noise-free" in f for f in res.flags)
+    assert all(np.isnan(lo) and np.isnan(hi) for lo, hi in res.intervals.values())
+    assert "WARNING" in res.summary() and "n/a" in res.summary()
 
 
 def test_noisy_two_levels_within_intervals_and_identified():
