@@ -529,6 +529,25 @@ def _solve(fun, jac, z0, lo, hi, max_nfev):
     )
 
 
+def _masked_solver(fun, jac, z_template, free, lo, hi):
+    """least squares over the ``free`` components of z only (the others held at ``z_template``);
+    the returned solution's ``x`` is the full z."""
+    if free.all():
+        return lambda z0, n: _solve(fun, jac, z0, lo, hi, n)
+
+    def solve(z0, n):
+        def full(w):
+            z = np.asarray(z_template, dtype=float).copy()
+            z[free] = w
+            return z
+
+        sol = _solve(lambda w: fun(full(w)), lambda w: jac(full(w))[:, free], z0[free], lo[free], hi[free], n)
+        sol.x = full(sol.x)
+        return sol
+
+    return solve
+
+
 def _safe(fn):
     def wrapped(z):
         r = fn(z)
@@ -544,9 +563,10 @@ class _Profiler:
         self.prob, self.z_hat, self.chi2_min, self.cov = prob, z_hat, chi2_min, cov_z
         self.lo, self.hi, self.max_nfev = lo, hi, max_nfev
         self.better: np.ndarray | None = None  # a point with lower chi2 than the "optimum", if met
+        self.free = np.ones(z_hat.size, dtype=bool)  # components re-optimised (not held fixed)
 
     def delta(self, i: int, c: float) -> float:
-        keep = np.arange(self.z_hat.size) != i
+        keep = (np.arange(self.z_hat.size) != i) & self.free
 
         def full(w):
             z = self.z_hat.copy()
@@ -707,12 +727,18 @@ def relaxation(
 
     # pass 1: common weights; noise estimate per record; pass 2: weighted by each record's noise
     prob.sig = np.full(prob.y.size, 0.01 * scale)
-    sol = _solve(fun, jac, np.concatenate([theta0, np.zeros(extra)]), lo, hi, max_nfev)
+    z0 = np.concatenate([theta0, np.zeros(extra)])
+    # a parameter the model does not depend on (alpha with the Hertz law) is held at its start value
+    norm0 = np.linalg.norm(jac(z0)[: prob.y.size, :P], axis=0)
+    dead0 = [i for i in range(P) if norm0[i] <= 1e-10 * max(float(np.max(norm0)), 1e-300)]
+    free = np.array([i not in dead0 for i in range(prob.nz)])
+    solve = _masked_solver(fun, jac, z0, free, lo, hi)
+    sol = solve(z0, max_nfev)
     nfev = int(sol.nfev)
     noise = prob.set_noise(sol.x, floor)
     if R > 1 or extra:
         for _ in range(2):  # weights from the previous pass's residuals; the last pass is optimal for its weights
-            sol = _solve(fun, jac, sol.x, lo, hi, max_nfev)
+            sol = solve(sol.x, max_nfev)
             nfev += int(sol.nfev)
             noise_prev, noise = noise, prob.set_noise(sol.x, floor)
             if np.all(np.abs(noise - noise_prev) <= 0.01 * noise_prev):
@@ -740,7 +766,7 @@ def relaxation(
     cov_z = (V * _inverse_eigenvalues(lam)) @ V.T
     cov = cov_z[:P, :P]
     colnorm = np.linalg.norm(Jz[:N, :P], axis=0)
-    dead = [i for i in range(P) if colnorm[i] <= 1e-10 * max(float(np.max(colnorm)), 1e-300)]
+    dead = sorted(set(dead0) | {i for i in range(P) if colnorm[i] <= 1e-10 * max(float(np.max(colnorm)), 1e-300)})
     lam_t, V_t = np.linalg.eigh(0.5 * (cov + cov.T))
     fisher_t = (V_t * _inverse_eigenvalues(lam_t)) @ V_t.T  # marginal Fisher of theta
     for i in dead:
@@ -772,13 +798,15 @@ def relaxation(
         return float(math.exp(th))
 
     prof = _Profiler(prob, z, chi2, cov_z, lo, hi)
+    prof.free = free.copy()
+    prof.free[dead] = False
     for i, nm in enumerate(names):
+        if i in dead:
+            ivals[nm] = (float(phys_lo[i]), float(math.exp(hi_t[i])) if np.isfinite(hi_t[i]) else math.inf)
+            kinds[nm], methods[nm] = "none", "bound"
+            continue
         if noise_free:
             ivals[nm], kinds[nm], methods[nm] = (math.nan, math.nan), "n/a", "n/a"
-            continue
-        if i in dead:
-            ivals[nm] = (float(phys_lo[i]), float(math.exp(hi[i])) if np.isfinite(hi[i]) else math.inf)
-            kinds[nm], methods[nm] = "none", "bound"
             continue
         h = tq * sd[i]
         ends, hows = [], []

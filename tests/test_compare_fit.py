@@ -346,3 +346,23 @@ def test_to_dict_is_json_ready():
     d = json.loads(json.dumps(res.to_dict()))
     assert d["names"] == list(res.names) and set(d["intervals_95"]) == set(res.names)
     assert d["interval_kinds"]["C"] == "two-sided" and d["success"] is True
+
+
+@pytest.mark.slow
+def test_hertz_law_alpha_flagged_noise_free_flagged():
+    """reduced.spheroid with equilibrium='hertz' (independent of alpha): exact data are flagged noise-free
+    (NaN intervals, not success) with alpha 'not identified'; 1 % noise: C, beta, tau cover the truth."""
+    from tissuemech.compare import coverage
+
+    truth = dict(C=150.0, alpha=0.2, beta=0.4, tau=200.0)
+    clean = coverage.reduced_records(truth, equilibrium="hertz")
+    r0 = fit.relaxation(clean, radius=A0, ramp_time=TR, equilibrium="hertz")
+    assert not r0.success and r0.kinds["alpha"] == "none" and np.isnan(r0.intervals["C"][0])
+    assert "does not depend on alpha" in r0.report
+    r1 = fit.relaxation(
+        coverage.add_noise(clean, 0.01, np.random.default_rng(0)), radius=A0, ramp_time=TR, equilibrium="hertz"
+    )
+    assert r1.success and r1.interval_text("alpha") == "not identified"
+    for k in ("C", "beta", "tau"):
+        lo, hi = r1.intervals[k]
+        assert lo < truth[k] < hi, k
