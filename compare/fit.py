@@ -9,19 +9,40 @@ Model (``reduced.spheroid``; SI units): for a ball of radius ``a0`` (m) pressed 
 with the Fung stiffness ``C`` (Pa), exponent ``alpha`` (-), energy factors ``beta_m`` (-) and
 relaxation times ``tau_m`` (s).
 
-Least squares in log-parameters ``theta = log p`` (every parameter stays positive; ``alpha`` is kept
-in ``[1e-6, 10]``): minimise ``sum_k r_k(theta)^2`` with ``r = sigma~_model - sigma~_data`` over all
-records, by ``scipy.optimize.least_squares`` (trust region) with the exact Jacobian ``jax.jacfwd``
-through the diffrax model. Gauss-Newton covariance in log space
+Statistical model
+-----------------
+Record j (one compression level) is  y_jk = m_jk(theta) (1 + e_j) + s_j eps_jk  with white Gaussian
+noise eps of unknown standard deviation ``s_j`` (Pa, estimated per record, so records of different
+stress levels are weighted by their own noise) and an optional **model-error** factor
+e_j ~ N(0, model_error^2): a relative error of the equilibrium law common to the whole record (a
+mis-tabulated F_eq at that compression scales the elastic and the viscous force alike). The e_j are
+nuisance parameters with a Gaussian prior, estimated jointly and marginalised in the covariance. By
+default (``model_error="auto"``) the FE master table's own error estimate is used (metadata key
+``model_error_rel``, relative 1-sigma error of the equilibrium force; :data:`DEFAULT_MODEL_ERROR_REL`
+when the table lacks it); for ``"hertz"``, a user table or a callable the law is taken as exact (0).
 
-    Cov(theta) = s^2 (J^T J)^-1,   s^2 = RSS / (N - P),
+Estimation: weighted least squares in log-parameters ``theta = log p`` (all positive; ``alpha`` kept
+in ``[1e-6, alpha_max]``, alpha_max = the table's upper alpha for table laws, else 10), by
+``scipy.optimize.least_squares`` (trust region) with the exact Jacobian ``jax.jacfwd`` through the
+JAX model: an unweighted pass, the per-record noise estimate s_j^2 = RSS_j / (n_j - P n_j / N), a
+weighted pass.
 
-gives 95 % intervals ``p exp(+-1.96 sd)``. The identifiability report is the eigen-decomposition of
-the Fisher matrix ``J^T J / s^2`` in log space: an eigenvector ``v`` with eigenvalue ``lam`` says the
-combination ``prod_i p_i^{v_i}`` is known to a relative standard deviation of about ``1/sqrt(lam)``.
-With ONE compression level only ``F_eq(delta)`` is seen, so ``C`` and ``alpha`` trade off along one
-direction (tiny eigenvalue, eigenvector mixing C and alpha); two or more levels separate them
-(provided the equilibrium law depends on alpha; the small-strain Hertz law does not).
+Intervals (95 %): the Gauss-Newton (Wald) interval ``theta_i +- t sd_i`` is checked against the
+profile likelihood: at each Wald end the other parameters are re-optimised, and if the rise of the
+chi-square there is not within 10 % of ``t^2`` (t the 97.5 % Student quantile with N - P degrees of
+freedom) the end is replaced by the root of the profile (``chi2_profile(theta_i) - chi2_min = t^2``,
+Brent). A profile that stays below ``t^2`` up to a search bound gives a one-sided interval (e.g.
+alpha in [0, 0.9]: "alpha < 0.9 at 95 %"), one that stays below it without bound an open end (inf).
+Records without information raise ValueError (fewer points than parameters, constant or
+non-positive stress); round-off-level residuals (noise-free data) and a model that does not depend
+on a parameter are flagged, with NaN or full-range intervals instead of zero widths.
+
+Identifiability: the eigen-decomposition of the (model-error-marginalised) Fisher matrix in log
+space: an eigenvector ``v`` with eigenvalue ``lam`` says the combination ``prod_i p_i^{v_i}`` is known
+to a relative standard deviation of about ``1/sqrt(lam)``. With ONE compression level only
+``F_eq(delta)`` is seen, so ``C`` and ``alpha`` trade off along one direction (tiny eigenvalue,
+eigenvector mixing C and alpha); two or more levels separate them (provided the equilibrium law
+depends on alpha; the small-strain Hertz law does not).
 """
 
 from __future__ import annotations
@@ -39,12 +60,26 @@ import numpy as np
 import tissuemech.reduced  # noqa: F401  (enables float64 in JAX)
 from tissuemech.reduced.material import validate_positive
 
-__all__ = ["Record", "FitResult", "Identifiability", "relaxation", "read_csv", "parameter_names", "Z95"]
+__all__ = [
+    "Record",
+    "FitResult",
+    "Identifiability",
+    "relaxation",
+    "read_csv",
+    "parameter_names",
+    "model_error_of",
+    "Z95",
+    "DEFAULT_MODEL_ERROR_REL",
+]
 
 Z95 = 1.959963984540054  # two-sided 95 % normal quantile
 ALPHA_BOUNDS = (1e-6, 10.0)
 BETA_BOUNDS = (1e-8, 1e4)
 POOR_SD = 0.5  # a log-combination with standard deviation above this (a factor ~2.7 at 95 %) is "poor"
+DEFAULT_MODEL_ERROR_REL = 0.005  # 1-sigma relative error of F_eq assumed for a table without `model_error_rel`
+NOISE_FREE_REL = 1e-9  # RMS residual below this fraction of the record's peak: noise-free (synthetic) data
+WALD_TOL = 0.10  # accept a Wald end when the profile chi-square rise there is within 10 % of t^2
+LOG_SPAN = 12.0  # profile search at most e^12 away from the estimate (beyond: unbounded)
 
 
 class Record(NamedTuple):
@@ -101,11 +136,21 @@ class FitResult:
     """Outcome of :func:`relaxation`.
 
     params        best-fit values: C [Pa], alpha [-], beta(_m) [-], tau(_m) [s]
-    intervals     95 % confidence interval (lo, hi) per parameter (Gauss-Newton, log space)
+    intervals     95 % confidence interval (lo, hi) per parameter; an end at a search bound is the
+                  physical limit (0 for alpha and beta), an unbounded end is 0 or inf; (nan, nan) when
+                  no interval can be given (noise-free data)
+    kinds         per parameter: "two-sided", "upper" (only an upper bound: "p < hi at 95 %"),
+                  "lower" ("p > lo"), "none" (not identified), "n/a" (no interval)
+    methods       per parameter: "wald" (Gauss-Newton ellipse confirmed by the profile), "profile"
+                  (profile-likelihood ends), "bound", "n/a"
     residual      root-mean-square residual (Pa)
+    noise         estimated noise standard deviation of each record (Pa)
+    model_error   relative 1-sigma model-error term used (0: none)
     identifiability  :class:`Identifiability` (Fisher eigen-decomposition and ``report``)
-    covariance    covariance of log-parameters (P x P)
-    success       optimizer convergence flag; ``message`` its text; ``nfev`` evaluations
+    covariance    covariance of log-parameters (P x P), model-error factors marginalised
+    success       True when the optimizer converged AND the intervals are usable (no flag below)
+    flags         warnings that make intervals unusable or one-sided, in words
+    message       optimizer message (and flags); ``nfev`` model evaluations of the final pass
     """
 
     params: dict[str, float]
@@ -117,19 +162,86 @@ class FitResult:
     message: str
     nfev: int
     names: tuple[str, ...] = field(default=())
+    kinds: dict[str, str] = field(default_factory=dict)
+    methods: dict[str, str] = field(default_factory=dict)
+    noise: tuple[float, ...] = field(default=())
+    model_error: float = 0.0
+    flags: tuple[str, ...] = field(default=())
+    dof: int = 0
+    model_error_factors: tuple[float, ...] = field(default=())
 
     @property
     def report(self) -> str:
         return self.identifiability.report
 
+    def interval_text(self, name: str) -> str:
+        """The 95 % statement for one parameter in words: ``148.3 .. 152.6``, ``< 0.9``, ``> 3``,
+        ``not identified`` or ``n/a``."""
+        lo, hi = self.intervals[name]
+        kind = self.kinds.get(name, "two-sided")
+        if kind == "upper":
+            return f"< {hi:.4g}"
+        if kind == "lower":
+            return f"> {lo:.4g}"
+        if kind == "none":
+            return "not identified"
+        if kind == "n/a" or not (np.isfinite(lo) and np.isfinite(hi)):
+            return "n/a"
+        return f"{lo:.4g} .. {hi:.4g}"
+
     def summary(self) -> str:
-        """Parameters with their 95 % intervals, the RMS residual and the identifiability report."""
-        lines = [f"{'parameter':>10} {'value':>12} {'95% lo':>12} {'95% hi':>12}"]
+        """Parameters with their 95 % intervals, the RMS residual, flags and the identifiability report."""
+        lines = [f"{'parameter':>10} {'value':>12} {'95% lo':>12} {'95% hi':>12}  95% statement"]
         for n in self.names:
             lo, hi = self.intervals[n]
-            lines.append(f"{n + ' [' + _UNITS[n.split('_')[0]] + ']':>10} {self.params[n]:12.5g} {lo:12.5g} {hi:12.5g}")
+            unit = _UNITS[n.split("_")[0]]
+            method = self.methods.get(n, "")
+            lines.append(
+                f"{n + ' [' + unit + ']':>10} {self.params[n]:12.5g} {lo:12.5g} {hi:12.5g}  "
+                f"{n} {self.interval_text(n)}" + (f"  ({method})" if method else "")
+            )
         lines.append(f"RMS residual: {self.residual:.4g} Pa")
+        if self.noise:
+            lines.append("noise sd per record: " + ", ".join(f"{s:.3g}" for s in self.noise) + " Pa")
+        if self.model_error:
+            lines.append(f"model-error term: {100 * self.model_error:.3g} % (1 sigma, per record, on the force)")
+        for f in self.flags:
+            lines.append(f"WARNING: {f}")
         return "\n".join(lines) + "\n" + self.report
+
+    def to_dict(self) -> dict[str, Any]:
+        """Everything as plain JSON-ready types."""
+
+        def num(v):
+            v = float(v)
+            return v if math.isfinite(v) else (None if math.isnan(v) else ("inf" if v > 0 else "-inf"))
+
+        ident = self.identifiability
+        return {
+            "names": list(self.names),
+            "params": {k: num(v) for k, v in self.params.items()},
+            "intervals_95": {k: [num(a), num(b)] for k, (a, b) in self.intervals.items()},
+            "interval_kinds": dict(self.kinds),
+            "interval_methods": dict(self.methods),
+            "interval_text": {n: self.interval_text(n) for n in self.names},
+            "units": {n: _UNITS[n.split("_")[0]] for n in self.names},
+            "rms_residual_Pa": num(self.residual),
+            "noise_sd_Pa": [num(s) for s in self.noise],
+            "model_error_rel": num(self.model_error),
+            "model_error_factors": [num(v) for v in self.model_error_factors],
+            "covariance_log": [[num(v) for v in row] for row in np.asarray(self.covariance)],
+            "dof": int(self.dof),
+            "success": bool(self.success),
+            "flags": list(self.flags),
+            "message": self.message,
+            "nfev": int(self.nfev),
+            "identifiability": {
+                "eigenvalues": [num(v) for v in ident.eigenvalues],
+                "eigenvectors": [[num(v) for v in row] for row in ident.eigenvectors],
+                "poorly": list(ident.poorly),
+                "report": ident.report,
+            },
+        }
 
 
 _UNITS = {"C": "Pa", "alpha": "-", "beta": "-", "tau": "s"}
@@ -181,6 +293,29 @@ def _as_records(records: Sequence[Any]) -> list[Record]:
     if not out:
         raise ValueError("at least one record (time, nominal_stress, displacement) is needed")
     return out
+
+
+def _check_information(recs: Sequence[Record], names: tuple[str, ...]) -> None:
+    """ValueError for records that cannot determine the parameters (one line, naming the record)."""
+    for k, r in enumerate(recs):
+        if np.ptp(r.time) == 0:
+            raise ValueError(f"record {k}: all {r.time.size} samples are at the same time ({r.time[0]:g} s)")
+        if np.ptp(r.nominal_stress) == 0:
+            raise ValueError(
+                f"record {k}: the nominal stress is constant ({r.nominal_stress[0]:g} Pa at all "
+                f"{r.time.size} times): no information on the parameters"
+            )
+        if np.max(r.nominal_stress) <= 0 or np.mean(r.nominal_stress) <= 0:
+            raise ValueError(
+                f"record {k}: the nominal stress must be positive in compression (Pa); its mean is "
+                f"{np.mean(r.nominal_stress):g} Pa (negate data recorded tension-positive)"
+            )
+    n = sum(r.time.size for r in recs)
+    if n <= len(names):
+        raise ValueError(
+            f"the records hold {n} data points in all, not more than the {len(names)} parameters "
+            f"{names}: at least {len(names) + 1} are needed (more for a noise estimate worth having)"
+        )
 
 
 def initial_guess(records: Sequence[Record], radius: float, ramp_time: float, n_branches: int = 1) -> np.ndarray:
@@ -256,6 +391,35 @@ def _builder(records, radius, ramp_time, n_branches, equilibrium, model):
         return jax.jit(f), jax.jit(jax.jacfwd(f)), scale
 
 
+def _table(equilibrium: Any):
+    """The master-curve object behind an equilibrium spec ("fem" or a MasterCurve), else None."""
+    from tissuemech.reduced import spheroid
+
+    if isinstance(equilibrium, str) and equilibrium == "fem":
+        return spheroid.master_curve()
+    if isinstance(equilibrium, spheroid.MasterCurve):
+        return equilibrium
+    return None
+
+
+def model_error_of(equilibrium: Any) -> float:
+    """The relative 1-sigma model error of an equilibrium law's force (the ``"auto"`` choice).
+
+    For the FE master table ("fem" or a MasterCurve): its metadata ``model_error_rel``, else
+    :data:`DEFAULT_MODEL_ERROR_REL`. For "hertz", an (x, f) table or a callable: 0 (taken as exact;
+    pass ``model_error=`` to :func:`relaxation` to add one).
+    """
+    mc = _table(equilibrium)
+    if mc is None:
+        return 0.0
+    v = mc.metadata.get("model_error_rel")
+    try:
+        v = float(v)
+    except (TypeError, ValueError):
+        return DEFAULT_MODEL_ERROR_REL
+    return v if math.isfinite(v) and v >= 0 else DEFAULT_MODEL_ERROR_REL
+
+
 def _inverse_eigenvalues(lam: np.ndarray) -> np.ndarray:
     """1/lambda with a relative floor (1e-16 of the largest): a null direction gets a huge but finite
     variance, so it does not leak round-off into the well-determined parameters."""
@@ -263,10 +427,10 @@ def _inverse_eigenvalues(lam: np.ndarray) -> np.ndarray:
     return 1.0 / np.maximum(lam, floor)
 
 
-def _identifiability(J: np.ndarray, s2: float, names: tuple[str, ...]) -> Identifiability:
-    fisher = J.T @ J / s2
-    lam, V = np.linalg.eigh(fisher)
-    lam = np.maximum(lam, 0.0)
+def _identifiability(fisher: np.ndarray, names: tuple[str, ...], dead: Sequence[int] = ()) -> Identifiability:
+    """Eigen-decomposition of the log-space Fisher matrix (already in units of the noise)."""
+    lam, V = np.linalg.eigh(0.5 * (fisher + fisher.T))
+    lam = np.where(lam > 1e-13 * max(float(np.max(lam)), 1e-300), lam, 0.0)
     with np.errstate(divide="ignore"):
         sd = 1.0 / np.sqrt(lam)
     poorly = tuple(int(i) for i in np.nonzero(sd > POOR_SD)[0])
@@ -276,6 +440,11 @@ def _identifiability(J: np.ndarray, s2: float, names: tuple[str, ...]) -> Identi
         tag = "POORLY determined" if i in poorly else "well determined"
         rel = f"+-{100 * (math.exp(Z95 * sd[i]) - 1):.3g} %" if np.isfinite(sd[i]) and sd[i] < 20 else "unbounded"
         lines.append(f"  {ident.combination(i):<45} eigenvalue {lam[i]:10.3e}  95% factor {rel:>12}  {tag}")
+    for i in dead:
+        lines.append(
+            f"  -> the model does not depend on {names[i]} at all (e.g. alpha with equilibrium='hertz'): "
+            "it is not identified by any data of this kind."
+        )
     if poorly:
         weak = [ident.combination(i) for i in poorly]
         lines.append("  -> the data cannot separate the parameters along: " + "; ".join(weak) + ".")
@@ -291,6 +460,182 @@ def _identifiability(J: np.ndarray, s2: float, names: tuple[str, ...]) -> Identi
     return ident
 
 
+class _Problem:
+    """Weighted residuals of the statistical model in z = (theta (P), eta (R, model-error factors))."""
+
+    def __init__(self, recs, res_fn, jac_fn, scale, P, eps):
+        self.res_fn, self.jac_fn, self.scale = res_fn, jac_fn, scale
+        self.y = np.concatenate([r.nominal_stress for r in recs])
+        self.idx = np.concatenate([np.full(r.time.size, j) for j, r in enumerate(recs)])
+        self.R, self.P, self.eps = len(recs), P, float(eps)
+        self.nz = P + (self.R if self.eps > 0 else 0)
+        self.sig = np.full(self.y.size, scale)  # per-point noise sd (Pa), set by set_noise
+
+    def model(self, th: np.ndarray) -> np.ndarray:
+        return np.asarray(self.res_fn(jnp.asarray(th))) * self.scale + self.y
+
+    def factor(self, z: np.ndarray) -> np.ndarray:
+        return np.exp(z[self.P :])[self.idx] if self.eps > 0 else 1.0
+
+    def data_residual(self, z: np.ndarray) -> np.ndarray:
+        """Model minus data (Pa), model-error factors applied."""
+        return self.model(z[: self.P]) * self.factor(z) - self.y
+
+    def resid(self, z: np.ndarray) -> np.ndarray:
+        r = self.data_residual(z) / self.sig
+        if self.eps > 0:
+            r = np.concatenate([r, z[self.P :] / self.eps])
+        return r
+
+    def jac(self, z: np.ndarray) -> np.ndarray:
+        th = jnp.asarray(z[: self.P])
+        f = self.factor(z)
+        Jm = np.asarray(self.jac_fn(th)) * self.scale  # d model / d theta (Pa)
+        J = Jm * (f / self.sig)[:, None]
+        if self.eps > 0:
+            m = self.model(z[: self.P])
+            Je = np.zeros((self.y.size, self.R))
+            Je[np.arange(self.y.size), self.idx] = m * f / self.sig
+            J = np.vstack([np.hstack([J, Je]), np.hstack([np.zeros((self.R, self.P)), np.eye(self.R) / self.eps])])
+        return J
+
+    def set_noise(self, z: np.ndarray, floor: np.ndarray) -> np.ndarray:
+        """Per-record noise sd s_j^2 = RSS_j / (n_j - P n_j / N) from the residuals at z (Pa)."""
+        r = self.data_residual(z)
+        n = self.y.size
+        s = np.empty(self.R)
+        for j in range(self.R):
+            rj = r[self.idx == j]
+            dof = max(rj.size * (1.0 - self.P / n), 1.0)
+            s[j] = math.sqrt(float(rj @ rj) / dof)
+        self.sig = np.maximum(s, floor)[self.idx]
+        return s
+
+
+def _solve(fun, jac, z0, lo, hi, max_nfev):
+    from scipy.optimize import least_squares
+
+    return least_squares(
+        fun,
+        np.clip(z0, lo + 1e-12, hi - 1e-12),
+        jac=jac,
+        bounds=(lo, hi),
+        method="trf",
+        x_scale="jac",
+        xtol=1e-12,
+        ftol=1e-12,
+        gtol=1e-12,
+        max_nfev=max_nfev,
+    )
+
+
+def _masked_solver(fun, jac, z_template, free, lo, hi):
+    """least squares over the ``free`` components of z only (the others held at ``z_template``);
+    the returned solution's ``x`` is the full z."""
+    if free.all():
+        return lambda z0, n: _solve(fun, jac, z0, lo, hi, n)
+
+    def solve(z0, n):
+        def full(w):
+            z = np.asarray(z_template, dtype=float).copy()
+            z[free] = w
+            return z
+
+        sol = _solve(lambda w: fun(full(w)), lambda w: jac(full(w))[:, free], z0[free], lo[free], hi[free], n)
+        sol.x = full(sol.x)
+        return sol
+
+    return solve
+
+
+def _safe(fn):
+    def wrapped(z):
+        r = fn(z)
+        return r if np.all(np.isfinite(r)) else np.full_like(r, 1e6)  # steer away from failed evaluations
+
+    return wrapped
+
+
+class _Profiler:
+    """chi2_profile(theta_i = c) - chi2_min by re-optimising the other components of z."""
+
+    def __init__(self, prob, z_hat, chi2_min, cov_z, lo, hi, max_nfev=30):
+        self.prob, self.z_hat, self.chi2_min, self.cov = prob, z_hat, chi2_min, cov_z
+        self.lo, self.hi, self.max_nfev = lo, hi, max_nfev
+        self.better: np.ndarray | None = None  # a point with lower chi2 than the "optimum", if met
+        self.free = np.ones(z_hat.size, dtype=bool)  # components re-optimised (not held fixed)
+
+    def delta(self, i: int, c: float) -> float:
+        keep = (np.arange(self.z_hat.size) != i) & self.free
+
+        def full(w):
+            z = self.z_hat.copy()
+            z[keep], z[i] = w, c
+            return z
+
+        fun = _safe(lambda w: self.prob.resid(full(w)))
+        jac = lambda w: np.nan_to_num(self.prob.jac(full(w))[:, keep], nan=0.0, posinf=0.0, neginf=0.0)
+        if keep.sum() == 0:
+            r = fun(np.zeros(0))
+            chi2 = float(r @ r)
+        else:
+            # start: the conditional optimum of the quadratic approximation (clipped), or the estimate
+            ci = self.cov[:, i] / self.cov[i, i] if self.cov[i, i] > 0 else np.zeros(self.z_hat.size)
+            move = np.nan_to_num(np.clip((c - self.z_hat[i]) * ci, -LOG_SPAN, LOG_SPAN))
+            starts = [np.clip((self.z_hat + move)[keep], self.lo[keep], self.hi[keep]), self.z_hat[keep]]
+            cost = [float(np.sum(fun(w) ** 2)) for w in starts]
+            w0 = starts[int(np.argmin(cost))]
+            sol = _solve(fun, jac, w0, self.lo[keep], self.hi[keep], self.max_nfev)
+            chi2 = float(sol.fun @ sol.fun)
+            if chi2 < self.chi2_min - max(1e-3, 1e-8 * self.chi2_min):  # 1e-3 << t^2 ~ 3.8
+                self.better = full(sol.x)
+        return max(chi2 - self.chi2_min, 0.0)
+
+    def end(self, i: int, side: int, h: float, q: float) -> tuple[float, str]:
+        """(theta_i at the interval end on this side, how: 'wald' | 'profile' | 'bound' | 'open')."""
+        from scipy.optimize import brentq
+
+        th0 = self.z_hat[i]
+        bound = self.hi[i] if side > 0 else self.lo[i]
+        limit = th0 + side * LOG_SPAN
+        edge = bound if np.isfinite(bound) else limit
+        if side * (edge - th0) <= 1e-12:
+            return float(edge), "bound"
+        h = min(max(h, 1e-6), LOG_SPAN) if np.isfinite(h) else 1.0
+        c = th0 + side * min(h, side * (edge - th0))
+        D = self.delta(i, c)
+        if abs(D - q) <= WALD_TOL * q and side * (edge - c) > 1e-12:
+            return float(c), "wald"
+        below = th0
+        for _ in range(12):
+            if D >= q:
+                break
+            below = c
+            if side * (edge - c) <= 1e-12:
+                return float(edge), ("bound" if np.isfinite(bound) else "open")
+            step = abs(c - th0) * (math.sqrt(q / D) * 1.3 if D > 1e-12 * q else 4.0)
+            step = min(max(step, 1.5 * abs(c - th0)), 4.0 * abs(c - th0) + 1.0)
+            c = th0 + side * min(step, side * (edge - th0))
+            D = self.delta(i, c)
+        if D < q:
+            return float(c), ("bound" if np.isfinite(bound) else "open")
+        g = lambda x: math.sqrt(self.delta(i, x)) - math.sqrt(q)
+        root = brentq(g, below, c, xtol=1e-3 * max(abs(c - th0), 1e-6), rtol=1e-10, maxiter=30)
+        return float(root), "profile"
+
+
+def _bounds(names, n_branches, equilibrium):
+    lo = np.full(len(names), -np.inf)
+    hi = np.full(len(names), np.inf)
+    a_lo, a_hi = ALPHA_BOUNDS
+    mc = _table(equilibrium)
+    if mc is not None and mc.alpha is not None:
+        a_lo, a_hi = max(a_lo, mc.alpha_range[0]), min(a_hi, mc.alpha_range[1])
+    lo[1], hi[1] = np.log(a_lo), np.log(a_hi)
+    lo[2 : 2 + n_branches], hi[2 : 2 + n_branches] = np.log(BETA_BOUNDS[0]), np.log(BETA_BOUNDS[1])
+    return lo, hi
+
+
 def relaxation(
     records: Sequence[Any],
     *,
@@ -301,25 +646,54 @@ def relaxation(
     initial: dict[str, float] | Sequence[float] | None = None,
     model: Callable | None = None,
     max_nfev: int = 200,
+    model_error: float | str | None = "auto",
+    intervals: str = "profile",
 ) -> FitResult:
-    r"""Fit ``(C, alpha, beta_m, tau_m)`` to compression-relaxation records by least squares.
+    r"""Fit ``(C, alpha, beta_m, tau_m)`` to compression-relaxation records (module doc: the statistics).
 
     records      list of ``(time [s], nominal_stress [Pa], displacement [m])``, one per compression
                  level (``displacement`` is the total plate approach reached at the end of the ramp).
     radius       reference ball radius a0 (m); ramp_time the loading ramp duration (s).
     n_branches   number of Maxwell branches (parameters ``beta``, ``tau`` or ``beta_1.., tau_1..``).
-    equilibrium  the equilibrium law passed to the model ("hertz", a master-curve table, a callable).
+    equilibrium  the equilibrium law passed to the model ("fem" table, "hertz", an (x, f) table, a callable).
     initial      optional starting values (dict by name, or a sequence in :func:`parameter_names` order).
     model        ``model(t, *, radius, C, alpha, branches, displacement, ramp_time, equilibrium)`` ->
                  nominal stress (Pa), JAX-traceable; default ``reduced.spheroid.nominal_stress``.
+    model_error  relative 1-sigma error of the model's force per record (e.g. 0.005), ``"auto"``
+                 (:func:`model_error_of`: the FE table's ``model_error_rel``), or None/0 for none.
+    intervals    "profile" (Wald checked against, and where poor replaced by, the profile likelihood)
+                 or "wald" (Gauss-Newton ellipse only; fast, for large studies of well-posed problems).
 
-    Minimises sum_k (sigma_model(t_k) - sigma_k)^2 over theta = log(params) with the exact JAX
-    Jacobian; returns a :class:`FitResult` with 95 % intervals and the identifiability report.
+    Returns a :class:`FitResult` (95 % intervals, flags and the identifiability report).
+    Raises ValueError for malformed or uninformative records (fewer points than parameters, constant
+    or non-positive stress, compression beyond the table) and RuntimeError when the model fails at
+    the starting point.
     """
     recs = _as_records(records)
     validate_positive("radius (of the spheroid)", radius, "m")
     validate_positive("ramp_time (duration of the loading ramp)", ramp_time, "s")
     names = parameter_names(n_branches)
+    _check_information(recs, names)
+    if intervals not in ("profile", "wald"):
+        raise ValueError(f"intervals must be 'profile' or 'wald'; got {intervals!r}")
+    mc = _table(equilibrium)
+    if mc is not None:
+        x = max(r.displacement for r in recs) / (2 * radius)
+        if x > mc.x_max * (1 + 1e-12):
+            raise ValueError(
+                f"compression delta/(2 a0) = {x:.4g} is beyond the calibrated table (up to {mc.x_max:.4g}); "
+                "use equilibrium='hertz' or a shorter approach (m)"
+            )
+    if isinstance(model_error, str):
+        if model_error != "auto":
+            raise ValueError(
+                f"model_error must be a number (relative, e.g. 0.005), 'auto' or None; got {model_error!r}"
+            )
+        eps = model_error_of(equilibrium)
+    else:
+        eps = 0.0 if model_error is None else float(model_error)
+        if not (math.isfinite(eps) and eps >= 0):
+            raise ValueError(f"model_error (relative 1-sigma error of the force, -) must be >= 0; got {model_error}")
     model = _default_model() if model is None else model
     if initial is None:
         p0 = initial_guess(recs, radius, ramp_time, n_branches)
@@ -332,106 +706,183 @@ def relaxation(
             raise ValueError(f"initial needs {len(names)} values in the order {names}; got {p0.size}")
     if np.any(p0 <= 0) or not np.all(np.isfinite(p0)):
         raise ValueError(f"initial values must be positive and finite; got {dict(zip(names, p0))}")
-    lo = np.full(len(names), -np.inf)
-    hi = np.full(len(names), np.inf)
-    lo[1], hi[1] = np.log(ALPHA_BOUNDS[0]), np.log(ALPHA_BOUNDS[1])
-    lo[2 : 2 + n_branches], hi[2 : 2 + n_branches] = np.log(BETA_BOUNDS[0]), np.log(BETA_BOUNDS[1])
-    theta0 = np.clip(np.log(p0), lo + 1e-9, hi - 1e-9)
+    P, R = len(names), len(recs)
+    lo_t, hi_t = _bounds(names, n_branches, equilibrium)
+    theta0 = np.clip(np.log(p0), lo_t + 1e-9, hi_t - 1e-9)
 
     res_fn, jac_fn, scale = _builder(recs, float(radius), float(ramp_time), n_branches, equilibrium, model)
-    from scipy.optimize import least_squares
-
-    def fun(th):
-        r = np.asarray(res_fn(jnp.asarray(th)))
-        if not np.all(np.isfinite(r)):
-            return np.full_like(r, 1e6)  # steer the trust region away from failed model evaluations
-        return r
-
-    def jac(th):
-        return np.asarray(jac_fn(jnp.asarray(th)))
-
     if not np.all(np.isfinite(np.asarray(res_fn(jnp.asarray(theta0))))):
         raise RuntimeError(
             f"the model returned NaN/inf at the starting point {dict(zip(names, p0))}. "
             "Hint: give initial=... closer to the data, or check units (m, Pa, s)."
         )
-    sol = least_squares(
-        fun,
-        theta0,
-        jac=jac,
-        bounds=(lo, hi),
-        method="trf",
-        x_scale="jac",
-        xtol=1e-12,
-        ftol=1e-12,
-        gtol=1e-12,
-        max_nfev=max_nfev,
-    )
-    theta = sol.x
-    r = sol.fun * scale
-    J = jac(theta) * scale
-    n, P = r.size, len(names)
-    s2 = float(r @ r) / max(n - P, 1)
-    s2 = max(s2, 1e-300)
-    ident = _identifiability(J, s2, names)
-    at_bound = [nm for nm, th, a, b in zip(names, theta, lo, hi) if min(th - a, b - th) < 1e-6]
+    prob = _Problem(recs, res_fn, jac_fn, scale, P, eps)
+    extra = prob.nz - P
+    lo = np.concatenate([lo_t, np.full(extra, -np.inf)])
+    hi = np.concatenate([hi_t, np.full(extra, np.inf)])
+    peaks = np.array([np.max(np.abs(r.nominal_stress)) for r in recs])
+    floor = NOISE_FREE_REL * 1e-3 * peaks  # keeps the weights finite for noise-free data
+    fun = _safe(prob.resid)
+    jac = lambda z: np.nan_to_num(prob.jac(z), nan=0.0, posinf=0.0, neginf=0.0)
+
+    # pass 1: common weights; noise estimate per record; pass 2: weighted by each record's noise
+    prob.sig = np.full(prob.y.size, 0.01 * scale)
+    z0 = np.concatenate([theta0, np.zeros(extra)])
+    # a parameter the model does not depend on (alpha with the Hertz law) is held at its start value
+    norm0 = np.linalg.norm(jac(z0)[: prob.y.size, :P], axis=0)
+    dead0 = [i for i in range(P) if norm0[i] <= 1e-10 * max(float(np.max(norm0)), 1e-300)]
+    free = np.array([i not in dead0 for i in range(prob.nz)])
+    solve = _masked_solver(fun, jac, z0, free, lo, hi)
+    sol = solve(z0, max_nfev)
+    nfev = int(sol.nfev)
+    noise = prob.set_noise(sol.x, floor)
+    if R > 1 or extra:
+        for _ in range(2):  # weights from the previous pass's residuals; the last pass is optimal for its weights
+            sol = solve(sol.x, max_nfev)
+            nfev += int(sol.nfev)
+            noise_prev, noise = noise, prob.set_noise(sol.x, floor)
+            if np.all(np.abs(noise - noise_prev) <= 0.01 * noise_prev):
+                break
+        prob.sig = np.maximum(noise_prev, floor)[prob.idx]  # the weights z is the optimum for
+    z = sol.x
+    flags: list[str] = []
+    noise_free = bool(np.any(noise < NOISE_FREE_REL * peaks))
+    if noise_free:
+        flags.append(
+            "the residuals are at round-off level (noise-free, synthetic data?): there is no noise to "
+            "estimate, so no confidence interval can be given (intervals are NaN); add the measurement noise"
+        )
+    r = prob.resid(z)
+    chi2 = float(r @ r)
+    Jz = prob.jac(z)
+    N = prob.y.size
+    dof = N - P
+    from scipy.stats import t as student_t
+
+    tq = float(student_t.ppf(0.975, dof))
+    q = tq * tq
+    fisher_z = Jz.T @ Jz
+    lam, V = np.linalg.eigh(0.5 * (fisher_z + fisher_z.T))
+    cov_z = (V * _inverse_eigenvalues(lam)) @ V.T
+    cov = cov_z[:P, :P]
+    colnorm = np.linalg.norm(Jz[:N, :P], axis=0)
+    dead = sorted(set(dead0) | {i for i in range(P) if colnorm[i] <= 1e-10 * max(float(np.max(colnorm)), 1e-300)})
+    lam_t, V_t = np.linalg.eigh(0.5 * (cov + cov.T))
+    fisher_t = (V_t * _inverse_eigenvalues(lam_t)) @ V_t.T  # marginal Fisher of theta
+    for i in dead:
+        fisher_t[i, :] = fisher_t[:, i] = 0.0
+    ident = _identifiability(fisher_t, names, dead)
+    at_bound = [names[i] for i in range(P) if min(z[i] - lo[i], hi[i] - z[i]) < 1e-6 and i not in dead]
     if at_bound:
         ident.report += (
             "\n  -> at a bound of the search: "
             + ", ".join(at_bound)
-            + f" (alpha in {ALPHA_BOUNDS}, beta in {BETA_BOUNDS}); e.g. alpha at 1e-6 means the "
-            "data are consistent with a neo-Hookean law (alpha = 0)."
+            + f" (alpha in [{math.exp(lo[1]):.3g}, {math.exp(hi[1]):.3g}], beta in {BETA_BOUNDS}); e.g. alpha "
+            "at its lower bound means the data are consistent with a neo-Hookean law (alpha = 0)."
         )
     if not sol.success:
-        ident.report += f"\n  -> the optimizer did not converge: {sol.message}"
-    lam, V = ident.eigenvalues, ident.eigenvectors
-    cov = (V * _inverse_eigenvalues(lam)) @ V.T
-    with np.errstate(over="ignore", invalid="ignore"):
-        sd = np.sqrt(np.abs(np.diag(cov)))
-        p = np.exp(theta)
-        intervals = {
-            nm: (float(p[i] * np.exp(-Z95 * sd[i])), float(p[i] * np.exp(Z95 * sd[i]))) for i, nm in enumerate(names)
-        }
+        flags.append(f"the optimizer did not converge: {sol.message}")
+
+    sd = np.sqrt(np.abs(np.diag(cov)))
+    p = np.exp(z[:P])
+    ivals: dict[str, tuple[float, float]] = {}
+    kinds: dict[str, str] = {}
+    methods: dict[str, str] = {}
+    phys_lo = np.where(np.isfinite(lo_t), 0.0, 0.0)  # a lower search bound stands for the limit 0
+
+    def to_linear(i, th, how, side):
+        if how in ("bound", "open"):
+            if side < 0:
+                return float(phys_lo[i])
+            return math.inf if how == "open" else float(math.exp(th))
+        return float(math.exp(th))
+
+    prof = _Profiler(prob, z, chi2, cov_z, lo, hi)
+    prof.free = free.copy()
+    prof.free[dead] = False
+    for i, nm in enumerate(names):
+        if i in dead:
+            ivals[nm] = (float(phys_lo[i]), float(math.exp(hi_t[i])) if np.isfinite(hi_t[i]) else math.inf)
+            kinds[nm], methods[nm] = "none", "bound"
+            continue
+        if noise_free:
+            ivals[nm], kinds[nm], methods[nm] = (math.nan, math.nan), "n/a", "n/a"
+            continue
+        h = tq * sd[i]
+        ends, hows = [], []
+        for side in (-1, 1):
+            if intervals == "wald":
+                c = z[i] + side * h
+                edge = hi[i] if side > 0 else lo[i]
+                if side * (c - edge) >= 0:
+                    c, how = edge, "bound"
+                elif not np.isfinite(c):
+                    c, how = z[i] + side * LOG_SPAN, "open"
+                else:
+                    how = "wald"
+            else:
+                c, how = prof.end(i, side, h, q)
+            ends.append(to_linear(i, c, how, side))
+            hows.append(how)
+        lo_open = hows[0] in ("bound", "open")
+        hi_open = hows[1] in ("bound", "open")
+        kinds[nm] = "none" if (lo_open and hi_open) else "upper" if lo_open else "lower" if hi_open else "two-sided"
+        real = [h_ for h_ in hows if h_ in ("wald", "profile")]
+        methods[nm] = "profile" if "profile" in real else "wald" if real else "bound"
+        ivals[nm] = (ends[0], ends[1])
+    if prof.better is not None:
+        flags.append(
+            "the profile search met parameters fitting better than the reported optimum (a local "
+            "minimum): refit with initial= near the profile's values"
+        )
+    for nm in names:
+        if kinds[nm] == "upper":
+            ident.report += f"\n  -> {nm}: only an upper bound at 95 %: {nm} < {ivals[nm][1]:.4g}"
+        elif kinds[nm] == "lower":
+            ident.report += f"\n  -> {nm}: only a lower bound at 95 %: {nm} > {ivals[nm][0]:.4g}"
+        elif kinds[nm] == "none" and names.index(nm) not in dead:
+            ident.report += f"\n  -> {nm}: not bounded by these records at 95 % (any value in the search range fits)"
+    rdata = prob.data_residual(z)
+    success = bool(sol.success) and not noise_free and prof.better is None
     return FitResult(
         params={nm: float(v) for nm, v in zip(names, p)},
-        intervals=intervals,
-        residual=float(np.sqrt(np.mean(r**2))),
+        intervals=ivals,
+        residual=float(np.sqrt(np.mean(rdata**2))),
         identifiability=ident,
         covariance=cov,
-        success=bool(sol.success),
-        message=str(sol.message),
-        nfev=int(sol.nfev),
+        success=success,
+        message=str(sol.message) + "".join(f"; {f}" for f in flags),
+        nfev=nfev,
         names=names,
+        kinds=kinds,
+        methods=methods,
+        noise=tuple(float(s) for s in noise),
+        model_error=eps,
+        flags=tuple(flags),
+        dof=int(dof),
+        model_error_factors=tuple(float(v) for v in np.exp(z[P:])) if extra else (),
     )
 
 
 def read_csv(path: str, *, displacement: float, time_column: str | int = 0, stress_column: str | int = 1) -> Record:
     """Read a relaxation record from a CSV file: a time column (s) and a nominal-stress column (Pa).
 
-    A header line is optional (columns may then be chosen by name); ``displacement`` is the total
-    plate approach in m. Returns a :class:`Record` ready for :func:`relaxation`.
+    A header line is optional (columns may then be chosen by name), ``#`` lines are comments;
+    ``displacement`` is the total plate approach in m. Returns a :class:`Record` ready for
+    :func:`relaxation`. Raises ValueError (one line naming the file and line) for malformed files.
     """
-    import pandas as pd
+    from tissuemech.compare.fit_cli import read_table
 
     validate_positive("displacement (the total approach of the plates)", displacement, "m")
-    with open(path) as fh:
-        first = fh.readline()
-    try:
-        [float(x) for x in first.replace(";", ",").split(",") if x.strip()]
-        header = None
-    except ValueError:
-        header = 0
-    df = pd.read_csv(path, header=header, sep=None, engine="python")
-    try:
-        t = df[time_column] if not isinstance(time_column, int) else df.iloc[:, time_column]
-        s = df[stress_column] if not isinstance(stress_column, int) else df.iloc[:, stress_column]
-    except (KeyError, IndexError):
-        raise ValueError(
-            f"{path}: columns {time_column!r}/{stress_column!r} not found; it has {list(df.columns)}"
-        ) from None
-    try:
-        t = np.asarray(t, dtype=float)
-        s = np.asarray(s, dtype=float)
-    except ValueError:
-        raise ValueError(f"{path}: time (s) and stress (Pa) columns must be numbers") from None
-    return _as_records([(t, s, displacement)])[0]
+    table = read_table(path)
+    cols = []
+    for c in (time_column, stress_column):
+        if isinstance(c, int):
+            if c >= table.values.shape[1]:
+                raise ValueError(f"{path}: column {c} not found; it has {table.values.shape[1]} columns")
+            cols.append(c)
+        else:
+            if c not in table.header:
+                raise ValueError(f"{path}: column {c!r} not found; it has {list(table.header)}")
+            cols.append(table.header.index(c))
+    return _as_records([(table.values[:, cols[0]], table.values[:, cols[1]], displacement)])[0]

@@ -32,6 +32,7 @@ COMMANDS: list[tuple[str, str]] = [
     ("report", "tissuemech.compare.cli.report"),
     ("bench", "tissuemech.compare.cli.bench"),
     ("batch", "tissuemech.compare.batch_cli"),
+    ("fit", "tissuemech.compare.fit_cli"),
 ]
 
 

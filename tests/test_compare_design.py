@@ -1,0 +1,77 @@
+"""compare.design: Fisher-matrix predictions of interval widths (exact identities, and agreement with
+the fit's own covariance)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tissuemech.compare import design
+
+PC = design.Protocol()  # 50 + 200 um, 0.2 s ramp, 70 samples, 1 % noise
+
+
+def test_levels_add_and_noise_scales():
+    p = design.predict(PC)
+    F = design.level_fisher(50e-6, PC) + design.level_fisher(200e-6, PC)
+    assert np.allclose(p.fisher, F, rtol=1e-12, atol=0)
+    p3 = design.predict(design.Protocol(noise=0.03))
+    for n in design.NAMES:  # white noise: sd proportional to the noise level
+        assert p3.sd[n] / p.sd[n] == pytest.approx(3.0, rel=1e-9)
+        assert p.width[n] == pytest.approx(2 * np.sinh(design.Z95 * p.sd[n]), rel=1e-12)
+
+
+def test_one_level_cannot_separate_C_and_alpha_two_can():
+    one = design.predict(design.Protocol(levels=(200e-6,)))
+    two = design.predict(PC)
+    assert one.sd["alpha"] > 3 * two.sd["alpha"]
+    assert one.sd["C"] > 3 * two.sd["C"]
+
+
+def test_model_error_adds_in_quadrature_to_C_at_one_level():
+    """The model is C x g(alpha, beta, tau; t): a record's model-error factor is indistinguishable from C,
+    so with one level var(log C) grows by exactly eps^2 and the other parameters are unchanged."""
+    one = design.Protocol(levels=(100e-6,))
+    p0 = design.predict(one)
+    eps = 0.01
+    p1 = design.predict(one, model_error=eps)
+    assert p1.sd["C"] ** 2 == pytest.approx(p0.sd["C"] ** 2 + eps**2, rel=1e-6)
+    for n in ("alpha", "beta", "tau"):
+        assert p1.sd[n] == pytest.approx(p0.sd[n], rel=1e-6)
+
+
+def test_recommend_and_scan():
+    cand = np.array([25e-6, 50e-6, 100e-6, 200e-6, 300e-6])
+    lv, pr = design.recommend(PC, n_levels=2, candidates=cand)
+    assert len(lv) == 2 and lv[0] < lv[1] and set(lv) <= set(cand)
+    scan = design.scan_second_level(50e-6, PC, candidates=cand)
+    assert pr.width["alpha"] <= 0.01 * scan["alpha width %"].min() * (1 + 1e-12)
+    lv3, pr3 = design.recommend(PC, n_levels=3, candidates=cand)
+    assert len(lv3) == 3 and pr3.width["alpha"] <= pr.width["alpha"]
+
+
+def test_protocol_validation():
+    with pytest.raises(ValueError, match="at least one compression level"):
+        design.predict(design.Protocol(levels=()))
+    with pytest.raises(ValueError, match="beyond the master table"):
+        design.predict(design.Protocol(levels=(50e-6, 400e-6)))
+    with pytest.raises(ValueError, match="noise"):
+        design.predict(design.Protocol(noise=0.0))
+    with pytest.raises(ValueError, match="sampling times"):
+        design.predict(design.Protocol(times=(0.0, 1.0, 2.0)))
+
+
+@pytest.mark.slow
+def test_prediction_matches_the_fit_covariance():
+    """A fit to one noisy record set of the same protocol: its Gauss-Newton sd (with the estimated noise)
+    agrees with the predicted sd to the sampling error of the noise estimate (~10 % for 140 points)."""
+    from tissuemech.compare import coverage, fit
+
+    truth = design.DEFAULT_TRUTH
+    prot = dict(radius=PC.radius, levels=PC.levels, ramp_time=PC.ramp_time, times=PC.times)
+    recs = coverage.add_noise(coverage.reduced_records(truth, prot), PC.noise, np.random.default_rng(3))
+    res = fit.relaxation(recs, radius=PC.radius, ramp_time=PC.ramp_time, model_error=0.0)
+    pred = design.predict(PC, truth)
+    sd_fit = np.sqrt(np.diag(res.covariance))
+    for i, n in enumerate(design.NAMES):
+        assert sd_fit[i] == pytest.approx(pred.sd[n], rel=0.3), n
