@@ -3,6 +3,7 @@
     tissuemech blastula [--out blastula.png] [--max-pressure 1000] [--step 100] [--fem]
     tissuemech spheroid [--out spheroid.png] [--C 150] [--alpha 0.2] [--beta 0.4] [--tau 200] ...
     tissuemech report [--out DIR] [--quick]     (figures, accuracy-vs-speed charts, stability map)
+    tissuemech scan spheroid|blastula [--C 100:400] [--tau 10:1000:log] ... [--out DIR]   (parameter scans)
 
 Tables go to stdout, the figure to a PNG. Bad arguments get a one-line error (exit code 2).
 """
@@ -96,6 +97,9 @@ def _parser() -> argparse.ArgumentParser:
     from tissuemech.compare.report import add_parser as add_report_parser
 
     add_report_parser(sub)
+    from tissuemech.compare.scan_cli import add_parser as add_scan_parser
+
+    add_scan_parser(sub)
     return p
 
 
@@ -105,6 +109,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return 0
+    if args.command == "scan":
+        from tissuemech.compare.scan_cli import run as run_scan
+
+        return run_scan(args)
     try:
         if args.command == "blastula":
             from tissuemech.compare.scenes import blastula_table
