@@ -67,7 +67,7 @@ _CHUNK = 8192  # points per reduced-model call (one compiled shape; the progress
 
 _SYNTAX = (
     "Each model parameter is a VALUE, a range LOW:HIGH, a log-scaled range LOW:HIGH:log, or a list "
-    "A,B,C (grid design only), in the unit its option names."
+    "A,B,C (grid design only), in the unit its option names (a range from a negative number: --opt=-1:2)."
 )
 
 

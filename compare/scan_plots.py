@@ -397,7 +397,6 @@ def curve_bundle(
             ax_n.set_ylabel("stress / its peak (-)")
             ax_n.set_title("the same, divided by the peak (the relaxation shape)", fontsize=10)
     else:
-        import jax
         import jax.numpy as jnp
 
         from tissuemech.reduced import blastula as red
@@ -410,11 +409,13 @@ def curve_bundle(
         if not p_top > 0:
             raise ValueError(f"max_pressure must be positive (Pa); got {p_top}")
         p = np.linspace(0.0, p_top, 160)
-        A, B, C, al = (jnp.asarray(combos[:, j])[:, None] for j in range(4))
+        padded = np.concatenate([combos, np.repeat(combos[:1], 40 - len(combos) % 40 if len(combos) % 40 else 0, 0)])
+        A, B, C, al = (jnp.asarray(padded[:, j])[:, None] for j in range(4))  # one shape: solver compiled once
         la = np.asarray(
-            jax.jit(red.inner_stretch_solve)(jnp.asarray(p)[None, :], inner_radius=A, outer_radius=B, C=C, alpha=al)[0]
-        )
+            red.inner_stretch_solve(jnp.asarray(p)[None, :], inner_radius=A, outer_radius=B, C=C, alpha=al)[0]
+        )[: len(combos)]
         lim = red.limit_point(inner_radius=A[:, 0], outer_radius=B[:, 0], C=C[:, 0], alpha=al[:, 0])
+        lim = type(lim)(*(np.asarray(v)[: len(combos)] for v in lim))
         j = list(names).index(color_by) if color_by in names else None
         if j is None:
             raise ValueError(f"blastula curves are coloured by one of {list(names)}; got {color_by!r}")
@@ -614,6 +615,9 @@ def sensitivities(
     vals = {k: table[scan._col(k)].to_numpy(float) for k in params}
     fixed = {k: float(vals[k][0]) for k in params if k not in varied}
     p = np.stack([vals[k][rows] for k in varied], axis=1)
+    n_rows = len(rows)
+    pad = -n_rows % 64  # point counts rounded up to 64: the compiled derivative is reused across calls
+    p = np.concatenate([p, np.repeat(p[:1], pad, axis=0)])
     if scene == "spheroid":
         if times is None:
             times = table.attrs.get("time [s]")
@@ -626,6 +630,7 @@ def sensitivities(
     else:
         y, J = _blastula_jacobian(p, varied, fixed)
         quantities = ("inner_stretch", "p_limit")
+    y, J, p = y[:n_rows], J[:n_rows], p[:n_rows]
     scale = []
     for j, k in enumerate(varied):
         lo, hi = float(vals[k].min()), float(vals[k].max())
