@@ -303,10 +303,12 @@ def _reduced_in_chunks(function, pts: pd.DataFrame, varied: list[str], kw: dict,
             m = len(sub)
             call = pd.concat([sub, pts.iloc[[0] * (_CHUNK - m)], extra_rows], ignore_index=True)
             df = function(points=call, batch_size=len(call), **kw)
+            attrs = dict(df.attrs)
+            df.attrs = {}  # concat compares attrs (arrays: ambiguous); set once below
             parts.append(df.iloc[:m])
             bar.update(m)
     out = pd.concat(parts, ignore_index=True)
-    out.attrs = dict(parts[0].attrs)
+    out.attrs = attrs
     return out
 
 
@@ -374,6 +376,18 @@ def _map_axes(scene: str, varied: list[str], text: str | None, names: Sequence[s
     if scene == "blastula" and "pressure" in varied:
         return [k for k in varied if k != "pressure"][0], "pressure"
     return varied[0], varied[1]
+
+
+def _strongest_axes(scene: str, sens: pd.DataFrame, varied: list[str], exclude: set) -> tuple[str, str] | None:
+    """Default map axes: the two varied parameters with the largest summed sensitivity share
+    (blastula with a pressure range: the strongest other parameter and the pressure)."""
+    s = sens[sens["parameter"].isin([k for k in varied if k not in exclude])]
+    order = list(s.groupby("parameter")["share [-]"].sum().sort_values(ascending=False).index)
+    if scene == "blastula" and "pressure" in order:
+        g = s[s["quantity"] == "inner_stretch"]
+        rest = [k for k in g.sort_values("share [-]", ascending=False)["parameter"] if k != "pressure"]
+        return (rest[0], "pressure") if rest else None
+    return (order[0], order[1]) if len(order) >= 2 else None
 
 
 def _parse_fix(items: Sequence[str], options: Sequence[Option]) -> dict[str, float]:
@@ -530,7 +544,7 @@ def _run(args: argparse.Namespace, scene: str) -> int:
 
     timings: dict[str, float] = {}
     notes: list[str] = []
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     pts = scan.design(params, n=n, method=design, seed=seed, log=log)
     varied = [k for k in pts.columns if pts[k].nunique() > 1]
     axes = _map_axes(scene, varied, args.map, [o.name for o in options])
@@ -546,6 +560,7 @@ def _run(args: argparse.Namespace, scene: str) -> int:
         kw = dict(seed=seed, log=log)
         table = _reduced_in_chunks(scan.blastula, pts, varied, kw, progress)
     timings["reduced model (design, compilation, evaluation)"] = time.perf_counter() - t0
+    timings["reduced model, CPU time of this process (all threads)"] = time.process_time() - c0
     print(f"reduced {scene}: {len(table)} points in {timings['reduced model (design, compilation, evaluation)']:.2f} s")
 
     n_fe = 0
@@ -604,6 +619,8 @@ def _run(args: argparse.Namespace, scene: str) -> int:
     import matplotlib.pyplot as plt
 
     plt.close("all")
+    if axes is not None and not args.map and sens is not None:
+        axes = _strongest_axes(scene, sens, varied, set(fixed_map)) or axes
     if axes is not None:
         qs = ["sigma_peak", "relaxed_fraction", "t_half"] if scene == "spheroid" else ["inner_stretch", "bursts"]
         if scene == "blastula" and "pressure" not in axes:

@@ -141,7 +141,7 @@ def _axis_bins(v: np.ndarray, log: bool, nbins: int | None) -> tuple[np.ndarray,
             mid = 0.5 * (c[1:] + c[:-1])
             edges = np.concatenate([[c[0] - (mid[0] - c[0])], mid, [c[-1] + (c[-1] - mid[-1])]])
         return levels, finv(edges), np.searchsorted(levels, v), True
-    nb = nbins or int(np.clip(np.sqrt(v.size / 8.0), 8, 40))
+    nb = nbins or int(np.clip(np.sqrt(v.size / 40.0), 8, 30))  # >= ~40 points per cell on average (2 axes)
     lo, hi = f(levels[0]), f(levels[-1])
     edges = np.linspace(lo, hi, nb + 1)
     idx = np.clip(np.searchsorted(edges, f(v), side="right") - 1, 0, nb - 1)
@@ -199,7 +199,7 @@ def summary_map(
               averaged (NaN values, e.g. stretch of a burst shell, are left out of the average; cells
               without a value are grey).
     log       parameters drawn on log axes (default: those positive and spanning >= 20x).
-    bins      cells per axis for scattered designs (default from the number of points, 8..40).
+    bins      cells per axis for scattered designs (default sqrt(points / 40), 8..30).
     color_log log colour scale (default: for positive quantities spanning >= 8x, e.g. stretches
               1..9, half-relaxation times over decades of tau).
     fe        draw the FE spot-checks (rows with a ``deviation [-]``) at their (x, y) design
@@ -294,18 +294,29 @@ def _fe_points(ax, table: pd.DataFrame, x: str, y: str) -> None:
     pts.set_gid("fe-checks")
     pts.set_label("FE spot-check (deviation)")
     to_axes = ax.transData + ax.transAxes.inverted()
+    box = ax.get_window_extent()
+    w_pt, h_pt = box.width * 72 / ax.figure.dpi, box.height * 72 / ax.figure.dpi  # panel size in points
+    placed: list[tuple[float, float]] = []  # label centres (points in the panel), to step clashes apart
     for a, b, d in zip(xv, yv, dev[sel]):
         fx, fy = to_axes.transform((a, b))
-        right, top = fx > 0.78, fy > 0.9  # keep the label inside the panel
+        right = fx > 0.78  # beside the point, on the side that keeps the label inside the panel
+        dx = -7 if right else 7
+        cx = fx * w_pt + (dx - 17 if right else dx + 17)
+        dy = 0
+        for k in range(1, 6):  # a label over an earlier one moves a line down (up near the bottom)
+            if not any(abs(cx - qx) < 36 and abs(fy * h_pt + dy - qy) < 10 for qx, qy in placed):
+                break
+            dy = (-10 if fy > 0.15 else 10) * k
+        placed.append((cx, fy * h_pt + dy))
         ax.annotate(
             f"{100 * d:.2g}%",
             (a, b),
             textcoords="offset points",
-            xytext=(-5 if right else 5, -4 if top else 4),
+            xytext=(dx, dy),
             ha="right" if right else "left",
-            va="top" if top else "bottom",
+            va="center",
             fontsize=7.5,
-            zorder=5,
+            zorder=3.9,  # under the markers: a label never hides another spot-check
             annotation_clip=False,
             bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8),
         )

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+from test_compare_fit import fake_nominal_stress
 
 from tissuemech.compare import cli, scan
 from tissuemech.compare import scan_cli as sc
@@ -154,3 +155,22 @@ def test_spheroid_command_writes_every_promised_file(tmp_path, monkeypatch):
     with xr.open_dataset(out / "scan.nc") as ds:
         assert ds["sigma"].dims == ("point", "time")  # --save-curves
         assert np.allclose(ds["sigma"].max("time").values, df["sigma_peak [Pa]"].to_numpy(), rtol=1e-12)
+
+
+def test_chunked_evaluation_equals_one_call(monkeypatch):
+    """Large designs go through the reduced model in equal chunks (plus the design's extreme rows, so
+    every chunk compiles to the same evaluator): the table is the one of a single call."""
+    pts = scan.design({"alpha": (0.05, 0.3), "C": (100.0, 300.0), "pressure": (0.0, 300.0)}, n=45, method="lhs")
+    pts = pts.assign(inner_radius=50e-6, outer_radius=75e-6)[list(scan.BLASTULA_PARAMS)]
+    direct = scan.blastula(points=pts)
+    monkeypatch.setattr(sc, "_CHUNK", 16)
+    got = sc._reduced_in_chunks(scan.blastula, pts, ["C", "alpha", "pressure"], {}, progress=False)
+    pd.testing.assert_frame_equal(got, direct)
+    df = scan.spheroid(C=(100.0, 300.0), tau=(10.0, 100.0), n=5, model=fake_nominal_stress, equilibrium="fake")
+    sp_pts = df[[scan._col(k) for k in scan.SPHEROID_PARAMS]]
+    sp_pts.columns = list(scan.SPHEROID_PARAMS)
+    kw = dict(model=fake_nominal_stress, equilibrium="fake", curves=True)
+    got = sc._reduced_in_chunks(scan.spheroid, sp_pts, ["C", "tau"], kw, progress=False, stiff_row=0)
+    want = scan.spheroid(points=sp_pts, **kw)
+    pd.testing.assert_frame_equal(got.drop(columns="sigma [Pa]"), want.drop(columns="sigma [Pa]"))
+    assert np.array_equal(got.attrs["time [s]"], want.attrs["time [s]"])
