@@ -119,7 +119,11 @@ def _is_log(values: np.ndarray, name: str, log: Sequence[str] | None) -> bool:
     if log is not None:
         return name in log
     v = values[np.isfinite(values)]
-    return bool(v.size and v.min() > 0 and v.max() / v.min() >= 20.0)
+    if not (v.size and v.min() > 0 and v.max() / v.min() >= 20.0):
+        return False
+    # sampled in log (median near the geometric middle) or linearly (near the arithmetic middle)?
+    med, lo, hi = np.median(v), v.min(), v.max()
+    return bool(abs(np.log(med / np.sqrt(lo * hi))) < abs(np.log(med / (0.5 * (lo + hi)))))
 
 
 def _check_quantity(table: pd.DataFrame, name: str) -> None:
@@ -146,6 +150,15 @@ def _axis_bins(v: np.ndarray, log: bool, nbins: int | None) -> tuple[np.ndarray,
     edges = np.linspace(lo, hi, nb + 1)
     idx = np.clip(np.searchsorted(edges, f(v), side="right") - 1, 0, nb - 1)
     return finv(0.5 * (edges[1:] + edges[:-1])), finv(edges), idx, False
+
+
+def _plain_log_ticks(axis) -> None:
+    """Log-axis ticks as plain numbers (20, 50, 100), not 2 x 10^1."""
+    import matplotlib as mpl
+
+    fmt = mpl.ticker.FuncFormatter(lambda v, _pos: f"{v:g}")
+    axis.set_major_formatter(fmt)
+    axis.set_minor_formatter(mpl.ticker.FuncFormatter(lambda v, _pos: f"{v:g}" if f"{v:.1e}"[0] in "25" else ""))
 
 
 def _select_fixed(table: pd.DataFrame, fixed: Mapping[str, float] | None, log: Sequence[str] | None):
@@ -198,7 +211,8 @@ def summary_map(
               level; scattered designs: a band of +-5 % of the range). Other varied parameters are
               averaged (NaN values, e.g. stretch of a burst shell, are left out of the average; cells
               without a value are grey).
-    log       parameters drawn on log axes (default: those positive and spanning >= 20x).
+    log       parameters drawn on log axes (default: those positive, spanning >= 20x and sampled
+              log-uniformly, i.e. with their median nearer the geometric than the arithmetic middle).
     bins      cells per axis for scattered designs (default sqrt(points / 40), 8..30).
     color_log log colour scale (default: for positive quantities spanning >= 8x, e.g. stretches
               1..9, half-relaxation times over decades of tau).
@@ -247,10 +261,14 @@ def summary_map(
     mesh.set_gid("map")
     cb = fig.colorbar(mesh, ax=ax)
     cb.set_label(axis_label(quantity) if quantity != "bursts" else "fraction of points that burst (-)")
+    if isinstance(norm, mpl.colors.LogNorm):
+        _plain_log_ticks(cb.ax.yaxis)
     if xlog:
         ax.set_xscale("log")
+        _plain_log_ticks(ax.xaxis)
     if ylog:
         ax.set_yscale("log")
+        _plain_log_ticks(ax.yaxis)
     ax.set_xlim(xe[0], xe[-1])
     ax.set_ylim(ye[0], ye[-1])
     ax.set_xlabel(axis_label(x))
@@ -372,6 +390,8 @@ def curve_bundle(
     curve ends where the shell bursts (limit point, marked x).
     Returns the Figure. Raises ValueError if the curves are missing or ``color_by`` is unknown.
     """
+    import matplotlib as mpl
+
     plt = _plt()
     _check_quantity(table, color_by)
     scene = scene_of(table)
@@ -449,6 +469,8 @@ def curve_bundle(
     ax.grid(alpha=0.3, which="both")
     cb = fig.colorbar(sm, ax=ax_n if ax_n is not None else ax)
     cb.set_label(axis_label(color_by))
+    if isinstance(sm.norm, mpl.colors.LogNorm):
+        _plain_log_ticks(cb.ax.yaxis)
     fig.tight_layout()
     return fig
 
@@ -601,7 +623,7 @@ def sensitivities(
     y_i and their exact derivatives (``jax.jacfwd``: through the exact-kernel quadrature of
     ``reduced.spheroid.nominal_stress``, through the implicit-function derivatives of
     ``reduced.blastula``) are taken with respect to each varied parameter x_j scaled to its scan
-    range, u_j in [0, 1] (log-scaled for parameters in ``log``, default those spanning >= 20x):
+    range, u_j in [0, 1] (log-scaled for parameters in ``log``, default as for the map axes):
     dy/du_j = dy/dx_j (hi - lo), or dy/dx_j x_j ln(hi/lo). Per summary:
 
     * ``mean_abs_dy_du``: mean |dy/du_j| over the points (units of y: the linearised change of y
