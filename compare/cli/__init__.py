@@ -4,6 +4,9 @@
     tissuemech spheroid [--out spheroid.png] [--C 150] [--alpha 0.2] [--beta 0.4] [--tau 200] ...
     tissuemech report [--out DIR] [--quick]     (figures, accuracy-vs-speed charts, stability map)
     tissuemech bench NAME [options]             (benchmark suites)
+    tissuemech scan spheroid|blastula [--C 100:400] [--tau 10:1000:log] ... [--out DIR]   (parameter scans)
+    tissuemech fit DATA.csv [...] --radius-um R --displacement-um D --ramp-time T   (fit your data)
+    tissuemech batch run|collect ...            (FE batches for job arrays)
     tissuemech --version
 
 Tables go to stdout, figures to PNG. Bad arguments get a one-line error (exit code 2).
@@ -33,6 +36,7 @@ COMMANDS: list[tuple[str, str]] = [
     ("bench", "tissuemech.compare.cli.bench"),
     ("batch", "tissuemech.compare.batch_cli"),
     ("fit", "tissuemech.compare.fit_cli"),
+    ("scan", "tissuemech.compare.scan_cli"),
 ]
 
 
