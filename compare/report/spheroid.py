@@ -138,7 +138,7 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
                 fit_sigma=fit_curve,
                 fit_label="fit to the SYNTHETIC record (95 % intervals):\n"
                 + ", ".join(
-                    f"{n} = {pf[n]:.3g} [{fit.intervals[n][0]:.3g}, {fit.intervals[n][1]:.3g}]{u}"
+                    f"{n} = {pf[n]:.3g} ({fit.interval_text(n)}){u}"
                     for n, u in (("C", " Pa"), ("alpha", ""), ("beta", ""), ("tau", " s"))
                 ),
                 fit_at_ref=np.interp(t_ref, t_dense, fit_curve),
@@ -239,11 +239,10 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
         dict(case="Fig. 10", quantity="calibration static FE run (s)", fe=calib_wall, reduced=np.nan),
     ]
     for n in fit.names:
-        lo, hi = fit.intervals[n]
         seed_rows.append(
             dict(
                 case="Fig. 10 fit (SYNTHETIC)",
-                quantity=f"{n} fitted [95% {lo:.4g}, {hi:.4g}]",
+                quantity=f"{n} fitted (95 %: {fit.interval_text(n)})",
                 fe=np.nan,
                 reduced=pf[n],
             )
