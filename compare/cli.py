@@ -14,6 +14,7 @@ import sys
 from collections.abc import Sequence
 
 UM = 1e-6
+MAX_TABLE_ROWS = 10_000  # the blastula table: max_pressure / step rows at most
 
 FIG4_ALPHAS = (1e-5, 0.1, 0.2, 0.3)
 FIG5_OUTER_UM = (52.0, 60.0, 75.0)
@@ -108,6 +109,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         if args.command == "blastula":
             from tissuemech.compare.scenes import blastula_table
+
+            rows = args.max_pressure / args.step
+            if rows > MAX_TABLE_ROWS:
+                raise CLIError(
+                    f"--step {args.step:g} Pa with --max-pressure {args.max_pressure:g} Pa gives {rows:.3g} table rows "
+                    f"(at most {MAX_TABLE_ROWS}); use a larger --step"
+                )
 
             blastula_table(args)
         elif args.command == "spheroid":

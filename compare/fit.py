@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import functools
 import math
+import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
@@ -417,7 +418,11 @@ def read_csv(path: str, *, displacement: float, time_column: str | int = 0, stre
     with open(path) as fh:
         first = fh.readline()
     try:
-        [float(x) for x in first.replace(";", ",").split(",") if x.strip()]
+        # a first line of numbers only (comma, semicolon, tab or space separated) is data, not a header
+        cells = [x for x in re.split(r"[,;\s]+", first.strip()) if x]
+        if not cells:
+            raise ValueError
+        [float(x) for x in cells]
         header = None
     except ValueError:
         header = 0

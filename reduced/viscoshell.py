@@ -221,7 +221,9 @@ def inflate(
     else:
         validate_finite("pressure", pressure, "Pa")
         if not is_traced(pressure) and np.ndim(pressure) != 0:
-            raise ValueError(f"pressure must be a single number in Pa (or a callable p(t)); got shape {np.shape(pressure)}")
+            raise ValueError(
+                f"pressure must be a single number in Pa (or a callable p(t)); got shape {np.shape(pressure)}"
+            )
         tr = 0.0 if ramp_time is None else ramp_time
         p_fun = _Ramp(jnp.asarray(pressure, dtype=jnp.float64), jnp.asarray(tr, dtype=jnp.float64))
         jumps = None if ramp_time is None else jnp.asarray([tr], dtype=jnp.float64)
@@ -244,7 +246,9 @@ def _check_pressure_history(pressure: Callable, t: np.ndarray) -> None:
         raise ValueError(f"pressure (a callable p(t) in Pa) must return one number per time; got shape {p.shape}")
     if not np.all(np.isfinite(p)):
         bad = probe[~np.isfinite(p)][0]
-        raise ValueError(f"pressure history p(t) must be finite (in Pa); it is {p[~np.isfinite(p)][0]} at t = {bad:g} s")
+        raise ValueError(
+            f"pressure history p(t) must be finite (in Pa); it is {p[~np.isfinite(p)][0]} at t = {bad:g} s"
+        )
 
 
 def _solve(t, p_fun, jumps, inner_radius, outer_radius, C, alpha, beta, tau, rtol, atol, max_steps):
