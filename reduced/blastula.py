@@ -110,10 +110,9 @@ def _check_stretch(name: str, value: Any) -> None:
         )
 
 
-def _validate(inner_radius, outer_radius, C=None, alpha=None) -> None:
+def _validate(inner_radius, outer_radius, C, alpha) -> None:
     validate_radii(inner_radius, outer_radius)
-    if C is not None:
-        validate_material(C, alpha)
+    validate_material(C, alpha)
 
 
 def _geometry(inner_radius, outer_radius):
