@@ -312,7 +312,7 @@ def spheroid(
     validate_positive("tau (the relaxation time)", pts["tau"].to_numpy(), "s")
     validate_positive("displacement (total approach)", pts["displacement"].to_numpy(), "m")
     validate_positive("ramp_time", pts["ramp_time"].to_numpy(), "s")
-    _check_spheroid_design(pts, equilibrium)
+    _check_spheroid_design(pts, equilibrium if model is None else None)
     if times is None:
         validate_positive("end_time (end of the hold)", end_time, "s")
         if pts["ramp_time"].nunique() != 1:
@@ -377,7 +377,8 @@ def spheroid(
 
 def _check_spheroid_design(pts: pd.DataFrame, equilibrium: Any) -> None:
     """Up-front checks of a spheroid design (the scan itself runs inside jit, where nothing can raise):
-    the approach below the diameter, and inside the equilibrium table (approach and alpha)."""
+    the approach below the diameter, and inside the equilibrium table (approach and alpha). ``equilibrium``
+    None: a user model, whose equilibrium spec is its own business."""
     x = pts["displacement"].to_numpy() / (2.0 * pts["radius"].to_numpy())
     if np.any(x >= 1.0):
         i = int(np.argmax(x))
@@ -385,6 +386,8 @@ def _check_spheroid_design(pts: pd.DataFrame, equilibrium: Any) -> None:
             f"displacement (total approach, m) must be smaller than the ball's diameter 2 * radius; "
             f"point {i} has {pts['displacement'].iloc[i]:g} m at radius {pts['radius'].iloc[i]:g} m"
         )
+    if equilibrium is None:
+        return
     if isinstance(equilibrium, str) and equilibrium not in ("fem", "hertz"):
         raise ValueError(f"equilibrium must be 'hertz', 'fem', an (x, f) table or a callable; got {equilibrium!r}")
     from tissuemech.reduced import spheroid as red
