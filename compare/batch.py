@@ -2,10 +2,20 @@
 
 ``run(function, points, executor=None, store=path)`` evaluates ``function(**point)`` for each point
 (a dict of keyword arguments, SI units). Each result is written to ``store`` the moment its point
-finishes, as one ``<key>.npz`` file where ``key`` is a SHA-256 hash of the function's name and the
-point's parameters; the file is written to a temporary name and renamed (atomic), so an interrupted
-batch (crash, Ctrl-C, killed job) loses nothing that finished and a rerun with the same ``store``
-skips every stored point.
+finishes, as one ``<key>.npz`` file where ``key`` is a SHA-256 hash of the function's name, a hash of
+its source code, the tissuemech version and the point's parameters (results of another version of the
+code are never reused). A rerun with the same ``store`` skips every stored point.
+
+The store survives corruption and concurrency:
+
+* every file carries a SHA-256 checksum of its arrays; a truncated, empty, garbage or altered file is
+  detected, moved aside to ``<key>.npz.corrupt``, recomputed, and a ``StoreWarning`` says so;
+* files are written to a unique temporary name (``<key>.npz.<pid>.<random>.part``) and renamed
+  (atomic), so a crash loses nothing that finished and writers never collide;
+* a point being computed is claimed by a lock file ``<key>.lock`` (pid and host inside): a second run
+  into the same store waits for that point instead of computing it again; the lock of a dead process
+  (same host) is taken over, so a killed batch resumes;
+* a store that cannot be written raises :class:`StoreError` before any point is computed.
 
 Executors: local processes by default (``ProcessPoolExecutor``, 2 workers, "spawn" start so JAX
 state is never forked); any ``concurrent.futures.Executor``; a ``dask.distributed.Client`` (its
@@ -21,16 +31,32 @@ from __future__ import annotations
 import concurrent.futures as cf
 import dataclasses
 import hashlib
+import inspect
 import json
 import multiprocessing
 import os
+import socket
+import time
+import uuid
+import warnings
+import zipfile
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-__all__ = ["run", "point_key", "load", "Stored", "BatchError"]
+__all__ = ["run", "point_key", "load", "Stored", "BatchError", "StoreError", "StoreWarning", "STORE_FORMAT"]
+
+STORE_FORMAT = 2  # version of the file layout (fields + __point__ + __meta__ with the checksum)
+
+
+class StoreError(ValueError):
+    """The result store cannot be used (not writable, or a stored file is unreadable or altered)."""
+
+
+class StoreWarning(UserWarning):
+    """A stored result was corrupt and is being recomputed."""
 
 
 class BatchError(RuntimeError):
@@ -69,9 +95,28 @@ def _name(function: Callable) -> str:
     return f"{getattr(function, '__module__', '?')}.{getattr(function, '__qualname__', repr(function))}"
 
 
+def _code_hash(function: Callable) -> str:
+    """SHA-256 (16 hex digits) of the function's source, '' when it has none (builtins, C code)."""
+    try:
+        src = inspect.getsource(function)
+    except (OSError, TypeError):
+        return ""
+    return hashlib.sha256(src.encode()).hexdigest()[:16]
+
+
+def _version() -> str:
+    from tissuemech import __version__
+
+    return str(__version__)
+
+
 def point_key(function: Callable, point: Mapping[str, Any]) -> str:
-    """SHA-256 (first 24 hex digits) of the function's qualified name and the point's parameters."""
-    text = json.dumps({"f": _name(function), "p": _jsonable(dict(point))}, sort_keys=True)
+    """SHA-256 (first 24 hex digits) of the function's qualified name, its source hash, the tissuemech
+    version and the point's parameters: results computed by other code are never reused."""
+    text = json.dumps(
+        {"f": _name(function), "c": _code_hash(function), "v": _version(), "p": _jsonable(dict(point))},
+        sort_keys=True,
+    )
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
 
@@ -96,21 +141,160 @@ def _to_fields(result: Any) -> dict[str, np.ndarray]:
     return out
 
 
-def _save(path: Path, fields: dict[str, np.ndarray], point: Mapping[str, Any]) -> None:
-    tmp = path.with_name(path.name + ".part")  # not matched by *.npz until complete
-    with open(tmp, "wb") as fh:
-        np.savez(fh, __point__=np.asarray(json.dumps(_jsonable(dict(point)))), **fields)
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
+def _checksum(fields: Mapping[str, np.ndarray], point_json: str) -> str:
+    h = hashlib.sha256(point_json.encode())
+    for k in sorted(fields):
+        a = np.ascontiguousarray(fields[k])
+        h.update(f"{k}|{a.dtype.str}|{a.shape}|".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def _save(path: Path, fields: dict[str, np.ndarray], point: Mapping[str, Any], function_name: str = "") -> None:
+    point_json = json.dumps(_jsonable(dict(point)))
+    meta = dict(
+        format=STORE_FORMAT,
+        tissuemech=_version(),
+        function=function_name,
+        sha256=_checksum(fields, point_json),
+        written=time.time(),
+    )
+    # a unique temporary name per writer: concurrent writers of one key never collide (not matched by *.npz)
+    tmp = path.with_name(f"{path.name}.{os.getpid()}.{uuid.uuid4().hex[:12]}.part")
+    try:
+        with open(tmp, "wb") as fh:
+            np.savez(fh, __point__=np.asarray(point_json), __meta__=np.asarray(json.dumps(meta)), **fields)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def load(path: str | os.PathLike) -> Stored:
-    """Read one stored result file (``<key>.npz``); the point is under ``"__point__"`` (a dict)."""
-    with np.load(path, allow_pickle=False) as z:
-        out = Stored({k: z[k] for k in z.files if k != "__point__"})
-        out["__point__"] = json.loads(str(z["__point__"]))
+    """Read one stored result file (``<key>.npz``); the point is under ``"__point__"`` (a dict).
+
+    Raises :class:`StoreError` (naming the file) when it is truncated, empty, not a result file, or
+    its numbers do not match the checksum written with them.
+    """
+    path = Path(path)
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            files = set(z.files)
+            if "__point__" not in files or "__meta__" not in files:
+                raise StoreError(f"result file {path} is not a tissuemech store file (no __point__/__meta__)")
+            point_json = str(z["__point__"])
+            meta = json.loads(str(z["__meta__"]))
+            fields = {k: z[k] for k in z.files if k not in ("__point__", "__meta__")}
+    except StoreError:
+        raise
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as exc:
+        raise StoreError(f"result file {path} is unreadable (truncated, empty or not an .npz): {exc}") from None
+    if meta.get("sha256") != _checksum(fields, point_json):
+        raise StoreError(f"result file {path} does not match its checksum (its numbers were altered or damaged)")
+    out = Stored(fields)
+    out["__point__"] = json.loads(point_json)
     return out
+
+
+def _load_or_quarantine(path: Path) -> Stored | None:
+    """The stored result, or None if absent; a corrupt file is moved aside (with a StoreWarning)."""
+    if not path.exists():
+        return None
+    try:
+        return load(path)
+    except StoreError as exc:
+        if not path.exists():  # replaced meanwhile by a concurrent writer: read it again
+            return _load_or_quarantine(path) if path.exists() else None
+        try:
+            os.replace(path, path.with_name(path.name + ".corrupt"))
+        except OSError:
+            pass
+        warnings.warn(f"{exc}; recomputing this point", StoreWarning, stacklevel=3)
+        return None
+
+
+# ---------------------------------------------------------------- per-point claims (lock files)
+
+_HOST = socket.gethostname()
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _lock_is_stale(lock: Path, stale_after: float) -> bool:
+    try:
+        info = json.loads(lock.read_text() or "{}")
+        age = time.time() - lock.stat().st_mtime
+    except (OSError, ValueError):
+        return False  # being written or just removed: look again later
+    if info.get("host") == _HOST and isinstance(info.get("pid"), int):
+        return not _pid_alive(info["pid"])
+    return age > stale_after
+
+
+_RUN_ID = uuid.uuid4().hex
+
+
+def _claim(lock: Path, stale_after: float) -> bool:
+    """Create ``lock`` exclusively (True), or False if a live process holds it; stale locks are taken over."""
+    for _ in range(2):
+        try:
+            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        except FileExistsError:
+            if _lock_is_stale(lock, stale_after):
+                try:
+                    lock.unlink()
+                except FileNotFoundError:
+                    pass
+                continue
+            return False
+        with os.fdopen(fd, "w") as fh:
+            json.dump({"pid": os.getpid(), "host": _HOST, "run": _RUN_ID, "time": time.time()}, fh)
+        return True
+    return False
+
+
+def _release(lock: Path) -> None:
+    try:
+        lock.unlink()
+    except FileNotFoundError:
+        pass
+
+
+def _check_writable(folder: Path) -> None:
+    """Raise StoreError unless files can be created in ``folder`` (checked before any point is computed)."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        probe = folder / f".write-probe.{os.getpid()}.{uuid.uuid4().hex[:8]}"
+        with open(probe, "wb") as fh:
+            fh.write(b"ok")
+        probe.unlink()
+    except OSError as exc:
+        raise StoreError(
+            f"store {folder} is not writable ({exc.strerror or exc}); give a folder this process can write to, "
+            "or store=None"
+        ) from None
+
+
+def _clean_parts(folder: Path) -> None:
+    """Remove temporary files left by dead writers on this host (``<key>.npz.<pid>.<rand>.part``)."""
+    for part in folder.glob("*.part"):
+        bits = part.name.split(".")
+        try:
+            pid = int(bits[-3])
+        except (IndexError, ValueError):
+            continue
+        if not _pid_alive(pid):
+            part.unlink(missing_ok=True)
 
 
 def _evaluate(function: Callable, point: dict) -> dict[str, np.ndarray]:
@@ -161,6 +345,8 @@ def run(
     store: str | os.PathLike | None = None,
     progress: bool = True,
     raise_on_error: bool = True,
+    poll: float = 0.05,
+    stale_after: float = 24 * 3600.0,
 ) -> list[Stored | None]:
     """Evaluate ``function(**point)`` for every point; return the results in the order of ``points``.
 
@@ -168,46 +354,136 @@ def run(
     points     dicts of keyword arguments (SI units).
     executor   None: 2 local processes; "serial"; a concurrent.futures.Executor; a dask Client.
     store      directory for ``<key>.npz`` results; points already there are not recomputed (resume).
+               Corrupt files are recomputed (with a ``StoreWarning``); points claimed by a concurrent
+               run into the same store are waited for, not recomputed.
     progress   show a tqdm progress bar.
+    poll       seconds between looks at points another run is computing.
+    stale_after  seconds after which a lock of a process on another host counts as abandoned (locks of
+               dead processes on this host are taken over at once).
     Failed points are collected; at the end a :class:`BatchError` names them (finished points are
     stored, so a rerun continues), or with ``raise_on_error=False`` their entries are None.
+    Raises :class:`StoreError` before computing anything if the store cannot be written.
     """
-    pts = [dict(p) for p in points]
+    if not callable(function):
+        raise ValueError(f"function must be a callable of keyword arguments; got {function!r}")
+    if isinstance(points, (str, bytes, Mapping)) or not isinstance(points, Iterable):
+        raise ValueError(f"points must be a sequence of dicts of keyword arguments; got {type(points).__name__}")
+    pts = []
+    for j, p in enumerate(points):
+        if not isinstance(p, Mapping):
+            raise ValueError(f"points[{j}] must be a dict of keyword arguments; got {p!r}")
+        pts.append(dict(p))
     keys = [point_key(function, p) for p in pts]
     results: list[Stored | None] = [None] * len(pts)
     folder = Path(store) if store is not None else None
     if folder is not None:
-        folder.mkdir(parents=True, exist_ok=True)
+        if folder.exists() and not folder.is_dir():
+            raise StoreError(f"store {folder} exists and is not a folder")
         for i, k in enumerate(keys):
-            f = folder / f"{k}.npz"
-            if f.exists():
-                results[i] = load(f)
+            results[i] = _load_or_quarantine(folder / f"{k}.npz")
     todo = [i for i, r in enumerate(results) if r is None]
     failures: dict[int, str] = {}
-    if todo:
-        from tqdm.auto import tqdm
+    if not todo:
+        return results
+    if folder is not None:
+        _check_writable(folder)
+        _clean_parts(folder)
+    from tqdm.auto import tqdm
 
-        ex, owned = _executor(executor)
-        bar = tqdm(total=len(pts), initial=len(pts) - len(todo), disable=not progress, desc="batch")
-        try:
-            futures = {ex.submit(_evaluate, function, pts[i]): i for i in todo}
-            done = futures if isinstance(ex, _Serial) else cf.as_completed(futures)
-            for fut in done:
-                i = futures[fut]
-                try:
-                    fields = fut.result()
-                except Exception as e:
-                    failures[i] = f"{type(e).__name__}: {e}"
-                    bar.update(1)
-                    continue
+    first_of: dict[str, int] = {}  # one computation per distinct key (duplicate points share it)
+    for i in todo:
+        first_of.setdefault(keys[i], i)
+    pending = [first_of[k] for k in dict.fromkeys(keys[i] for i in todo)]
+    name = _name(function)
+    ex, owned = _executor(executor)
+    window = 1 if isinstance(ex, _Serial) else max(4, 2 * (getattr(ex, "_max_workers", 4) or 4))
+    bar = tqdm(total=len(pts), initial=len(pts) - len(todo), disable=not progress, desc="batch")
+    held: set[str] = set()
+    try:
+        waiting: list[int] = []  # points another run holds: looked at again later
+        futures: dict[Any, int] = {}
+        queue = list(pending)
+
+        def submit_next() -> None:
+            while queue and len(futures) < window:
+                i = queue.pop(0)
                 if folder is not None:
-                    _save(folder / f"{keys[i]}.npz", fields, pts[i])
+                    f = folder / f"{keys[i]}.npz"
+                    got = _load_or_quarantine(f)
+                    if got is not None:  # finished meanwhile by a concurrent run
+                        results[i] = got
+                        bar.update(1)
+                        continue
+                    lock = folder / f"{keys[i]}.lock"
+                    if not _claim(lock, stale_after):
+                        waiting.append(i)
+                        continue
+                    got = _load_or_quarantine(f)  # finished between the look and the claim
+                    if got is not None:
+                        _release(lock)
+                        results[i] = got
+                        bar.update(1)
+                        continue
+                    held.add(keys[i])
+                futures[ex.submit(_evaluate, function, pts[i])] = i
+
+        def collect(fut) -> None:
+            i = futures.pop(fut)
+            try:
+                fields = fut.result()
+            except Exception as e:
+                failures[i] = f"{type(e).__name__}: {e}"
+            else:
+                if folder is not None:
+                    _save(folder / f"{keys[i]}.npz", fields, pts[i], name)
                 results[i] = Stored(fields, __point__=_jsonable(pts[i]))
-                bar.update(1)
-        finally:
-            bar.close()
-            if owned:
-                ex.shutdown(wait=True, cancel_futures=True)
+            finally:
+                if folder is not None and keys[i] in held:
+                    _release(folder / f"{keys[i]}.lock")
+                    held.discard(keys[i])
+            bar.update(1)
+
+        while queue or futures or waiting:
+            submit_next()
+            if futures:
+                if isinstance(ex, _Serial):
+                    collect(next(iter(futures)))
+                else:
+                    done, _ = cf.wait(list(futures), timeout=poll if waiting else None, return_when=cf.FIRST_COMPLETED)
+                    for fut in done:
+                        collect(fut)
+                continue
+            if waiting:  # nothing of our own in flight: look at the points others hold
+                still = []
+                for i in waiting:
+                    got = _load_or_quarantine(folder / f"{keys[i]}.npz")
+                    if got is not None:
+                        results[i] = got
+                        bar.update(1)
+                    elif (folder / f"{keys[i]}.lock").exists() and not _lock_is_stale(
+                        folder / f"{keys[i]}.lock", stale_after
+                    ):
+                        still.append(i)
+                    else:  # the other run gave up (failed point, or died): compute it here
+                        queue.append(i)
+                waiting[:] = still
+                if waiting and not queue:
+                    time.sleep(poll)
+    finally:
+        bar.close()
+        if folder is not None:
+            for k in held:
+                _release(folder / f"{k}.lock")
+        if owned:
+            ex.shutdown(wait=True, cancel_futures=True)
+    for i in range(len(pts)):  # duplicates of a computed point share its result
+        if results[i] is None and i not in failures:
+            j = first_of.get(keys[i])
+            if j is not None and j != i:
+                if j in failures:
+                    failures[i] = failures[j]
+                else:
+                    results[i] = results[j]
     if failures and raise_on_error:
         first = min(failures)
         raise BatchError(

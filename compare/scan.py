@@ -30,7 +30,16 @@ import numpy as np
 import pandas as pd
 
 import tissuemech.reduced  # noqa: F401  (float64)
-from tissuemech.reduced.material import validate_material, validate_nonnegative, validate_positive, validate_radii
+from tissuemech.reduced.validation import (
+    validate_choice,
+    validate_finite,
+    validate_int,
+    validate_material,
+    validate_nonnegative,
+    validate_positive,
+    validate_radii,
+    validate_times,
+)
 
 __all__ = ["design", "spheroid", "blastula", "spread_indices", "to_xarray", "from_xarray", "to_netcdf"]
 
@@ -64,6 +73,23 @@ def _col(name: str) -> str:
     return f"{name} [{UNITS[name]}]"
 
 
+def _unit(name: str) -> str:
+    return {"-": "dimensionless"}.get(UNITS.get(name, ""), UNITS.get(name, ""))
+
+
+MAX_SCAN_BYTES = 2 * 1024**3  # a design (or its curves) larger than this is refused up front
+
+
+def _check_memory(points: int, values_per_point: int, what: str) -> None:
+    """Refuse a scan whose table would need more than MAX_SCAN_BYTES (with the estimate)."""
+    need = float(points) * float(values_per_point) * 8.0 * 3.0  # the table, its copy and the results
+    if need > MAX_SCAN_BYTES:
+        raise ValueError(
+            f"the {what} has {points:.4g} points: about {need / 1024**3:.3g} GiB of memory "
+            f"(limit {MAX_SCAN_BYTES / 1024**3:.3g} GiB); scan fewer points (n) or split the scan into parts"
+        )
+
+
 def _points(params: dict, points: Any, n: int, method: str, seed: int, log: Sequence[str]) -> pd.DataFrame:
     """The design: a user-given table of points (plain names or unit-labelled columns; parameters it
     lacks are taken from the fixed keyword values) or one generated from the ranges."""
@@ -77,7 +103,10 @@ def _points(params: dict, points: Any, n: int, method: str, seed: int, log: Sequ
         if k not in df.columns:
             if _is_range(v) or np.ndim(v) > 0:
                 raise ValueError(f"{k}: give it in points or as a single number, not a range, when points= is used")
-            df[k] = float(v)
+            df[k] = float(validate_finite(f"{k} ({_unit(k)})", v, _unit(k)))
+    for k in params:
+        validate_finite(f"points[{k!r}] ({_unit(k)})", df[k].to_numpy(dtype=object), _unit(k))
+    _check_memory(len(df), len(params), "design")
     return df[list(params)].astype(float).reset_index(drop=True)
 
 
@@ -94,15 +123,26 @@ def design(
     n       grid: values per ranged parameter; random/lhs: number of points.
     method  "grid", "random" or "lhs"; ``log`` names the parameters sampled in log scale.
     """
-    if n < 1:
-        raise ValueError(f"n (the number of points) must be at least 1; got {n}")
+    n = validate_int("n (the number of points)", n, minimum=1)
+    validate_choice("design method", method, ("grid", "random", "lhs"))
     names = list(params)
     ranged = [k for k in names if _is_range(params[k])]
     for k in ranged:
-        lo, hi = params[k]
-        if not (np.isfinite(lo) and np.isfinite(hi)) or lo > hi:
+        lo, hi = (float(validate_finite(f"range of {k} ({_unit(k)})", v, _unit(k))) for v in params[k])
+        if lo > hi:
             raise ValueError(f"range of {k} must be (low, high) with low <= high; got {params[k]}")
-        if k in log and lo <= 0:
+    for k in names:
+        if not _is_range(params[k]):
+            validate_finite(f"{k} ({_unit(k)})", params[k], _unit(k))
+    if method == "grid":
+        size = 1
+        for k in names:
+            size *= n if _is_range(params[k]) else int(np.size(params[k]))
+    else:
+        size = n
+    _check_memory(size, len(names), "design")
+    for k in ranged:
+        if k in log and params[k][0] <= 0:
             raise ValueError(f"{k} is sampled in log scale, so its range must be positive; got {params[k]}")
 
     def scale(k, u):
@@ -263,6 +303,8 @@ def spheroid(
     parameters it lacks come from the keyword values (numbers).
     """
     params = dict(radius=radius, C=C, alpha=alpha, beta=beta, tau=tau, displacement=displacement, ramp_time=ramp_time)
+    batch_size = validate_int("batch_size", batch_size, minimum=1)
+    fe_checks = validate_int("fe_checks (number of FE spot checks)", fe_checks, minimum=0)
     pts = _points(params, points, n, design_method, seed, log)
     validate_positive("radius", pts["radius"].to_numpy(), "m")
     validate_material(pts["C"].to_numpy(), pts["alpha"].to_numpy())
@@ -270,11 +312,22 @@ def spheroid(
     validate_positive("tau (the relaxation time)", pts["tau"].to_numpy(), "s")
     validate_positive("displacement (total approach)", pts["displacement"].to_numpy(), "m")
     validate_positive("ramp_time", pts["ramp_time"].to_numpy(), "s")
+    _check_spheroid_design(pts, equilibrium if model is None else None)
     if times is None:
+        validate_positive("end_time (end of the hold)", end_time, "s")
         if pts["ramp_time"].nunique() != 1:
             raise ValueError("with a range of ramp_time, give the output times explicitly (times=...)")
+        if float(end_time) <= float(pts["ramp_time"].iloc[0]):
+            raise ValueError(
+                f"end_time ({end_time:g} s) must be after the ramp (ramp_time {float(pts['ramp_time'].iloc[0]):g} s)"
+            )
         times = default_times(float(pts["ramp_time"].iloc[0]), end_time)
-    t = jnp.asarray(np.asarray(times, dtype=float))
+    tt = validate_times("times (output times)", times, unit="s", ascending=True, strictly=True)
+    if tt.ndim != 1 or tt.size < 2:
+        raise ValueError(f"times (output times, s) must be a 1-D array of at least 2 times; got shape {tt.shape}")
+    if curves:
+        _check_memory(len(pts), tt.size, "scan's curves")
+    t = jnp.asarray(tt)
     if model is None:
         # the design is known here. Non-stiff (ramp_time / tau <= 10 everywhere): the explicit Tsit5 ODE
         # path at rtol (1e-6: curves within ~1e-6, 2x faster than the quadrature with a spline table);
@@ -320,6 +373,28 @@ def spheroid(
                 abs(res["sigma_peak"][i] / peak - 1.0), abs(res["sigma_end"][i] / end - 1.0)
             )
     return df
+
+
+def _check_spheroid_design(pts: pd.DataFrame, equilibrium: Any) -> None:
+    """Up-front checks of a spheroid design (the scan itself runs inside jit, where nothing can raise):
+    the approach below the diameter, and inside the equilibrium table (approach and alpha). ``equilibrium``
+    None: a user model, whose equilibrium spec is its own business."""
+    x = pts["displacement"].to_numpy() / (2.0 * pts["radius"].to_numpy())
+    if np.any(x >= 1.0):
+        i = int(np.argmax(x))
+        raise ValueError(
+            f"displacement (total approach, m) must be smaller than the ball's diameter 2 * radius; "
+            f"point {i} has {pts['displacement'].iloc[i]:g} m at radius {pts['radius'].iloc[i]:g} m"
+        )
+    if equilibrium is None:
+        return
+    if isinstance(equilibrium, str) and equilibrium not in ("fem", "hertz"):
+        raise ValueError(f"equilibrium must be 'hertz', 'fem', an (x, f) table or a callable; got {equilibrium!r}")
+    from tissuemech.reduced import spheroid as red
+
+    table = red._table_of_safe(equilibrium)
+    if table is not None:
+        table.check_range(float(np.max(x)), pts["alpha"].to_numpy())
 
 
 @functools.lru_cache(maxsize=8)
@@ -429,9 +504,12 @@ def blastula(
     ``points``: a ready design (DataFrame or dict of arrays), as in :func:`spheroid`.
     """
     params = dict(inner_radius=inner_radius, outer_radius=outer_radius, C=C, alpha=alpha, pressure=pressure)
+    batch_size = validate_int("batch_size", batch_size, minimum=1)
+    fe_checks = validate_int("fe_checks (number of FE spot checks)", fe_checks, minimum=0)
     pts = _points(params, points, n, design_method, seed, log)
     validate_radii(pts["inner_radius"].to_numpy(), pts["outer_radius"].to_numpy())
     validate_material(pts["C"].to_numpy(), pts["alpha"].to_numpy())
+    validate_finite("pressure", pts["pressure"].to_numpy(), "Pa")
 
     res = _batched(lambda **kw: _blastula_evaluate(**kw), {k: pts[k].to_numpy() for k in BLASTULA_PARAMS}, batch_size)
     df = pts.rename(columns={k: _col(k) for k in pts.columns})

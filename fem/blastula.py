@@ -31,6 +31,7 @@ the time. No branches (or beta = 0) is the elastic shell at every step.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from typing import NamedTuple
 
@@ -46,10 +47,16 @@ from tissuemech.fem.newton import NewtonError, newton, sparse_solve
 from tissuemech.fem.output import BlastulaField, BlastulaResult
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
 from tissuemech.reduced.material import validate_branches, validate_material, validate_positive, validate_radii
+from tissuemech.reduced.validation import validate_choice, validate_finite
 
-__all__ = ["inflate", "creep", "MESHES", "LimitPointError", "NewtonError"]
+__all__ = ["inflate", "creep", "MESHES", "LimitPointError", "NewtonError", "LockingWarning"]
 
 MESHES = {"coarse": (2, 4), "default": (4, 8), "fine": (8, 16)}
+LOCKING_RATIO = 100.0  # displacement-only elements lock (overly stiff) beyond kappa/C ~ 1e2
+
+
+class LockingWarning(UserWarning):
+    """formulation='displacement' with a nearly incompressible material: the answer is locked (too stiff)."""
 
 
 def _make_mesh(mesh, A: float, B: float) -> AxiMesh:
@@ -204,10 +211,9 @@ def inflate(
     ``store_fields=True`` keeps the fields (displacement, von Mises, pressure) of every converged step in
     ``result.fields`` (``BlastulaField``; for ``result.to_pvd``); by default only the final ones are kept.
     """
-    if method not in ("load", "arclength"):
-        raise ValueError(f"method must be 'load' or 'arclength', got {method!r}")
+    validate_choice("method", method, ("load", "arclength"))
     if pressures is not None:
-        p = np.atleast_1d(np.asarray(pressures, dtype=float))
+        p = np.atleast_1d(validate_finite("pressures (the pressure levels to reach)", pressures, "Pa"))
         if p.ndim != 1 or p.size == 0 or not np.all(np.isfinite(p)):
             raise ValueError("pressures must be a non-empty 1D list of finite values in Pa")
         if np.any(p < 0):
@@ -217,8 +223,21 @@ def inflate(
     elif method == "load":
         raise ValueError("method='load' needs the list of pressures (Pa) to reach")
     if method == "arclength":
+        if max_inner_stretch is not None:
+            validate_finite("max_inner_stretch (a/A, dimensionless)", max_inner_stretch, "dimensionless")
         if max_inner_stretch is None or not np.isfinite(max_inner_stretch) or max_inner_stretch <= 1:
             raise ValueError("method='arclength' needs max_inner_stretch > 1 (where to stop the trace)")
+    validate_choice("formulation", formulation, ("mixed", "displacement"))
+    validate_radii(inner_radius, outer_radius)
+    validate_material(C, alpha, kappa)
+    if formulation == "displacement" and float(kappa) / float(C) > LOCKING_RATIO:
+        warnings.warn(
+            f"formulation='displacement' locks at kappa/C = {float(kappa) / float(C):.3g} (kappa = {float(kappa):g} Pa, "
+            f"C = {float(C):g} Pa): the shell comes out far too stiff (e.g. inner stretch 1.002 instead of 1.116 "
+            "at 100 Pa for the seed's kappa = 2.2 GPa). Use formulation='mixed' (the default)",
+            LockingWarning,
+            stacklevel=2,
+        )
     prob = _setup(inner_radius, outer_radius, C, alpha, kappa, mesh, formulation)
     u0 = np.zeros(prob.free.size)
     ref, floor = prob.ref, prob.floor

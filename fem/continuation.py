@@ -81,6 +81,7 @@ def load_control(
                             f"{lam_c * scale:.6g}{unit}, the curve is flat there",
                             load=lam_t * scale,
                             residuals=err.residuals,
+                            unit=unit,
                             hint=f"the last converged load {lam_c * scale:.6g}{unit} is (close to) the maximum; "
                             "use method='arclength' to pass it",
                         )
@@ -91,6 +92,7 @@ def load_control(
                         load=lam_t * scale,
                         residuals=err.residuals,
                         hint=err.hint,
+                        unit=unit,
                     ) from None
                 dlam *= 0.5
                 log.debug(

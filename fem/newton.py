@@ -33,10 +33,13 @@ __all__ = ["NewtonError", "NewtonResult", "newton", "sparse_solve", "symmetric_s
 class NewtonError(RuntimeError):
     """Newton failed: ``load`` (load level), ``residuals`` (history), ``hint`` (what to try)."""
 
-    def __init__(self, message: str, *, load=None, residuals: Sequence[float] = (), hint: str = ""):
+    def __init__(self, message: str, *, load=None, residuals: Sequence[float] = (), hint: str = "", unit: str = ""):
         self.load, self.residuals, self.hint = load, list(residuals), hint
         hist = ", ".join(f"{r:.3e}" for r in self.residuals[-8:])
-        super().__init__(f"{message} (load level {load}; residual history [{hist}]). Hint: {hint}")
+        where = f"{load:.6g}{unit}" if isinstance(load, (int, float)) and not isinstance(load, bool) else f"{load}"
+        if isinstance(load, (int, float)) and not unit:
+            where += " (scaled load, no unit given)"
+        super().__init__(f"{message} (load level {where}; residual history [{hist}]). Hint: {hint}")
 
 
 class NewtonResult(NamedTuple):

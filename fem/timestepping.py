@@ -109,6 +109,7 @@ def march(
             raise ValueError(f"step times must increase: {target} s after {t_c} s")
         dt = target - t_c
         cuts = 0
+        last_res: list = []
         while t_c < target - 1e-12 * max(abs(target), 1.0):
             t_new = min(target, t_c + dt)
             if target - t_new < 1e-9 * dt:
@@ -122,12 +123,14 @@ def march(
                 s_new, its = step(t_c, s_c, t_new, prev)
             except NewtonError as err:
                 cuts += 1
+                last_res = err.residuals or last_res
                 if cuts > max_cuts:
+                    # the step's own label (a time in s, or a load such as "delta = 50 um" for static runs)
+                    where = err.load if isinstance(err.load, str) and err.load else f"t = {t_new:.6g} s"
                     raise NewtonError(
-                        f"time step {t_c:.6g} s -> {t_new:.6g} s failed after {max_cuts} cuts "
-                        f"({err.args[0].split(' (load level')[0]})",
-                        load=f"t = {t_new:.6g} s",
-                        residuals=err.residuals,
+                        f"the step to {where} failed after {max_cuts} cuts ({err.args[0].split(' (load level')[0]})",
+                        load=where,
+                        residuals=err.residuals or last_res,
                         hint=err.hint,
                     ) from None
                 dt *= 0.5

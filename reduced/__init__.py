@@ -5,7 +5,8 @@ that works under ``jax.jit``, ``jax.vmap`` and ``jax.grad``.
 
 Modules
 -------
-material   Fung energy and its scalar derivatives, parameter validation (shared with ``fem``)
+material   Fung energy and its scalar derivatives (shared with ``fem``)
+validation input checks with messages naming the quantity and unit (re-exported by ``material``)
 blastula   exact thick incompressible shell: p(lambda_a), inverse, limit point, profiles
 viscoshell the shell with generalized-Maxwell branches: inflation history under p(t)
 spheroid   lumped generalized-Maxwell plate force of a compressed ball

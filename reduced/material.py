@@ -17,10 +17,23 @@ and ``jax.numpy`` for JAX arrays and tracers (jit/vmap/grad work).
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
 from typing import Any
 
 import numpy as np
+
+from tissuemech.reduced.validation import (  # re-exported: the historical home of the checks
+    InputError,
+    InputTypeError,
+    as_array,
+    is_traced,
+    validate_branches,
+    validate_finite,
+    validate_int,
+    validate_material,
+    validate_nonnegative,
+    validate_positive,
+    validate_radii,
+)
 
 try:  # jax is a core dependency; keep this module importable for pure-NumPy callers anyway
     import jax
@@ -42,7 +55,12 @@ __all__ = [
     "validate_nonnegative",
     "validate_radii",
     "validate_branches",
+    "validate_finite",
+    "validate_int",
+    "as_array",
     "is_traced",
+    "InputError",
+    "InputTypeError",
 ]
 
 _SERIES_CUTOFF = 1e-3  # |alpha x| below this uses the 4-term Taylor series (error < 1e-14 rel.)
@@ -118,87 +136,5 @@ def incompressible_stress_difference(li, lj, I1, C, alpha):
 
 
 # ---------------------------------------------------------------------------------------------
-# Validation: plain messages a biologist understands. Skipped for traced values (inside jit).
+# Validation lives in ``reduced.validation``; the names stay importable from here.
 # ---------------------------------------------------------------------------------------------
-
-
-def is_traced(*values: Any) -> bool:
-    """True if any value is a JAX tracer (inside jit/vmap/grad): checks are then skipped."""
-    if jax is None:
-        return False
-    return any(isinstance(v, jax.core.Tracer) for v in values)
-
-
-def _concrete(value: Any) -> np.ndarray | None:
-    if is_traced(value):
-        return None
-    return np.asarray(value, dtype=float)
-
-
-def validate_positive(name: str, value: Any, unit: str = "") -> None:
-    """Raise ValueError unless every entry of ``value`` is finite and > 0."""
-    v = _concrete(value)
-    if v is None:
-        return
-    u = f" (in {unit})" if unit else ""
-    if not np.all(np.isfinite(v)):
-        raise ValueError(f"{name} must be a finite number{u}; got {value!r}")
-    if np.any(v <= 0):
-        raise ValueError(f"{name} must be positive{u}; got {np.min(v):g}{' ' + unit if unit else ''}")
-
-
-def validate_nonnegative(name: str, value: Any, unit: str = "") -> None:
-    """Raise ValueError unless every entry of ``value`` is finite and >= 0."""
-    v = _concrete(value)
-    if v is None:
-        return
-    u = f" (in {unit})" if unit else ""
-    if not np.all(np.isfinite(v)):
-        raise ValueError(f"{name} must be a finite number{u}; got {value!r}")
-    if np.any(v < 0):
-        raise ValueError(f"{name} must not be negative{u}; got {np.min(v):g}{' ' + unit if unit else ''}")
-
-
-def validate_material(C: Any, alpha: Any, kappa: Any = None) -> None:
-    """Check the Fung parameters: C > 0 (Pa), alpha >= 0, optional kappa > 0 (Pa)."""
-    validate_positive("C (the Fung stiffness, shear modulus / 2)", C, "Pa")
-    v = _concrete(alpha)
-    if v is not None:
-        if not np.all(np.isfinite(v)):
-            raise ValueError(f"alpha (the Fung stiffening exponent) must be finite; got {alpha!r}")
-        if np.any(v < 0):
-            raise ValueError(f"alpha (the Fung stiffening exponent) must be >= 0 (0 is neo-Hookean); got {np.min(v):g}")
-    if kappa is not None:
-        validate_positive("kappa (the bulk modulus)", kappa, "Pa")
-
-
-def validate_radii(inner_radius: Any, outer_radius: Any) -> None:
-    """Check a hollow sphere: 0 < inner_radius < outer_radius (both in m)."""
-    validate_positive("inner_radius", inner_radius, "m")
-    validate_positive("outer_radius", outer_radius, "m")
-    a, b = _concrete(inner_radius), _concrete(outer_radius)
-    if a is not None and b is not None and np.any(np.asarray(a) >= np.asarray(b)):
-        raise ValueError(
-            "inner_radius must be smaller than outer_radius (the wall needs a positive "
-            f"thickness); got inner {np.max(a):g} m >= outer {np.min(b):g} m"
-        )
-
-
-def validate_branches(branches: Iterable[Sequence[float]] | None) -> tuple[tuple[Any, Any], ...]:
-    """Normalise generalized-Maxwell branches to a tuple of (beta, tau) and check them.
-
-    ``beta`` (dimensionless energy factor) must be >= 0 and ``tau`` (relaxation time, s) > 0.
-    ``None`` or an empty sequence means purely elastic.
-    """
-    if branches is None:
-        return ()
-    out = []
-    for k, br in enumerate(branches):
-        try:
-            beta, tau = br
-        except (TypeError, ValueError):
-            raise ValueError(f"branch {k}: each viscoelastic branch is a pair (beta, tau); got {br!r}") from None
-        validate_nonnegative(f"beta (energy factor of branch {k})", beta)
-        validate_positive(f"tau (relaxation time of branch {k})", tau, "s")
-        out.append((beta, tau))
-    return tuple(out)

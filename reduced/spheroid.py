@@ -62,7 +62,16 @@ import jax.numpy as jnp
 import numpy as np
 
 from tissuemech.reduced.interp import Spline1D, Spline2D
-from tissuemech.reduced.material import is_traced, validate_branches, validate_material, validate_positive
+from tissuemech.reduced.validation import (
+    is_traced,
+    validate_branches,
+    validate_finite,
+    validate_int,
+    validate_material,
+    validate_nonnegative,
+    validate_positive,
+    validate_times,
+)
 
 __all__ = [
     "force",
@@ -532,23 +541,8 @@ def _evaluate(
         *(() if callable(displacement) else (displacement,)),
     )
     if eager:
-        tn = np.asarray(t, dtype=float)
-        if tn.size == 0 or not np.all(np.isfinite(tn)) or np.min(tn) < 0:
-            raise ValueError("t must be a non-empty array of finite output times >= 0 s (t = 0: first contact)")
-        validate_positive("radius (of the ball)", radius, "m")
-        validate_material(C, alpha)
-        if not callable(displacement):
-            validate_positive("displacement (the total approach of the plates)", displacement, "m")
-            if ramp_time is None:
-                raise ValueError("ramp_time (s) is needed with a numeric displacement (linear ramp, then hold)")
-            validate_positive("ramp_time (duration of the loading ramp)", ramp_time, "s")
-            if np.any(np.asarray(displacement, dtype=float) >= 2 * np.asarray(radius, dtype=float)):
-                raise ValueError("displacement (total approach) must be smaller than the ball's diameter 2 * radius")
-            x_max = np.asarray(displacement, dtype=float) / (2 * np.asarray(radius, dtype=float))
-            for law in (equilibrium, midplane):
-                mc = _table_of(law)
-                if mc is not None:
-                    mc.check_range(x_max, alpha)
+        _check_inputs(t, radius, C, alpha, displacement, ramp_time, equilibrium, midplane, jump_times)
+    _check_solver_options(rtol, atol, max_steps)
     betas = tuple(jnp.asarray(b, dtype=jnp.float64) for b, _ in br)
     taus = tuple(jnp.asarray(tau, dtype=jnp.float64) for _, tau in br)
     params = dict(radius=radius, C=C, alpha=alpha)
@@ -594,7 +588,14 @@ def _evaluate(
             f"{int(np.size(ok))} parameter sets. Hint: raise max_steps (now {max_steps}), loosen rtol/atol, "
             "or check that the relaxation times are not absurdly short compared with the ramp."
         )
-    return out.reshape(shape + t_arr.shape)
+    out = out.reshape(shape + t_arr.shape)
+    if eager and callable(displacement) and bool(np.any(np.asarray(out) < 0)):
+        raise ValueError(
+            "displacement history: the plate force turns negative (the plates would lose contact: the "
+            "approach decreases faster than the ball relaxes); the lumped model holds only while the "
+            "plates push (force >= 0 N). Shorten the history or unload more slowly"
+        )
+    return out
 
 
 def _table_of(law):
@@ -708,8 +709,10 @@ def equilibrium_force(
 ) -> jnp.ndarray:
     """Elastic equilibrium force F_eq(delta) in N for the total approach ``displacement`` (m)."""
     if not is_traced(displacement, radius, C, alpha):
-        validate_positive("radius (of the ball)", radius, "m")
+        r = validate_positive("radius (of the ball)", radius, "m")
         validate_material(C, alpha)
+        d = validate_finite("displacement (the total approach of the plates)", displacement, "m")
+        _check_approach("displacement", d / (2.0 * r))
         mc = _table_of(equilibrium)
         if mc is not None:
             mc.check_range(np.asarray(displacement, dtype=float) / (2 * np.asarray(radius, dtype=float)), alpha)
@@ -722,6 +725,89 @@ def midplane_radius(
     displacement: Any, *, radius: Any, alpha: Any = 0.0, midplane: Any = "incompressible"
 ) -> jnp.ndarray:
     """Deformed equator radius r_mid (m) at total approach ``displacement`` (m)."""
+    if not is_traced(displacement, radius, alpha):
+        r = validate_positive("radius (of the ball)", radius, "m")
+        validate_nonnegative("alpha (the Fung stiffening exponent)", alpha, "dimensionless")
+        d = validate_finite("displacement (the total approach of the plates)", displacement, "m")
+        _check_approach("displacement", d / (2.0 * r))
+        mc = _table_of_safe(midplane)
+        if mc is not None:
+            mc.check_range(d / (2.0 * r), alpha)
     g, _ = _midplane_law(midplane, None, radius, alpha)
     x = jnp.asarray(displacement, dtype=jnp.float64) / (2.0 * jnp.asarray(radius, dtype=jnp.float64))
     return jnp.asarray(radius) * g(x)
+
+
+# ---------------------------------------------------------------- input checks of the public entry points
+
+
+def _check_solver_options(rtol: Any, atol: Any, max_steps: Any) -> None:
+    validate_positive("rtol (relative tolerance of the ODE solver)", rtol, "dimensionless")
+    validate_positive("atol (absolute tolerance of the ODE solver)", atol, "dimensionless")
+    validate_int("max_steps (of the ODE solver)", max_steps, minimum=1)
+
+
+def _check_approach(name: str, x_over_diameter: np.ndarray, where: str = "") -> None:
+    """An approach delta/(2 a0) must be finite, >= 0 and below 1 (the plates cannot pass each other)."""
+    if not np.all(np.isfinite(x_over_diameter)):
+        raise ValueError(f"{name} (the total approach of the plates, in m) must be finite{where}")
+    if np.any(x_over_diameter < 0):
+        raise ValueError(
+            f"{name} (the total approach of the plates, in m) must not be negative{where}: "
+            f"got delta/(2 radius) = {np.min(x_over_diameter):.4g}"
+        )
+    if np.any(x_over_diameter >= 1):
+        raise ValueError(
+            f"{name} (the total approach of the plates, in m) must be smaller than the ball's diameter "
+            f"2 * radius{where}: got delta/(2 radius) = {np.max(x_over_diameter):.4g}"
+        )
+
+
+def _check_inputs(t, radius, C, alpha, displacement, ramp_time, equilibrium, midplane, jump_times) -> None:
+    """Eager checks of force / nominal_stress (every message names the quantity and its unit)."""
+    validate_times("t (output times, t = 0 is first contact)", t, unit="s")
+    r = validate_positive("radius (of the ball)", radius, "m")
+    validate_material(C, alpha)
+    if jump_times is not None:
+        validate_times("jump_times (kinks of the displacement history)", jump_times, unit="s")
+    laws = [law for law in (equilibrium, midplane) if _table_of_safe(law) is not None]
+    if callable(displacement):
+        tn = np.asarray(t, dtype=float).ravel()
+        probe = np.union1d(tn, np.linspace(0.0, float(np.max(tn)), 257))
+        try:
+            d = np.asarray(jax.vmap(displacement)(jnp.asarray(probe)), dtype=float)
+        except Exception as exc:
+            raise ValueError(
+                f"displacement (a callable delta(t) in m) failed when called on the output times: {exc}"
+            ) from None
+        if d.shape != probe.shape:
+            raise ValueError(
+                f"displacement (a callable delta(t) in m) must return one number per time; got shape {d.shape}"
+            )
+        x = d / (2.0 * float(np.min(r)))
+        _check_approach("displacement history", x, " at every time")
+        if abs(float(x[0])) > 1e-12:
+            raise ValueError(
+                f"displacement history: delta(0) = {d[0]:g} m, but the model starts at first contact "
+                "(delta(0) = 0 m, branches at rest); start the history at 0"
+            )
+        for law in laws:
+            _table_of_safe(law).check_range(np.max(x), alpha)
+        return
+    validate_positive("displacement (the total approach of the plates)", displacement, "m")
+    if ramp_time is None:
+        raise ValueError("ramp_time (s) is needed with a numeric displacement (linear ramp, then hold)")
+    validate_positive("ramp_time (duration of the loading ramp)", ramp_time, "s")
+    if np.any(np.asarray(displacement, dtype=float) >= 2 * np.asarray(radius, dtype=float)):
+        raise ValueError("displacement (total approach) must be smaller than the ball's diameter 2 * radius")
+    x_max = np.asarray(displacement, dtype=float) / (2 * np.asarray(radius, dtype=float))
+    for law in laws:
+        _table_of_safe(law).check_range(x_max, alpha)
+
+
+def _table_of_safe(law):
+    """The table behind an equilibrium/midplane spec, or None (also for specs rejected later)."""
+    try:
+        return _table_of(law)
+    except (TypeError, ValueError):
+        return None

@@ -60,13 +60,16 @@ import jax.numpy as jnp
 import numpy as np
 
 from tissuemech.reduced import blastula
-from tissuemech.reduced.material import (
-    dW_dI1,
+from tissuemech.reduced.material import dW_dI1
+from tissuemech.reduced.validation import (
     is_traced,
     validate_branches,
+    validate_finite,
+    validate_int,
     validate_material,
     validate_positive,
     validate_radii,
+    validate_times,
 )
 
 __all__ = ["inflate", "Inflation", "N_NODES"]
@@ -192,30 +195,35 @@ def inflate(
     branches      sequence of (beta_m, tau_m): energy factor (>= 0) and relaxation time (s, > 0);
                   None or () is purely elastic.
     Returns ``Inflation(t, inner_stretch, outer_stretch)``. Raises RuntimeError (with the time
-    reached and a hint) when the integration fails, e.g. when the shell creeps past its limit point.
+    reached and a hint) when the integration fails, e.g. when the shell creeps past its limit point;
+    ValueError (naming the quantity and unit) for bad inputs, e.g. a pressure history p(t) that is not
+    finite at some time. Inside jit no check can run: a failed solve, or output times that are
+    negative, non-finite or not ascending, give NaN stretches.
     """
     validate_radii(inner_radius, outer_radius)
     validate_material(C, alpha)
     br = validate_branches(branches)
-    t = jnp.asarray(t, dtype=jnp.float64)
+    validate_positive("rtol (relative tolerance of the ODE solver)", rtol, "dimensionless")
+    validate_positive("atol (absolute tolerance of the ODE solver)", atol, "dimensionless")
+    validate_int("max_steps (of the ODE solver)", max_steps, minimum=1)
     if not is_traced(t):
-        tn = np.asarray(t)
-        if tn.ndim != 1 or tn.size == 0:
-            raise ValueError("t must be a non-empty 1-D array of output times in s")
-        if not np.all(np.isfinite(tn)) or np.any(tn < 0):
-            raise ValueError(
-                f"output times t must be finite and >= 0 s (t = 0 is when loading starts); got min {tn.min():g}"
-            )
-        if np.any(np.diff(tn) < 0):
-            raise ValueError("output times t must be in ascending order")
+        tn = validate_times("t (output times, t = 0 is when loading starts)", t, unit="s", ascending=True)
+        if tn.ndim != 1:
+            raise ValueError(f"t (output times) must be a 1-D array of times in s; got shape {tn.shape}")
+    t = jnp.asarray(t, dtype=jnp.float64)
     if ramp_time is not None:
         validate_positive("ramp_time", ramp_time, "s")
     if callable(pressure):
         p_fun = pressure
         jumps = None
+        if not is_traced(t):
+            _check_pressure_history(pressure, np.asarray(t))
     else:
-        if not is_traced(pressure) and not np.isfinite(float(pressure)):
-            raise ValueError(f"pressure must be a finite number in Pa; got {pressure!r}")
+        validate_finite("pressure", pressure, "Pa")
+        if not is_traced(pressure) and np.ndim(pressure) != 0:
+            raise ValueError(
+                f"pressure must be a single number in Pa (or a callable p(t)); got shape {np.shape(pressure)}"
+            )
         tr = 0.0 if ramp_time is None else ramp_time
         p_fun = _Ramp(jnp.asarray(pressure, dtype=jnp.float64), jnp.asarray(tr, dtype=jnp.float64))
         jumps = None if ramp_time is None else jnp.asarray([tr], dtype=jnp.float64)
@@ -225,6 +233,22 @@ def inflate(
     tau = jnp.asarray([s for _, s in br] or [1.0], dtype=jnp.float64)
     la, lb = _solve(t, p_fun, jumps, inner_radius, outer_radius, C, alpha, beta, tau, rtol, atol, max_steps)
     return Inflation(t, la, lb)
+
+
+def _check_pressure_history(pressure: Callable, t: np.ndarray) -> None:
+    """Eager check of a pressure history p(t): finite numbers (Pa) at the output times and between them."""
+    probe = np.union1d(t.ravel(), np.linspace(0.0, float(np.max(t)), 257))
+    try:
+        p = np.asarray(jax.vmap(pressure)(jnp.asarray(probe)), dtype=float)
+    except Exception as exc:
+        raise ValueError(f"pressure (a callable p(t) in Pa) failed when called on the output times: {exc}") from None
+    if p.shape != probe.shape:
+        raise ValueError(f"pressure (a callable p(t) in Pa) must return one number per time; got shape {p.shape}")
+    if not np.all(np.isfinite(p)):
+        bad = probe[~np.isfinite(p)][0]
+        raise ValueError(
+            f"pressure history p(t) must be finite (in Pa); it is {p[~np.isfinite(p)][0]} at t = {bad:g} s"
+        )
 
 
 def _solve(t, p_fun, jumps, inner_radius, outer_radius, C, alpha, beta, tau, rtol, atol, max_steps):
@@ -249,6 +273,10 @@ def _solve(t, p_fun, jumps, inner_radius, outer_radius, C, alpha, beta, tau, rto
     )
     if jumps is not None:
         controller = diffrax.ClipStepSizeController(controller, jump_ts=jumps)
+    # inside jit the times cannot be checked: a non-monotonic, negative or non-finite t would make
+    # diffrax fail with an XLA callback error; integrate over a monotone copy and flag the result NaN
+    t_bad = jnp.any(~jnp.isfinite(t)) | jnp.any(t < 0) | jnp.any(jnp.diff(t) < 0)
+    t = jax.lax.cummax(jnp.clip(jnp.where(jnp.isfinite(t), t, 0.0), 0.0, None))
     t1 = t[-1]
     sol = diffrax.diffeqsolve(
         diffrax.ODETerm(_rhs),
@@ -286,7 +314,7 @@ def _solve(t, p_fun, jumps, inner_radius, outer_radius, C, alpha, beta, tau, rto
                 "function is smooth and JAX-traceable."
             )
     else:
-        la = jnp.where(sol.result == diffrax.RESULTS.successful, la, jnp.nan)
+        la = jnp.where((sol.result == diffrax.RESULTS.successful) & ~t_bad, la, jnp.nan)
     lb = (
         blastula.outer_stretch(la, inner_radius=inner_radius, outer_radius=outer_radius)
         if not is_traced(la)

@@ -127,3 +127,164 @@ def test_dask_local_cluster(tmp_path):
 def test_bad_executor():
     with pytest.raises(ValueError, match="executor"):
         batch.run(square, POINTS, executor="cloud", progress=False)
+
+
+# ---------------------------------------------------------------- a store that survives corruption and concurrency
+
+
+def _calls(log: Path) -> int:
+    return len(list(log.iterdir()))
+
+
+def test_key_holds_version_and_code(monkeypatch):
+    k = batch.point_key(square, dict(a=1.0))
+    monkeypatch.setattr(batch, "_version", lambda: "0.0.0-other")
+    assert batch.point_key(square, dict(a=1.0)) != k  # another version of the code: not reused
+    monkeypatch.undo()
+    monkeypatch.setattr(batch, "_code_hash", lambda f: "changed")
+    assert batch.point_key(square, dict(a=1.0)) != k
+
+
+@pytest.mark.parametrize("damage", ["truncate", "empty", "garbage", "altered", "foreign"])
+def test_corrupt_file_is_detected_recomputed_and_reported(tmp_path, damage):
+    log = tmp_path / "log"
+    log.mkdir()
+    store = tmp_path / "store"
+    pts = [dict(a=float(a), log=str(log)) for a in range(4)]
+    ref = batch.run(square, pts, executor="serial", store=store, progress=False)
+    victim = store / f"{batch.point_key(square, pts[2])}.npz"
+    raw = victim.read_bytes()
+    if damage == "truncate":
+        victim.write_bytes(raw[: len(raw) // 2])
+    elif damage == "empty":
+        victim.write_bytes(b"")
+    elif damage == "garbage":
+        victim.write_bytes(os.urandom(len(raw)))
+    elif damage == "foreign":
+        np.savez(victim, x=np.zeros(3))  # a valid .npz, but not one of ours
+    else:  # a valid file whose numbers were changed afterwards
+        with np.load(victim) as z:
+            fields = {k: z[k] for k in z.files}
+        fields["x"] = fields["x"] + 1.0
+        np.savez(victim, **fields)
+    with pytest.raises(batch.StoreError, match=str(victim.name)):
+        batch.load(victim)
+    before = _calls(log)
+    with pytest.warns(batch.StoreWarning, match="recomputing"):
+        res = batch.run(square, pts, executor="serial", store=store, progress=False)
+    assert _calls(log) - before == 1  # only the damaged point
+    assert np.array_equal(res[2].x, ref[2].x)
+    assert (store / (victim.name + ".corrupt")).exists()
+    assert batch.load(victim)["x"].tolist() == ref[2].x.tolist()
+
+
+def test_read_only_store_fails_before_computing(tmp_path, monkeypatch):
+    log = tmp_path / "log"
+    log.mkdir()
+    store = tmp_path / "store"
+    store.mkdir()
+    pts = [dict(a=float(a), log=str(log)) for a in range(3)]
+    if os.geteuid() != 0:  # a real read-only folder (root can write anyway, so it is simulated below)
+        store.chmod(0o555)
+        try:
+            with pytest.raises(batch.StoreError, match="not writable"):
+                batch.run(square, pts, executor="serial", store=store, progress=False)
+        finally:
+            store.chmod(0o755)
+        assert _calls(log) == 0
+
+    def refuse(*a, **k):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(batch, "open", refuse, raising=False)
+    with pytest.raises(batch.StoreError, match="not writable"):
+        batch.run(square, pts, executor="serial", store=store, progress=False)
+    assert _calls(log) == 0  # nothing was computed
+    monkeypatch.undo()
+    done = batch.run(square, pts, executor="serial", store=store, progress=False)
+    monkeypatch.setattr(batch, "open", refuse, raising=False)  # all stored: reading needs no write access
+    again = batch.run(square, pts, executor="serial", store=store, progress=False)
+    assert [float(r.total) for r in again] == [float(r.total) for r in done]
+
+
+def test_store_that_is_a_file(tmp_path):
+    f = tmp_path / "store"
+    f.write_text("x")
+    with pytest.raises(batch.StoreError, match="not a folder"):
+        batch.run(square, POINTS, executor="serial", store=f, progress=False)
+
+
+def test_stale_lock_of_a_dead_process_is_taken_over(tmp_path):
+    store = tmp_path / "store"
+    store.mkdir()
+    pt = dict(a=2.0)
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    lock = store / f"{batch.point_key(square, pt)}.lock"
+    lock.write_text(f'{{"pid": {dead.pid}, "host": "{batch._HOST}"}}')
+    (store / f"{batch.point_key(square, pt)}.npz.{dead.pid}.abc.part").write_bytes(b"half")
+    res = batch.run(square, [pt], executor="serial", store=store, progress=False)
+    assert float(res[0].total) == 10.0
+    assert not lock.exists() and not list(store.glob("*.part"))
+
+
+WRITER = """
+import sys, json
+sys.path.insert(0, {tests!r})
+import test_compare_batch as t
+from tissuemech.compare import batch
+if __name__ == "__main__":
+    pts = [dict(a=float(a), log={log!r}) for a in range({n})]
+    res = batch.run(t.square, pts, executor={ex}, store={store!r}, progress=False)
+    ok = all(float(r.total) == 5.0 * p["a"] for r, p in zip(res, pts))
+    print(json.dumps(dict(ok=ok, n=len(res))))
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("executor", ["'serial'", "None"])
+def test_concurrent_writers_never_crash_nor_compute_twice(tmp_path, executor):
+    """3 runs x 400 points into one store at the same time: every run gets all 400 results, every
+    point is computed exactly once, no temporary or lock file is left."""
+    n = 400 if executor == "'serial'" else 120
+    log = tmp_path / "log"
+    log.mkdir()
+    store = tmp_path / "store"
+    script = tmp_path / "writer.py"
+    script.write_text(WRITER.format(tests=str(Path(__file__).parent), log=str(log), n=n, ex=executor, store=str(store)))
+    procs = [
+        subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        for _ in range(3)
+    ]
+    outs = [p.communicate(timeout=300) for p in procs]
+    for p, (out, err) in zip(procs, outs):
+        assert p.returncode == 0, err[-2000:]
+        assert '"ok": true' in out and f'"n": {n}' in out
+    assert _calls(log) == n  # nothing computed twice
+    assert len(list(store.glob("*.npz"))) == n
+    assert not list(store.glob("*.part")) and not list(store.glob("*.lock"))
+
+
+def test_duplicate_points_computed_once(tmp_path):
+    log = tmp_path / "log"
+    log.mkdir()
+    pts = [dict(a=1.0, log=str(log))] * 3 + [dict(a=2.0, log=str(log))]
+    res = batch.run(square, pts, executor="serial", store=tmp_path / "s", progress=False)
+    assert [float(r.total) for r in res] == [5.0, 5.0, 5.0, 10.0]
+    assert _calls(log) == 2
+
+
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        (dict(points=5), "points"),
+        (dict(points=[1, 2]), r"points\[0\]"),
+        (dict(points="ab"), "points"),
+        (dict(function=3), "function"),
+    ],
+)
+def test_bad_arguments(tmp_path, kw, match):
+    args = dict(function=square, points=POINTS, executor="serial", progress=False)
+    args.update(kw)
+    with pytest.raises(ValueError, match=match):
+        batch.run(args.pop("function"), args.pop("points"), **args)

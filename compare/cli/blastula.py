@@ -35,8 +35,17 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     return b
 
 
+MAX_TABLE_ROWS = 10_000  # the table: max_pressure / step rows at most
+
+
 def run(args: Namespace) -> None:
     """Run ``tissuemech blastula`` with parsed arguments."""
+    rows = args.max_pressure / args.step
+    if rows > MAX_TABLE_ROWS:
+        raise CLIError(
+            f"--step {args.step:g} Pa with --max-pressure {args.max_pressure:g} Pa gives {rows:.3g} table rows "
+            f"(at most {MAX_TABLE_ROWS}); use a larger --step"
+        )
     blastula_table(args)
 
 

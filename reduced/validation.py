@@ -1,0 +1,241 @@
+r"""Input checks shared by every public entry point of tissuemech (reduced, fem and compare).
+
+Each check raises :class:`InputError` (a ``ValueError``) with a one-line message that names the
+quantity, its unit and the value received, e.g.::
+
+    C (the Fung stiffness, shear modulus / 2) must be positive (in Pa); got -1 Pa
+    inner_stretch must be a number or an array of numbers (a/A, dimensionless), not text; got 'abc'
+
+Wrong types (text, None, a bool, a dict...) raise :class:`InputTypeError`, which is both an
+``InputError`` (so a ``ValueError``) and a ``TypeError``: ``except ValueError`` catches every bad
+input, ``except TypeError`` still catches the type errors.
+
+Values that are JAX tracers (inside ``jit``/``vmap``/``grad``) cannot be inspected: every check
+returns without a word for them (models then follow their documented NaN convention).
+"""
+
+from __future__ import annotations
+
+import numbers
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+import numpy as np
+
+try:  # jax is a core dependency; keep this module importable for pure-NumPy callers anyway
+    import jax
+except ImportError:  # pragma: no cover
+    jax = None
+
+__all__ = [
+    "InputError",
+    "InputTypeError",
+    "is_traced",
+    "as_array",
+    "validate_finite",
+    "validate_positive",
+    "validate_nonnegative",
+    "validate_material",
+    "validate_radii",
+    "validate_branches",
+    "validate_int",
+    "validate_choice",
+    "validate_times",
+]
+
+
+class InputError(ValueError):
+    """A bad input value; the message names the quantity and its unit."""
+
+
+class InputTypeError(InputError, TypeError):
+    """An input of the wrong type (text, None, a bool, a container where a number is needed)."""
+
+
+def is_traced(*values: Any) -> bool:
+    """True if any value is a JAX tracer (inside jit/vmap/grad): checks are then skipped."""
+    if jax is None:
+        return False
+    return any(isinstance(v, jax.core.Tracer) for v in values)
+
+
+def _unit_phrase(unit: str) -> str:
+    return f" (in {unit})" if unit and unit not in ("-", "dimensionless") else (" (dimensionless)" if unit else "")
+
+
+def _with_unit(x: float, unit: str) -> str:
+    return f"{x:g} {unit}" if unit and unit not in ("-", "dimensionless") else f"{x:g}"
+
+
+def _describe(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def as_array(name: str, value: Any, unit: str = "") -> np.ndarray | None:
+    """``value`` as a float64 array (None for traced values), or raise InputTypeError naming ``name``.
+
+    Text, None, bools, complex numbers and ragged or non-numeric containers are refused.
+    """
+    if is_traced(value):
+        return None
+    u = _unit_phrase(unit)
+    if value is None:
+        raise InputTypeError(f"{name} must be a number{u}; got None")
+    if isinstance(value, (str, bytes)):
+        raise InputTypeError(f"{name} must be a number or an array of numbers{u}, not text; got {_describe(value)}")
+    if isinstance(value, (bool, np.bool_)):
+        raise InputTypeError(f"{name} must be a number{u}, not a bool; got {value!r}")
+    if isinstance(value, dict):
+        raise InputTypeError(f"{name} must be a number or an array of numbers{u}; got a dict {_describe(value)}")
+    try:
+        raw = np.asarray(value)
+    except Exception:
+        raise InputTypeError(f"{name} must be a number or an array of numbers{u}; got {_describe(value)}") from None
+    if raw.dtype.kind == "c":
+        raise InputTypeError(f"{name} must be a real number{u}; got the complex value {_describe(value)}")
+    if raw.dtype.kind == "b":
+        raise InputTypeError(f"{name} must be a number{u}, not a bool; got {_describe(value)}")
+    if raw.dtype.kind in "US":
+        raise InputTypeError(f"{name} must be a number or an array of numbers{u}, not text; got {_describe(value)}")
+    if raw.dtype.kind not in "iuf":
+        try:
+            return np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            raise InputTypeError(f"{name} must be a number or an array of numbers{u}; got {_describe(value)}") from None
+    return np.asarray(raw, dtype=float)
+
+
+def validate_finite(name: str, value: Any, unit: str = "") -> np.ndarray | None:
+    """Raise unless every entry of ``value`` is a finite real number; returns the float array."""
+    v = as_array(name, value, unit)
+    if v is None:
+        return None
+    if v.size == 0:
+        raise InputError(f"{name} must not be empty{_unit_phrase(unit)}; got {_describe(value)}")
+    if not np.all(np.isfinite(v)):
+        raise InputError(f"{name} must be a finite number{_unit_phrase(unit)}; got {_describe(value)}")
+    return v
+
+
+def validate_positive(name: str, value: Any, unit: str = "") -> np.ndarray | None:
+    """Raise unless every entry of ``value`` is finite and > 0."""
+    v = validate_finite(name, value, unit)
+    if v is not None and np.any(v <= 0):
+        raise InputError(f"{name} must be positive{_unit_phrase(unit)}; got {_with_unit(float(np.min(v)), unit)}")
+    return v
+
+
+def validate_nonnegative(name: str, value: Any, unit: str = "") -> np.ndarray | None:
+    """Raise unless every entry of ``value`` is finite and >= 0."""
+    v = validate_finite(name, value, unit)
+    if v is not None and np.any(v < 0):
+        raise InputError(f"{name} must not be negative{_unit_phrase(unit)}; got {_with_unit(float(np.min(v)), unit)}")
+    return v
+
+
+def validate_material(C: Any, alpha: Any, kappa: Any = None) -> None:
+    """Check the Fung parameters: C > 0 (Pa), alpha >= 0 (dimensionless), optional kappa > 0 (Pa)."""
+    validate_positive("C (the Fung stiffness, shear modulus / 2)", C, "Pa")
+    name = "alpha (the Fung stiffening exponent)"
+    v = as_array(name, alpha, "dimensionless")
+    if v is not None:
+        if v.size == 0 or not np.all(np.isfinite(v)):
+            raise InputError(f"{name} must be finite (dimensionless); got {_describe(alpha)}")
+        if np.any(v < 0):
+            raise InputError(f"{name} must be >= 0 (dimensionless, 0 is neo-Hookean); got {np.min(v):g}")
+    if kappa is not None:
+        validate_positive("kappa (the bulk modulus)", kappa, "Pa")
+
+
+def validate_radii(inner_radius: Any, outer_radius: Any) -> None:
+    """Check a hollow sphere: 0 < inner_radius < outer_radius (both in m)."""
+    a = validate_positive("inner_radius", inner_radius, "m")
+    b = validate_positive("outer_radius", outer_radius, "m")
+    if a is not None and b is not None:
+        try:
+            thin = np.any(a >= b)
+        except ValueError:
+            raise InputError(
+                f"inner_radius (shape {a.shape}) and outer_radius (shape {b.shape}) must broadcast (in m)"
+            ) from None
+        if thin:
+            raise InputError(
+                "inner_radius must be smaller than outer_radius (the wall needs a positive "
+                f"thickness); got inner {np.max(a):g} m >= outer {np.min(b):g} m"
+            )
+
+
+def validate_branches(branches: Iterable[Sequence[float]] | None) -> tuple[tuple[Any, Any], ...]:
+    """Normalise generalized-Maxwell branches to a tuple of (beta, tau) and check them.
+
+    ``beta`` (dimensionless energy factor) must be >= 0 and ``tau`` (relaxation time, s) > 0.
+    ``None`` or an empty sequence means purely elastic.
+    """
+    if branches is None:
+        return ()
+    if isinstance(branches, (str, bytes, dict)) or not isinstance(branches, Iterable):
+        raise InputTypeError(
+            "branches must be a sequence of (beta, tau) pairs (energy factor, relaxation time in s), "
+            f"e.g. [(0.4, 200.0)]; got {_describe(branches)}"
+        )
+    out = []
+    for k, br in enumerate(branches):
+        if isinstance(br, (str, bytes)):
+            raise InputTypeError(f"branch {k}: each viscoelastic branch is a pair (beta, tau); got {br!r}")
+        try:
+            beta, tau = br
+        except (TypeError, ValueError):
+            raise InputTypeError(f"branch {k}: each viscoelastic branch is a pair (beta, tau); got {br!r}") from None
+        validate_nonnegative(f"beta (energy factor of branch {k})", beta, "dimensionless")
+        validate_positive(f"tau (relaxation time of branch {k})", tau, "s")
+        out.append((beta, tau))
+    return tuple(out)
+
+
+def validate_int(name: str, value: Any, minimum: int | None = None, maximum: int | None = None) -> int:
+    """``value`` as a Python int; raises unless it is a whole number within [minimum, maximum]."""
+    if isinstance(value, (bool, np.bool_)) or value is None or isinstance(value, (str, bytes)):
+        raise InputTypeError(f"{name} must be a whole number; got {_describe(value)}")
+    if isinstance(value, numbers.Integral):
+        n = int(value)
+    elif isinstance(value, numbers.Real) and np.isfinite(float(value)) and float(value).is_integer():
+        n = int(value)
+    else:
+        raise InputTypeError(f"{name} must be a whole number; got {_describe(value)}")
+    if minimum is not None and n < minimum:
+        raise InputError(f"{name} must be at least {minimum}; got {n}")
+    if maximum is not None and n > maximum:
+        raise InputError(f"{name} must be at most {maximum}; got {n}")
+    return n
+
+
+def validate_choice(name: str, value: Any, choices: Sequence[str]) -> str:
+    """Raise unless ``value`` is one of the strings ``choices``."""
+    if not isinstance(value, str) or value not in choices:
+        opts = ", ".join(repr(c) for c in choices)
+        raise InputError(f"{name} must be one of {opts}; got {_describe(value)}")
+    return value
+
+
+def validate_times(
+    name: str, t: Any, *, unit: str = "s", ascending: bool = False, strictly: bool = False, ndim1: bool = False
+) -> np.ndarray | None:
+    """Output times: a non-empty array of finite values >= 0 (``unit``); optionally 1-D and ascending."""
+    v = validate_finite(name, t, unit)
+    if v is None:
+        return None
+    if ndim1 and v.ndim != 1:
+        raise InputError(f"{name} must be a 1-D array of times{_unit_phrase(unit)}; got shape {v.shape}")
+    if np.any(v < 0):
+        raise InputError(f"{name} must be >= 0{_unit_phrase(unit)}; got {_with_unit(float(np.min(v)), unit)}")
+    if ascending:
+        d = np.diff(v.ravel())
+        if np.any(d < 0) or (strictly and np.any(d == 0)):
+            i = int(np.flatnonzero(d < 0)[0] if np.any(d < 0) else np.flatnonzero(d == 0)[0])
+            order = "strictly increasing" if strictly else "in ascending order"
+            raise InputError(
+                f"{name} must be {order}{_unit_phrase(unit)}; entry {i + 1} ({v.ravel()[i + 1]:g}) follows "
+                f"{v.ravel()[i]:g}"
+            )
+    return v
