@@ -444,9 +444,11 @@ def _blastula_one(inner_radius, outer_radius, C, alpha, pressure):
     from tissuemech.reduced import blastula as red
 
     geo = dict(inner_radius=inner_radius, outer_radius=outer_radius)
-    la, _ = red.inner_stretch_solve(pressure, **geo, C=C, alpha=alpha)
-    lb = red.outer_stretch(jnp.where(jnp.isnan(la), 1.0, la), **geo)
     lim = red.limit_point(**geo, C=C, alpha=alpha)
+    # the state reached by inflating from rest: on the first rising branch, below the limit stretch
+    # (past the limit pressure the shell bursts, even where a Fung shell re-stiffens far beyond it)
+    la, _ = red.inner_stretch_solve(pressure, **geo, C=C, alpha=alpha, max_inner_stretch=lim.inner_stretch)
+    lb = red.outer_stretch(jnp.where(jnp.isnan(la), 1.0, la), **geo)
     return dict(inner_stretch=la, outer_stretch=jnp.where(jnp.isnan(la), jnp.nan, lb), p_limit=lim.pressure)
 
 

@@ -497,31 +497,34 @@ _CHUNK = 8192  # large inputs are solved chunk by chunk: each chunk stops when i
 
 
 @jax.jit
-def _solve_stretch(p_over_C, k, omk, alpha):
-    """Inverse of p/C(lambda_a) on the rising branch by the one-panel rule.
+def _solve_stretch(p_over_C, k, omk, alpha, max_stretch=INVERSE_STRETCH_RANGE[1]):
+    """Inverse of p/C(lambda_a) on the rising branch by the one-panel rule, searching
+    lambda_a <= ``max_stretch`` (per lane; e.g. the limit stretch, so that the far, re-stiffening
+    branch of a Fung shell is never returned).
 
     Returns (lambda_a, converged, rule_ok): ``rule_ok`` is False where the 20-point rule cannot be
     trusted to 1e-10 at the solution (quadrature indicator above PANEL_INDICATOR)."""
-    pt, k, omk, alpha = jnp.broadcast_arrays(p_over_C, k, omk, alpha)
-    pt, k, omk, alpha = (jax.lax.stop_gradient(v) for v in (pt, k, omk, alpha))
+    pt, k, omk, alpha, mx = jnp.broadcast_arrays(p_over_C, k, omk, alpha, jnp.asarray(max_stretch, jnp.float64))
+    pt, k, omk, alpha, mx = (jax.lax.stop_gradient(v) for v in (pt, k, omk, alpha, mx))
     if pt.size <= 2 * _CHUNK:
-        return _solve_block(pt, k, omk, alpha)
+        return _solve_block(pt, k, omk, alpha, mx)
     n = pt.size
     m = -(-n // _CHUNK)
     pad = m * _CHUNK - n
     # padding lanes: p = 0 in a valid shell (converge at once)
-    fills = (0.0, 0.5, 0.5, 0.0)
+    fills = (0.0, 0.5, 0.5, 0.0, INVERSE_STRETCH_RANGE[1])
     blocks = tuple(
         jnp.concatenate([v.ravel(), jnp.full((pad,), f, dtype=v.dtype)]).reshape(m, _CHUNK)
-        for v, f in zip((pt, k, omk, alpha), fills)
+        for v, f in zip((pt, k, omk, alpha, mx), fills)
     )
     outs = jax.lax.map(lambda b: _solve_block(*b), blocks)
     return tuple(o.ravel()[:n].reshape(pt.shape) for o in outs)
 
 
-def _solve_block(pt, k, omk, alpha):
+def _solve_block(pt, k, omk, alpha, max_stretch):
     """Two-stage safeguarded Newton on one block of lanes (arrays of equal shape)."""
-    xmin, xmax = np.log(INVERSE_STRETCH_RANGE[0]), np.log(INVERSE_STRETCH_RANGE[1])
+    xmin = np.log(INVERSE_STRETCH_RANGE[0])
+    xmax = jnp.log(jnp.clip(max_stretch, 1.0, INVERSE_STRETCH_RANGE[1]))
     lo = jnp.where(pt >= 0.0, 0.0, xmin)
     hi = jnp.where(pt >= 0.0, xmax, 0.0)
     # small-strain guess p/C ~ 8 (1 - k)(lambda_a - 1)
@@ -540,7 +543,13 @@ def _solve_block(pt, k, omk, alpha):
 
 
 def inner_stretch_solve(
-    pressure: Array, *, inner_radius: Array, outer_radius: Array, C: Array, alpha: Array
+    pressure: Array,
+    *,
+    inner_radius: Array,
+    outer_radius: Array,
+    C: Array,
+    alpha: Array,
+    max_inner_stretch: Array | None = None,
 ) -> tuple[Array, Array]:
     r"""Inverse of :func:`pressure` for jit/vmap use: ``(lambda_a, converged)``.
 
@@ -553,28 +562,36 @@ def inner_stretch_solve(
     ``lambda_a`` is NaN there. ``pressure = 0`` gives exactly 1. Negative pressures deflate
     (lambda_a < 1). No input validation (use :func:`inner_stretch` for checked eager calls).
     Derivatives (jax.grad) follow the implicit function theorem: d lambda_a/dp = 1/(dp/dlambda_a).
+
+    ``max_inner_stretch`` (optional, per entry) bounds the search: pass the limit stretch
+    (``limit_point(...).inner_stretch``) to get the branch reached by inflating from rest. A Fung shell
+    with a limit point re-stiffens beyond it (a second rising branch at large stretch); without the
+    bound that far branch may be returned for pressures above the limit (where the shell has burst).
     """
     k, omk = _geometry(inner_radius, outer_radius)
     C = jnp.asarray(C, dtype=jnp.float64)
     alpha = jnp.asarray(alpha, dtype=jnp.float64)
     pt = jnp.asarray(pressure, dtype=jnp.float64) / C
-    la = _inverse(pt, k, omk, alpha)
+    mx = INVERSE_STRETCH_RANGE[1] if max_inner_stretch is None else max_inner_stretch
+    mx = jnp.where(jnp.isnan(jnp.asarray(mx, jnp.float64)), INVERSE_STRETCH_RANGE[1], mx)
+    la = _inverse(pt, k, omk, alpha, mx)
     return la, ~jnp.isnan(la)
 
 
 @jax.custom_jvp
-def _inverse(pt, k, omk, alpha):
-    """lambda_a(p/C; k, alpha) on the rising branch, NaN where there is none."""
-    la, conv, rule_ok = _solve_stretch(pt, k, omk, alpha)
+def _inverse(pt, k, omk, alpha, max_stretch):
+    """lambda_a(p/C; k, alpha) on the rising branch up to ``max_stretch``, NaN where there is none."""
+    la, conv, rule_ok = _solve_stretch(pt, k, omk, alpha, max_stretch)
     return jnp.where(conv & rule_ok, la, jnp.nan)
 
 
 @_inverse.defjvp
 def _inverse_jvp(primals, tangents):
-    """Implicit function theorem: d lambda_a = (d(p/C) - dP/d(k, 1-k, alpha) . d(k, 1-k, alpha)) / dP/dlambda_a."""
-    pt, k, omk, alpha = primals
-    dpt, dk, domk, dalpha = tangents
-    la = _inverse(pt, k, omk, alpha)
+    """Implicit function theorem: d lambda_a = (d(p/C) - dP/d(k, 1-k, alpha) . d(k, 1-k, alpha)) / dP/dlambda_a.
+    (The search bound ``max_stretch`` does not move the solution: no tangent.)"""
+    pt, k, omk, alpha, mx = primals
+    dpt, dk, domk, dalpha, _ = tangents
+    la = _inverse(pt, k, omk, alpha, mx)
     f = lambda k_, o_, a_: _p_over_C_quad(*jnp.broadcast_arrays(la, k_, o_, a_))
     _, dP = jax.jvp(f, (k, omk, alpha), (dk, domk, dalpha))
     return la, (dpt - dP) / _dp_over_C(la, k, alpha)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 from test_compare_fit import fake_nominal_stress
 
@@ -185,3 +186,12 @@ def test_user_design_points():
         scan.blastula(points={"E": [1.0]})
     with pytest.raises(ValueError, match="single number"):
         scan.spheroid(points={"C": [1.0]}, alpha=(0.0, 0.1), model=fake_nominal_stress)
+
+
+def test_scan_flags_bursts_above_the_limit_pressure():
+    from tissuemech.compare import scan
+
+    pts = pd.DataFrame(dict(inner_radius=50e-6, outer_radius=52.84e-6, C=200.0, alpha=0.0357, pressure=[10.0, 962.8]))
+    t = scan.blastula(points=pts)
+    p_lim = t["p_limit [Pa]"].to_numpy()
+    assert list(t["bursts [-]"]) == [False, True] and np.all(p_lim > 10.0) and np.all(p_lim < 962.8)

@@ -292,3 +292,19 @@ def test_other_bad_inputs_raise():
         bl.inner_stretch(1e30, **GEO, C=C, alpha=0.1)
     with pytest.raises(ValueError, match="at least 2"):
         bl.profiles(1.5, **GEO, C=C, alpha=0.1, n=1)
+
+
+def test_bounded_inverse_stays_on_the_first_branch():
+    """A Fung shell with a limit point re-stiffens far beyond it: past the limit pressure the unbounded
+    inverse may return that far branch (lambda_a ~ 9); bounded by the limit stretch it says 'bursts'
+    (NaN), and below the limit both agree with the forward map."""
+    geo = dict(inner_radius=50e-6, outer_radius=52.84e-6, C=200.0, alpha=0.0357)
+    lim = bl.limit_point(**geo)
+    far, ok = bl.inner_stretch_solve(962.8, **geo)
+    assert bool(ok) and float(far) > 3 * float(lim.inner_stretch)  # the far, re-stiffening branch
+    la, ok = bl.inner_stretch_solve(962.8, **geo, max_inner_stretch=lim.inner_stretch)
+    assert not bool(ok) and np.isnan(float(la))
+    p = np.linspace(0.05, 0.99, 25) * float(lim.pressure)
+    la, ok = bl.inner_stretch_solve(p, **geo, max_inner_stretch=lim.inner_stretch)
+    assert np.all(np.asarray(ok)) and np.all(np.asarray(la) <= float(lim.inner_stretch))
+    np.testing.assert_allclose(np.asarray(bl.pressure(np.asarray(la), **geo)), p, rtol=1e-10)
