@@ -220,8 +220,9 @@ def _sym_plan(K):
         ):
             data = K.data
         elif K.nnz < plan.keys.size:
-            pos = np.searchsorted(plan.keys, _keys(K))
-            if pos[-1:].max(initial=0) >= plan.keys.size or not np.array_equal(plan.keys[pos], _keys(K)):
+            kk = _keys(K)
+            pos = np.searchsorted(plan.keys, kk)
+            if pos[-1:].max(initial=0) >= plan.keys.size or not np.array_equal(plan.keys[pos], kk):
                 continue
             data = np.zeros(plan.keys.size)
             data[pos] = K.data
