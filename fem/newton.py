@@ -33,6 +33,7 @@ so the answers do not depend on the backend beyond round-off.
 from __future__ import annotations
 
 import os
+import threading
 from collections.abc import Callable, Sequence
 from typing import NamedTuple
 
@@ -133,7 +134,21 @@ def _gather_plan(K, rows: np.ndarray, cols: np.ndarray, fmt: str = "csc", upper:
     return M.data.astype(np.int64) - 1, M.indices.copy(), M.indptr.copy()
 
 
-_SUB = _Cache()
+_TLS = threading.local()  # plans are per thread: a qdldl plan holds mutable factors
+
+
+def _sub_cache() -> _Cache:
+    c = getattr(_TLS, "sub", None)
+    if c is None:
+        c = _TLS.sub = _Cache()
+    return c
+
+
+def _sym_cache() -> list:
+    c = getattr(_TLS, "sym", None)
+    if c is None:
+        c = _TLS.sym = []
+    return c
 
 
 def _submatrix(K, free: np.ndarray | None):
@@ -144,7 +159,7 @@ def _submatrix(K, free: np.ndarray | None):
     n = free.size
     if n == K.shape[0] and n == K.shape[1] and np.array_equal(free, np.arange(n)):
         return K
-    plan = _SUB.get(K, free.tobytes(), lambda: _gather_plan(K, free, free, "csr"))
+    plan = _sub_cache().get(K, free.tobytes(), lambda: _gather_plan(K, free, free, "csr"))
     src, ind, ptr = plan
     return sp.csr_matrix((K.data[src], ind, ptr), shape=(n, n))
 
@@ -203,13 +218,11 @@ def _keys(K) -> np.ndarray:
     return major.astype(np.int64) * K.shape[0] + K.indices
 
 
-_SYM: list = []  # plans, most recent first
-
-
 def _sym_plan(K):
     """(plan, data): the plan of K's pattern and K's values in that pattern's storage order. A pattern that
     lost entries (exact zeros dropped by a sparse sum, e.g. K_int - p K_pressure) reuses the plan of the
     pattern that contains it (its values embedded, the missing ones zero) instead of a new ordering."""
+    _SYM = _sym_cache()  # plans of this thread, most recent first
     for i, plan in enumerate(_SYM):
         if plan.n != K.shape[0] or plan.format != K.format:
             continue
