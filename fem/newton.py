@@ -23,7 +23,7 @@ computes its fill-reducing ordering once per pattern and then factors the pre-pe
 again, straight into CSC, no format conversion). Backends of :func:`symmetric_solve` (chosen by measurement,
 ``python -m tissuemech.compare.bench fem-perf``): ``"superlu"`` (scipy, the default: SuperLU in symmetric
 mode, MMD ordering of K + K^T reused) and ``"qdldl"`` (optional, ``pip install qdldl``: sparse LDL^T of the
-quasi-definite saddle-point matrix with AMD, numeric refactorisation on the stored symbolic analysis; 1.3-2.5x
+quasi-definite saddle-point matrix with AMD, numeric refactorisation on the stored symbolic analysis; 2-5x
 faster factorisations here). ``set_backend("auto" | "superlu" | "qdldl")`` or the environment variable
 ``TISSUEMECH_SPARSE`` selects it; "auto" (default) takes qdldl when it imports. Every backend ends with
 iterative refinement against the true K (|b - K x| <= 1e-13 |b|) and falls back to pivoted SuperLU (COLAMD),
