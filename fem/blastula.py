@@ -43,7 +43,7 @@ from tissuemech.fem.continuation import LimitPointError, arc_length, load_contro
 from tissuemech.fem.forms import Assembler, Material
 from tissuemech.fem.kinematics import invariants
 from tissuemech.fem.mesh import AxiMesh, shell_section
-from tissuemech.fem.newton import NewtonError, newton, sparse_solve
+from tissuemech.fem.newton import NewtonError, newton, sparse_solve, symmetric_solve
 from tissuemech.fem.output import BlastulaField, BlastulaResult
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
 from tissuemech.reduced.material import validate_branches, validate_material, validate_positive, validate_radii
@@ -121,6 +121,7 @@ class _Problem:
             atol=self.floor * (1 + lam),
             admissible=self.admissible,
             load=load,
+            solver=symmetric_solve,  # symmetric ordering (issue 14: 2x fewer fill-ins than COLAMD, same answer)
         )
 
     def admissible(self, uf):

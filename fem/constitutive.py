@@ -15,17 +15,32 @@ Units: whatever C is given in (the engine passes C = 1, i.e. stresses scaled by 
 
 API: ``iso_stress(f, C, alpha) -> (P, A)``, ``iso_energy(f, C, alpha)``, ``iso_second_piola(f, C, alpha)``
 (S_iso, what the viscoelastic recursion needs), ``vol_q(f, q)``, ``vol_penalty(f, kappa)``,
-``cauchy(f, P) -> 3x3 sigma`` and ``von_mises(sigma)``.
+``cauchy(f, P) -> 3x3 sigma`` and ``von_mises(sigma)``; ``total_stress(f, C, alpha, ...)`` the fused kernel
+the assembly uses (iso + volumetric + fixed extra stress in one pass, weights folded in, few temporaries).
+
+Fused form of the tangent (what ``total_stress`` evaluates): with gJ = dJ/df and H = d2J/df2 (linear in f),
+A_iso = c_ff f (x) f + c_fJ (f (x) gJ + gJ (x) f) + c_JJ gJ (x) gJ + c_I Id - 2/3 W' J^(-5/3) I1 H, where
+c_ff = 4 W'' J^(-4/3), c_fJ = -4/3 J^(-5/3) (W'' J^(-2/3) I1 + W'), c_JJ = 4/9 W'' J^(-10/3) I1^2
++ 10/9 W' J^(-8/3) I1, c_I = 2 W' J^(-2/3) (the expansion of the formulas above with dI1 = 2 f).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from tissuemech.fem.kinematics import d2J, dI1, dJ, full_F, invariants, second_from_first
+from tissuemech.fem.kinematics import d2J, dI1, dJ, first_from_second, full_F, invariants, second_from_first
 from tissuemech.reduced.material import d2W_dI1, dU_dJ, dW_dI1, fung_energy
 
-__all__ = ["iso_stress", "iso_energy", "iso_second_piola", "vol_q", "vol_penalty", "cauchy", "von_mises"]
+__all__ = [
+    "total_stress",
+    "iso_stress",
+    "iso_energy",
+    "iso_second_piola",
+    "vol_q",
+    "vol_penalty",
+    "cauchy",
+    "von_mises",
+]
 
 
 def _ibar_derivs(f):
@@ -78,6 +93,85 @@ def vol_penalty(f: np.ndarray, kappa: float):
     gJ = dJ(f)
     up = dU_dJ(J, kappa)
     return up[..., None] * gJ, kappa * gJ[..., :, None] * gJ[..., None, :] + up[..., None, None] * d2J(f)
+
+
+# flat (row-major) positions in a 5 x 5 block of the entries of H = d2J/df2 and of T = d(F S)/dF
+_H_POS = np.array([3, 4, 7, 9, 11, 14, 15, 19, 20, 21, 22, 23])
+_T_POS = np.array([0, 1, 5, 6, 12, 13, 17, 18, 24])
+_DIAG = np.arange(0, 25, 6)
+
+
+def total_stress(
+    f: np.ndarray,
+    C: float,
+    alpha: float,
+    *,
+    q: np.ndarray | None = None,
+    kappa: float | None = None,
+    iso_scale: float = 1.0,
+    extra_S: np.ndarray | None = None,
+    weight: np.ndarray | None = None,
+    tangent: bool = True,
+):
+    """Weighted total first Piola stress and tangent in one pass (the assembly kernel).
+
+    Args:
+        f: 5-comp deformation gradients (..., 5).
+        C, alpha: Fung parameters (C in the caller's stress unit; alpha dimensionless).
+        q: mixed volumetric field (..., ) (P_vol = q dJ); or None with ``kappa`` for the penalty U(J).
+        kappa: bulk modulus (stress unit) of the penalty form, used only when ``q`` is None.
+        iso_scale: factor on the isochoric part (viscoelastic algorithmic stress).
+        extra_S: fixed 2nd Piola stress (..., 5) added as P = F S (its tangent d(F S)/dF at fixed S).
+        weight: quadrature weights (...,) multiplied into P and A (None: 1).
+        tangent: False skips A.
+
+    Returns:
+        (P, A, J): w P (..., 5), w A (..., 5, 5) or None, J = det F (...,).
+    Equals ``iso_scale * iso_stress + vol_q`` (or ``vol_penalty``) ``+ first_from_second`` to round-off.
+    """
+    a, b, c, d, e = f[..., 0], f[..., 1], f[..., 2], f[..., 3], f[..., 4]
+    det2 = a * d - b * c
+    J = e * det2
+    I1 = np.einsum("...i,...i->...", f, f)
+    gJ = np.stack([e * d, -e * c, -e * b, e * a, det2], axis=-1)
+    Jm23 = J ** (-2.0 / 3.0)
+    Jm53 = Jm23 / J
+    Ib = Jm23 * I1
+    w1 = dW_dI1(Ib, C, alpha)
+    sw = iso_scale if weight is None else iso_scale * weight
+    s1 = sw * w1
+    # P = s W' dIbar + P_vol + F S0, dIbar = 2 J^(-2/3) f - 2/3 J^(-5/3) I1 gJ
+    if q is not None:
+        pv = q
+    elif kappa is not None:
+        pv = dU_dJ(J, kappa)
+    else:
+        pv = 0.0
+    pJ = -(2.0 / 3.0) * s1 * Jm53 * I1 + (pv if weight is None else pv * weight)
+    P = (2.0 * s1 * Jm23)[..., None] * f + pJ[..., None] * gJ
+    S0 = None
+    if extra_S is not None:
+        S0 = extra_S if weight is None else extra_S * weight[..., None]
+        P = P + first_from_second(f, S0)
+    if not tangent:
+        return P, None, J
+    s2 = sw * d2W_dI1(Ib, C, alpha)
+    c_ff = 4.0 * s2 * Jm23 * Jm23
+    c_fJ = -(4.0 / 3.0) * Jm53 * (s2 * Jm23 * I1 + s1)
+    c_JJ = (4.0 / 9.0) * s2 * Jm53 * Jm53 * I1 * I1 + (10.0 / 9.0) * s1 * Jm53 / J * I1
+    if q is None and kappa is not None:
+        c_JJ = c_JJ + (kappa if weight is None else kappa * weight)
+    W0 = c_ff[..., None] * f + c_fJ[..., None] * gJ
+    W1 = c_fJ[..., None] * f + c_JJ[..., None] * gJ
+    A = f[..., :, None] * W0[..., None, :]
+    A += gJ[..., :, None] * W1[..., None, :]
+    A2 = A.reshape(A.shape[:-2] + (25,))
+    A2[..., _DIAG] += (2.0 * s1 * Jm23)[..., None]
+    cH = pJ[..., None]  # H multiplies -2/3 s W' J^(-5/3) I1 + q (the same factor as gJ in P)
+    A2[..., _H_POS] += cH * np.stack([e, d, -e, -c, -e, -b, e, a, d, -c, -b, a], axis=-1)
+    if S0 is not None:
+        A2[..., _T_POS] += S0[..., [0, 2, 1, 3, 0, 2, 1, 3, 4]]
+    return P, A, J
 
 
 def cauchy(f: np.ndarray, P: np.ndarray) -> np.ndarray:

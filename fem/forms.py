@@ -61,17 +61,19 @@ class _Pattern:
     """COO -> CSR map built once: K.data = bincount(perm, values) is the whole global assembly."""
 
     def __init__(self, rows: np.ndarray, cols: np.ndarray, n: int):
-        coo = sp.coo_matrix((np.arange(rows.size, dtype=float) + 1, (rows.ravel(), cols.ravel())), shape=(n, n))
         key = rows.ravel().astype(np.int64) * n + cols.ravel()
         uniq, self.inv = np.unique(key, return_inverse=True)
         self.indptr = np.searchsorted(uniq // n, np.arange(n + 1)).astype(np.int32)
         self.indices = (uniq % n).astype(np.int32)
         self.n, self.nnz = n, uniq.size
-        del coo
+        self._tpl = sp.csr_matrix((np.zeros(self.nnz), self.indices, self.indptr), shape=(n, n))
+        self._tpl.has_sorted_indices = True
+        self.indices, self.indptr = self._tpl.indices, self._tpl.indptr
 
     def matrix(self, values: np.ndarray) -> sp.csr_matrix:
+        """CSR matrix with the summed values on the precomputed (canonical) pattern."""
         data = np.bincount(self.inv, weights=values.ravel(), minlength=self.nnz)
-        return sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
+        return self._tpl._with_data(data, copy=False)
 
 
 class Assembler:
@@ -108,6 +110,10 @@ class Assembler:
         rows = np.repeat(alld[:, :, None], nd, axis=2)
         cols = np.repeat(alld[:, None, :], nd, axis=1)
         self._pattern = _Pattern(rows, cols, self.ndof)
+        self._alld_flat = np.ascontiguousarray(alld.ravel())
+        self._B2 = np.ascontiguousarray(self.B.reshape(ne, -1, self.B.shape[-1]))  # (ne, nq * 5, nd)
+        if formulation == "mixed":
+            self._psiT = np.ascontiguousarray(self.psi.transpose(0, 2, 1))
         self._edge_cache: dict = {}
 
     # ---- kinematics at quadrature points ------------------------------------------------
@@ -143,7 +149,62 @@ class Assembler:
         return f, P, A, q
 
     def internal(self, u: np.ndarray, mat: Material, extra_S=None, iso_scale: float = 1.0, tangent: bool = True):
-        """Internal residual (ndof,) and tangent (CSR) of the elastic (+ extra) stress at x = (u, q)."""
+        """Internal residual (ndof,) and tangent (CSR) of the elastic (+ extra) stress at x = (u, q).
+
+        Args:
+            u: the full unknown vector x = (u, q) (scaled).
+            mat: scaled material; extra_S: fixed 2nd Piola stress (n_el, n_qp, 5) or None;
+            iso_scale: factor on the isochoric stress; tangent: False returns (r, None).
+        Returns:
+            (r, K): r (ndof,), K CSR (ndof, ndof) with the same canonical pattern at every call (the sparsity
+            pattern is built once; only the values are assembled).
+        One fused constitutive pass (``constitutive.total_stress``), weights folded in, element blocks
+        written in place, global values by one ``bincount`` over a precomputed COO -> CSR map.
+        """
+        ne, nq, _, nd = self.B.shape
+        ue = u[self.edofs]
+        f = np.matmul(self._B2, ue[:, :, None]).reshape(ne, nq, 5)
+        f += IDENTITY5
+        mixed = self.formulation == "mixed"
+        q = np.matmul(self.psi, u[self.qdofs][:, :, None])[..., 0] if mixed else None
+        P, A, J = cm.total_stress(
+            f,
+            mat.C,
+            mat.alpha,
+            q=q,
+            kappa=None if mixed else mat.kappa,
+            iso_scale=iso_scale,
+            extra_S=extra_S,
+            weight=self.w,
+            tangent=tangent,
+        )
+        re = np.matmul(P.reshape(ne, 1, nq * 5), self._B2)[:, 0]
+        if mixed:
+            rq = np.matmul(self._psiT, ((J - 1.0) * self.w)[:, :, None])[..., 0]
+            rq -= np.matmul(self.M, u[self.qdofs][:, :, None])[..., 0] / mat.kappa
+            re = np.concatenate([re, rq], axis=1)
+        r = np.bincount(self._alld_flat, weights=re.ravel(), minlength=self.ndof)
+        if not tangent:
+            return r, None
+        AB = np.matmul(A, self.B).reshape(ne, nq * 5, nd)
+        if not mixed:
+            return r, self._pattern.matrix(np.matmul(self.Bt, AB))
+        Ke = np.empty((ne, nd + 3, nd + 3))
+        np.matmul(self.Bt, AB, out=Ke[:, :nd, :nd])
+        a_, b_, c_, d_, e_ = (f[..., i] for i in range(5))
+        gJw = np.stack([e_ * d_, -e_ * c_, -e_ * b_, e_ * a_, a_ * d_ - b_ * c_], axis=-1) * self.w[..., None]
+        dJB = np.matmul(gJw[:, :, None, :], self.B)[:, :, 0, :]  # (ne, nq, nd)
+        G = np.matmul(self._psiT, dJB)
+        Ke[:, nd:, :nd] = G
+        Ke[:, :nd, nd:] = G.transpose(0, 2, 1)
+        np.multiply(self.M, -1.0 / mat.kappa, out=Ke[:, nd:, nd:])
+        return r, self._pattern.matrix(Ke)
+
+    def _internal_reference(
+        self, u: np.ndarray, mat: Material, extra_S=None, iso_scale: float = 1.0, tangent: bool = True
+    ):
+        """The straightforward assembly (``stress`` + np.block + a fresh COO->CSR matrix): the reference that
+        :meth:`internal` must equal to round-off (tests); slower."""
         f, P, A, _ = self.stress(u, mat, extra_S, iso_scale)
         ne, nq, _, nd = self.B.shape
         re = np.matmul((P * self.w[..., None]).reshape(ne, 1, nq * 5), self.B.reshape(ne, nq * 5, nd))[:, 0]
@@ -163,7 +224,9 @@ class Assembler:
             dJB = np.matmul((dJ(f) * self.w[..., None])[..., None, :], self.B)[..., 0, :]  # (ne, nq, nd)
             G = np.matmul(self.psi.transpose(0, 2, 1), dJB)
             Ke = np.block([[Ke, np.swapaxes(G, 1, 2)], [G, -self.M / mat.kappa]])
-        return r, self._pattern.matrix(Ke)
+        rows = np.repeat(self.alldofs[:, :, None], Ke.shape[1], axis=2)
+        cols = np.repeat(self.alldofs[:, None, :], Ke.shape[1], axis=1)
+        return r, sp.csr_matrix((Ke.ravel(), (rows.ravel(), cols.ravel())), shape=(self.ndof, self.ndof))
 
     # ---- boundary curves --------------------------------------------------------------
     def _edge(self, edges: np.ndarray, nq: int = 4):
@@ -172,12 +235,15 @@ class Assembler:
             xi, wq = np.polynomial.legendre.leggauss(nq)
             Nl, dNl = line_shape(edges.shape[1], xi)
             dofs = np.stack([2 * edges, 2 * edges + 1], -1)  # (ned, nn, 2)
-            self._edge_cache[key] = (Nl, dNl, wq, dofs)
+            d = dofs.reshape(edges.shape[0], -1)
+            rows = np.repeat(d[:, :, None], d.shape[1], 2)
+            cols = np.repeat(d[:, None, :], d.shape[1], 1)
+            self._edge_cache[key] = (Nl, dNl, wq, dofs, _Pattern(rows, cols, self.ndof))
         return self._edge_cache[key]
 
     def follower_pressure(self, u: np.ndarray, p: float, edges: np.ndarray, tangent: bool = True):
         """Equivalent nodal force of pressure p on the deformed curve and d(force)/du (CSR)."""
-        Nl, dNl, wq, dofs = self._edge(edges)
+        Nl, dNl, wq, dofs, pattern = self._edge(edges)
         X = self.mesh.X
         x = X[:, edges] + np.stack([u[dofs[..., 0]], u[dofs[..., 1]]])  # (2, ned, nn)
         r = np.einsum("aq,ea->eq", Nl, x[0])
@@ -194,17 +260,11 @@ class Assembler:
         K[:, :, 0, :, 0] = np.einsum("aq,bq,eq->eab", Nl, Nl, c * zp)
         K[:, :, 0, :, 1] = np.einsum("aq,bq,eq->eab", Nl, dNl, c * r)
         K[:, :, 1, :, 0] = -np.einsum("aq,bq,eq->eab", Nl, Nl, c * rp) - np.einsum("aq,bq,eq->eab", Nl, dNl, c * r)
-        d = dofs.reshape(ned, -1)
-        rows = np.repeat(d[:, :, None], 2 * nn, 2)
-        cols = np.repeat(d[:, None, :], 2 * nn, 1)
-        Kg = sp.csr_matrix(
-            (K.reshape(ned, 2 * nn, 2 * nn).ravel(), (rows.ravel(), cols.ravel())), shape=(self.ndof, self.ndof)
-        )
-        return F, Kg
+        return F, pattern.matrix(K)
 
     def surface_mean_stretch(self, u: np.ndarray, edges: np.ndarray) -> float:
         """Mean of |x|/|X| over a reference surface (area weights 2 pi R ds): a spherical stretch."""
-        Nl, dNl, wq, dofs = self._edge(edges)
+        Nl, dNl, wq, dofs, _ = self._edge(edges)
         X = self.mesh.X[:, edges]
         x = X + np.stack([u[dofs[..., 0]], u[dofs[..., 1]]])
         Xq, xq = np.einsum("aq,iea->ieq", Nl, X), np.einsum("aq,iea->ieq", Nl, x)

@@ -16,10 +16,24 @@ Sparse direct solves (SuperLU via ``scipy.sparse.linalg.splu``); ``solver(K, b) 
 (e.g. :func:`symmetric_solve`, fast for the symmetric saddle-point systems of the mixed u-p form). On failure ``NewtonError`` carries
 ``load`` (the load level being solved), ``residuals`` (history) and a ``hint``; no NaN is returned.
 Returns ``NewtonResult(x, iterations, residuals)``.
+
+Close to the machine (issue 14): the reduction ``K[free][:, free]`` is one gather ``K.data[map]`` with the
+map built once per (sparsity pattern, free set) (``free=None``: no copy at all); :func:`symmetric_solve`
+computes its fill-reducing ordering once per pattern and then factors the pre-permuted matrix (one gather
+again, straight into CSC, no format conversion). Backends of :func:`symmetric_solve` (chosen by measurement,
+``python -m tissuemech.compare.bench fem-perf``): ``"superlu"`` (scipy, the default: SuperLU in symmetric
+mode, MMD ordering of K + K^T reused) and ``"qdldl"`` (optional, ``pip install qdldl``: sparse LDL^T of the
+quasi-definite saddle-point matrix with AMD, numeric refactorisation on the stored symbolic analysis; 2-5x
+faster factorisations here). ``set_backend("auto" | "superlu" | "qdldl")`` or the environment variable
+``TISSUEMECH_SPARSE`` selects it; "auto" (default) takes qdldl when it imports. Every backend ends with
+iterative refinement against the true K (|b - K x| <= 1e-13 |b|) and falls back to pivoted SuperLU (COLAMD),
+so the answers do not depend on the backend beyond round-off.
 """
 
 from __future__ import annotations
 
+import os
+import threading
 from collections.abc import Callable, Sequence
 from typing import NamedTuple
 
@@ -27,7 +41,127 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-__all__ = ["NewtonError", "NewtonResult", "newton", "sparse_solve", "symmetric_solve"]
+__all__ = [
+    "NewtonError",
+    "NewtonResult",
+    "newton",
+    "sparse_solve",
+    "symmetric_solve",
+    "set_backend",
+    "backend",
+    "available_backends",
+]
+
+try:  # optional sparse LDL^T (wheel on the package index; no compiler needed)
+    import qdldl as _qdldl
+except ImportError:  # pragma: no cover - depends on the environment
+    _qdldl = None
+
+_BACKEND = ["auto"]
+
+
+def available_backends() -> list[str]:
+    """The symmetric-solve backends that import here ("superlu" always)."""
+    return ["superlu"] + (["qdldl"] if _qdldl is not None else [])
+
+
+def set_backend(name: str) -> None:
+    """Select the backend of :func:`symmetric_solve`: "auto", "superlu" or "qdldl" (raises ValueError)."""
+    if name not in ("auto", "superlu", "qdldl"):
+        raise ValueError(f"sparse backend must be 'auto', 'superlu' or 'qdldl', got {name!r}")
+    if name == "qdldl" and _qdldl is None:
+        raise ValueError("sparse backend 'qdldl' is not installed (pip install qdldl)")
+    _BACKEND[0] = name
+
+
+def backend() -> str:
+    """The backend :func:`symmetric_solve` uses now ("superlu" or "qdldl")."""
+    name = _BACKEND[0]
+    if name == "auto":
+        env = os.environ.get("TISSUEMECH_SPARSE", "auto")
+        name = env if env in ("superlu", "qdldl") else "auto"
+    if name == "qdldl" and _qdldl is None:
+        name = "superlu"
+    if name == "auto":
+        name = "qdldl" if _qdldl is not None else "superlu"
+    return name
+
+
+class _Cache:
+    """Small LRU of per-pattern plans keyed by (format, shape, nnz, extra) and checked against the
+    stored ``indptr``/``indices`` (identity first, then equality: O(nnz), far below a factorisation)."""
+
+    def __init__(self, size: int = 8):
+        self.size, self.items = size, []
+
+    def get(self, K, extra, build):
+        key = (K.format, K.shape, K.nnz, extra)
+        for i, (k, ptr, ind, plan) in enumerate(self.items):
+            if k == key and (
+                (ptr is K.indptr and ind is K.indices)
+                or (np.array_equal(ptr, K.indptr) and np.array_equal(ind, K.indices))
+            ):
+                if i:
+                    self.items.insert(0, self.items.pop(i))
+                return plan
+        plan = build()
+        self.items.insert(0, (key, K.indptr, K.indices, plan))
+        del self.items[self.size :]
+        return plan
+
+
+def _canonical(K) -> sp.spmatrix:
+    """K as CSR or CSC without duplicate entries, sorted indices (no copy when it already is)."""
+    if K.format not in ("csr", "csc"):
+        K = sp.csr_matrix(K)
+    if not K.has_canonical_format:
+        K = K.copy()
+        K.sum_duplicates()
+    return K
+
+
+def _gather_plan(K, rows: np.ndarray, cols: np.ndarray, fmt: str = "csc", upper: bool = False):
+    """(src, indices, indptr): M = K[rows][:, cols] in format ``fmt`` (triu if ``upper``) is
+    ``M.data = K.data[src]`` with the returned pattern."""
+    tag = K.copy()
+    tag.data = np.arange(1, K.nnz + 1, dtype=float)
+    M = tag[rows][:, cols]
+    if upper:
+        M = sp.triu(M)
+    M = M.asformat(fmt)
+    M.sum_duplicates()
+    M.sort_indices()
+    return M.data.astype(np.int64) - 1, M.indices.copy(), M.indptr.copy()
+
+
+_TLS = threading.local()  # plans are per thread: a qdldl plan holds mutable factors
+
+
+def _sub_cache() -> _Cache:
+    c = getattr(_TLS, "sub", None)
+    if c is None:
+        c = _TLS.sub = _Cache()
+    return c
+
+
+def _sym_cache() -> list:
+    c = getattr(_TLS, "sym", None)
+    if c is None:
+        c = _TLS.sym = []
+    return c
+
+
+def _submatrix(K, free: np.ndarray | None):
+    """K[free][:, free] (CSR) by one cached gather; K itself when ``free`` is None."""
+    if free is None:
+        return K
+    K = _canonical(K)
+    n = free.size
+    if n == K.shape[0] and n == K.shape[1] and np.array_equal(free, np.arange(n)):
+        return K
+    plan = _sub_cache().get(K, free.tobytes(), lambda: _gather_plan(K, free, free, "csr"))
+    src, ind, ptr = plan
+    return sp.csr_matrix((K.data[src], ind, ptr), shape=(n, n))
 
 
 class NewtonError(RuntimeError):
@@ -51,40 +185,162 @@ class NewtonResult(NamedTuple):
 def sparse_solve(K: sp.spmatrix, b: np.ndarray) -> np.ndarray:
     """Direct sparse solve; raises np.linalg.LinAlgError on a singular matrix."""
     try:
+        # (factoring K^T, the CSR arrays read as CSC, and solving trans="T" saves the conversion but loses
+        # 5 digits of the residual with COLAMD's row pivots here: measured, not used)
         x = spla.splu(sp.csc_matrix(K)).solve(b)
     except RuntimeError as e:  # SuperLU: "Factor is exactly singular"
         raise np.linalg.LinAlgError(str(e)) from e
     return x
 
 
-def symmetric_solve(K: sp.spmatrix, b: np.ndarray, *, refine: int = 4, rtol: float = 1e-13) -> np.ndarray:
-    """Direct solve for structurally symmetric (saddle-point) matrices: SuperLU in symmetric mode
-    (minimum-degree ordering of K + K^T, diagonal pivots, several times fewer fill-ins than the default
-    COLAMD for the mixed u-p tangent) followed by iterative refinement (|b - K x| <= rtol |b|, at most
-    ``refine`` corrections: the unpivoted saddle-point factor is accurate to ~1e-6 before refinement).
-    Falls back to :func:`sparse_solve` when the diagonal pivots fail or refinement stalls."""
-    Kc = sp.csc_matrix(K)
-    try:
-        lu = spla.splu(Kc, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options=dict(SymmetricMode=True))
-    except RuntimeError:
-        return sparse_solve(Kc, b)
-    x = lu.solve(b)
-    nb = np.linalg.norm(b)
-    res = b - Kc @ x
+class _SymPlan:
+    """Per-pattern plan of :func:`symmetric_solve`: the fill-reducing permutation p (computed once, MMD on
+    K + K^T by SuperLU), the gather map of P K P^T (CSC), and for qdldl the gather map of the upper
+    triangle of K and the qdldl solver (its AMD ordering and symbolic analysis, kept for refactorisation)."""
+
+    def __init__(self, K):
+        n = K.shape[0]
+        A = sp.csc_matrix(K, copy=True)  # the ordering depends on the pattern only: factor a regular stand-in
+        A.data[:] = 1.0
+        A = A + sp.identity(n, format="csc") * (n + 1.0)
+        lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options=dict(SymmetricMode=True))
+        self.p = np.argsort(lu.perm_c)  # P K P^T = K[p][:, p] has the ordering built in
+        self.pinv = np.empty(n, dtype=np.int64)
+        self.pinv[self.p] = np.arange(n)
+        self.perm = _gather_plan(K, self.p, self.p, "csc")
+        self.upper = None
+        self.ldl = None
+        self.n = n
+        self.format, self.indptr, self.indices = K.format, K.indptr, K.indices
+        self.keys = _keys(K)
+
+
+def _keys(K) -> np.ndarray:
+    """Sorted linear keys major * n + minor of the stored entries of a canonical CSR/CSC matrix."""
+    major = np.repeat(np.arange(K.shape[0] if K.format == "csr" else K.shape[1]), np.diff(K.indptr))
+    return major.astype(np.int64) * K.shape[0] + K.indices
+
+
+def _sym_plan(K):
+    """(plan, data): the plan of K's pattern and K's values in that pattern's storage order. A pattern that
+    lost entries (exact zeros dropped by a sparse sum, e.g. K_int - p K_pressure) reuses the plan of the
+    pattern that contains it (its values embedded, the missing ones zero) instead of a new ordering."""
+    _SYM = _sym_cache()  # plans of this thread, most recent first
+    for i, plan in enumerate(_SYM):
+        if plan.n != K.shape[0] or plan.format != K.format:
+            continue
+        if (plan.indptr is K.indptr and plan.indices is K.indices) or (
+            plan.indices.size == K.nnz
+            and np.array_equal(plan.indptr, K.indptr)
+            and np.array_equal(plan.indices, K.indices)
+        ):
+            data = K.data
+        elif K.nnz < plan.keys.size:
+            kk = _keys(K)
+            pos = np.searchsorted(plan.keys, kk)
+            if pos[-1:].max(initial=0) >= plan.keys.size or not np.array_equal(plan.keys[pos], kk):
+                continue
+            data = np.zeros(plan.keys.size)
+            data[pos] = K.data
+        else:
+            continue
+        if i:
+            _SYM.insert(0, _SYM.pop(i))
+        return plan, data
+    # a new pattern: plan for its union with the latest plan of the same shape (patterns that differ by
+    # dropped zeros then converge to one plan after a few calls)
+    same = [p for p in _SYM if p.n == K.shape[0] and p.format == K.format]
+    data = K.data
+    if same:
+        kk = _keys(K)
+        ku = np.union1d(same[0].keys, kk)
+        n = K.shape[0]
+        data = np.zeros(ku.size)
+        data[np.searchsorted(ku, kk)] = K.data
+        ptr = np.searchsorted(ku // n, np.arange(n + 1)).astype(K.indptr.dtype)
+        K = (sp.csr_matrix if K.format == "csr" else sp.csc_matrix)(
+            (data, (ku % n).astype(K.indices.dtype), ptr), shape=K.shape
+        )
+    plan = _SymPlan(K)
+    _SYM.insert(0, plan)
+    del _SYM[8:]
+    return plan, data
+
+
+def _refine(K, b, x, solve, refine: int, rtol: float):
+    """Iterative refinement of K x = b with the approximate ``solve``; returns (x, |b - K x|)."""
+    res = b - K @ x
     rn = np.linalg.norm(res)
+    nb = np.linalg.norm(b)
     for _ in range(refine):
         if not np.isfinite(rn) or rn <= rtol * nb:
             break
-        x2 = x + lu.solve(res)
-        res2 = b - Kc @ x2
+        x2 = x + solve(res)
+        res2 = b - K @ x2
         rn2 = np.linalg.norm(res2)
         if not rn2 < 0.5 * rn:  # stalled: keep the better one
             if rn2 < rn:
                 x, rn = x2, rn2
             break
         x, res, rn = x2, res2, rn2
-    if not (np.all(np.isfinite(x)) and rn <= 1e-8 * max(float(nb), 1e-300)):
-        return sparse_solve(Kc, b)
+    return x, rn
+
+
+def symmetric_solve(K: sp.spmatrix, b: np.ndarray, *, refine: int = 4, rtol: float = 1e-13) -> np.ndarray:
+    """Direct solve for structurally symmetric (saddle-point) matrices.
+
+    Args:
+        K: square sparse matrix (n, n), structurally symmetric (values may be slightly unsymmetric,
+            e.g. a follower load: refinement against the true K corrects that).
+        b: right-hand side (n,).
+        refine: at most this many refinement corrections; rtol: target |b - K x| / |b|.
+    Returns:
+        x (n,).
+    Raises:
+        np.linalg.LinAlgError: singular K (from the pivoted fallback).
+
+    Backend "superlu": SuperLU in symmetric mode (diagonal pivots, several times fewer fill-ins than COLAMD
+    for the mixed u-p tangent) on P K P^T with the minimum-degree ordering of K + K^T computed once per
+    pattern. Backend "qdldl": LDL^T of the upper triangle with refactorisation on the stored analysis.
+    Both are followed by iterative refinement; when the diagonal pivots fail or refinement stalls above
+    1e-8 |b|, the pivoted :func:`sparse_solve` (COLAMD) answers instead."""
+    K = _canonical(K)
+    b = np.asarray(b, dtype=float)
+    nb = np.linalg.norm(b)
+    try:
+        plan, data = _sym_plan(K)
+    except RuntimeError:
+        return sparse_solve(K, b)
+    which = backend()
+    x = None
+    try:
+        if which == "qdldl":
+            if plan.upper is None:
+                ar = np.arange(plan.n)
+                T = (sp.csr_matrix if plan.format == "csr" else sp.csc_matrix)(
+                    (data, plan.indices, plan.indptr), shape=K.shape
+                )
+                plan.upper = _gather_plan(T, ar, ar, "csc", upper=True)
+            src, ind, ptr = plan.upper
+            U = sp.csc_matrix((data[src], ind, ptr), shape=K.shape)
+            if plan.ldl is None:
+                plan.ldl = _qdldl.Solver(U, upper=True)  # AMD ordering + symbolic analysis, kept
+            else:
+                plan.ldl.update(U, upper=True)
+            solve_p = plan.ldl.solve
+        else:
+            src, ind, ptr = plan.perm
+            Kp = sp.csc_matrix((data[src], ind, ptr), shape=K.shape)
+            lu = spla.splu(Kp, permc_spec="NATURAL", diag_pivot_thresh=0.0, options=dict(SymmetricMode=True))
+            solve_p = lambda v: lu.solve(v[plan.p])[plan.pinv]
+        x = solve_p(b)
+        x, rn = _refine(K, b, x, solve_p, refine, rtol)
+    except (RuntimeError, ValueError):
+        if which == "qdldl":
+            plan.ldl = None
+        x = None
+    if x is None or not (np.all(np.isfinite(x)) and rn <= 1e-8 * max(float(nb), 1e-300)):
+        return sparse_solve(K, b)
     return x
 
 
@@ -106,6 +362,7 @@ def newton(
 ) -> NewtonResult:
     """Solve fun(x)[0] = 0 from x0 (see the module docstring)."""
     x = np.array(x0, dtype=float)
+    sub = None if free is None else np.asarray(free)
     free = np.arange(x.size) if free is None else np.asarray(free)
     ref = max(float(ref_norm), 1e-300)
     why = admissible(x) if admissible is not None else None
@@ -128,7 +385,7 @@ def newton(
         )
     for it in range(1, max_iter + 1):
         try:
-            dx = (solver or sparse_solve)(K[free][:, free], -r[free])
+            dx = (solver or sparse_solve)(_submatrix(K, sub), -r[free])
         except np.linalg.LinAlgError:
             raise NewtonError(
                 "singular tangent matrix",

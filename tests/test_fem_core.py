@@ -188,3 +188,60 @@ def test_arc_length_passes_a_limit_point_and_load_control_stops_there():
     with pytest.raises(LimitPointError) as ei:
         load_control(solve, np.linspace(0.05, 0.5, 10), np.array([0.0]), monitor=lambda x: x[0])
     assert np.exp(-1) - 0.05 < ei.value.last_converged <= np.exp(-1) < ei.value.load
+
+
+@pytest.mark.parametrize("formulation", ["mixed", "displacement"])
+@pytest.mark.parametrize("which", ["shell", "ball"])
+def test_fast_assembly_equals_reference(formulation, which):
+    """Issue 14: the fused, pattern-reusing assembly equals the straightforward one (values and pattern)."""
+    m = shell_section(50e-6, 75e-6, 3, 5) if which == "shell" else ball_section(500e-6, 4, 3)
+    a = Assembler(m, formulation)
+    rng = np.random.default_rng(3)
+    X = m.X
+    x = np.zeros(a.ndof)
+    x[0 : a.n_u : 2] = 0.05 * X[0] + 0.02 * X[0] * X[1]
+    x[1 : a.n_u : 2] = -0.04 * X[1] + 0.01 * X[0] ** 2
+    x[: a.n_u] += 1e-3 * rng.standard_normal(a.n_u)
+    x[a.n_u :] = rng.standard_normal(a.ndof - a.n_u)
+    mat = Material(1.0, 0.2, 1e4)
+    S0 = rng.standard_normal(a.w.shape + (5,))
+    S0[..., 2] = S0[..., 1]
+    for kw in ({}, dict(extra_S=S0, iso_scale=1.3)):
+        r, K = a.internal(x, mat, **kw)
+        r0, K0 = a._internal_reference(x, mat, **kw)
+        K0 = K0.tocsr()
+        K0.sum_duplicates()
+        assert np.abs(r - r0).max() <= 1e-14 * np.abs(r0).max()
+        assert np.abs(a.internal(x, mat, tangent=False, **kw)[0] - r0).max() <= 1e-14 * np.abs(r0).max()
+        assert sp.isspmatrix_csr(K) and np.array_equal(K.indptr, K0.indptr) and np.array_equal(K.indices, K0.indices)
+        assert np.abs(K.data - K0.data).max() <= 1e-14 * np.abs(K0.data).max()
+
+
+def test_solver_backends_and_submatrix_cache():
+    """Every symmetric_solve backend and the cached K[free][:, free] gather give the same answer."""
+    from tissuemech.fem import newton as nw
+
+    m = shell_section(50e-6, 75e-6, 3, 6)
+    a = Assembler(m)
+    x = np.zeros(a.ndof)
+    x[: a.n_u] = 1e-3 * np.sin(np.arange(a.n_u))
+    _, K = a.internal(x, Material(1.0, 0.2, 1e7))
+    fp, Kp = a.follower_pressure(x, 1.0, m.edges["inner"])
+    K = (K - 0.7 * Kp).tocsr()  # slightly unsymmetric, and exact zeros dropped from the pattern
+    free = np.setdiff1d(np.arange(a.ndof), np.concatenate([2 * m.nodes["axis"], 2 * m.nodes["symmetry"] + 1]))
+    Kf = K[free][:, free]
+    assert (nw._submatrix(K, free) != Kf).nnz == 0 and (nw._submatrix(K, free) != Kf).nnz == 0  # built, reused
+    b = np.cos(np.arange(free.size))
+    ref = nw.sparse_solve(Kf, b)
+    old = nw.backend()
+    try:
+        for name in nw.available_backends():
+            nw.set_backend(name)
+            for _ in range(2):  # plan built, then reused
+                xs = nw.symmetric_solve(Kf, b)
+                assert np.linalg.norm(Kf @ xs - b) <= 1e-12 * np.linalg.norm(b)
+                assert np.allclose(xs, ref, rtol=1e-7, atol=1e-12 * np.abs(ref).max())
+        with pytest.raises(ValueError, match="sparse backend"):
+            nw.set_backend("umfpack")
+    finally:
+        nw.set_backend("auto" if old == "auto" else old)

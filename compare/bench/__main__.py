@@ -10,6 +10,7 @@ SUITES = {
     "fem-blastula": "tissuemech.compare.bench.fem_blastula",
     "fem-spheroid": "tissuemech.compare.bench.fem_spheroid",
     "hybrid": "tissuemech.compare.bench.hybrid",
+    "fem-perf": "tissuemech.compare.bench.fem_perf",
 }
 
 
