@@ -20,7 +20,9 @@ def _prints(path: Path):
         for child in ast.iter_child_nodes(node):
             f = child.name if isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef)) else func
             if isinstance(child, ast.Call) and isinstance(child.func, ast.Name) and child.func.id == "print":
-                out.append((child.lineno, func))
+                # print(..., file=stream) to a stream the caller passed in is fine; bare print() is not
+                if not any(k.arg == "file" for k in child.keywords):
+                    out.append((child.lineno, func))
             visit(child, f)
 
     visit(tree, None)
@@ -35,8 +37,8 @@ def test_reduced_and_fem_never_print():
 def test_compare_prints_only_in_entry_points():
     found = []
     for p in (ROOT / "compare").rglob("*.py"):
-        if p.name in ENTRY_MODULES or "bench" in p.parts:
-            continue
+        if p.name in ENTRY_MODULES or p.name.endswith("_cli.py") or "bench" in p.parts or "cli" in p.parts:
+            continue  # command-line modules print their tables; benchmarks print their reports
         found += [(p.name, ln, f) for ln, f in _prints(p) if f not in ENTRY_FUNCTIONS]
     assert found == []
 
