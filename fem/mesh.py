@@ -144,21 +144,45 @@ def shell_section(
     return _finish(m1, order, mapper, inner_radius, tags)
 
 
+def _check_points(p, n: int, name: str) -> np.ndarray:
+    p = np.asarray(p, dtype=float)
+    if p.shape != (n + 1,) or abs(p[0]) > 1e-14 or abs(p[-1] - 1) > 1e-14 or np.any(np.diff(p) <= 0):
+        raise ValueError(f"{name} must be {n + 1} increasing numbers from 0 to 1 (fractions of the block edge)")
+    return np.r_[0.0, p[1:-1], 1.0]
+
+
 def ball_section(
-    radius: float, n_core: int, n_radial: int, *, grading: float = 1.0, pole_grading: float = 1.0, order: int = 2
+    radius: float,
+    n_core: int,
+    n_radial: int,
+    *,
+    grading: float = 1.0,
+    pole_grading: float = 1.0,
+    order: int = 2,
+    pole_points: np.ndarray | None = None,
+    radial_points: np.ndarray | None = None,
 ) -> AxiMesh:
     """O-grid quarter disk of a solid ball (lengths scaled by ``radius``).
 
     Core square [0, c]^2 (c = 0.55) with ``n_core`` divisions per side, two curved blocks between the
     square and the arc with ``n_radial`` layers. ``grading`` > 1 refines toward the surface,
     ``pole_grading`` > 1 refines toward the top pole (R = 0, Z = 1), the plate contact zone.
+    ``pole_points`` (n_core + 1 increasing values from 0 to 1; replaces ``pole_grading``): the node
+    positions along the pole block, as fractions of its arc (the surface angle from the pole is
+    (pi/4) u) and of the core's top edge (R = c u): e.g. a surface node placed on a contact edge.
+    ``radial_points`` (n_radial + 1 increasing values from 0 at the core to 1 at the surface;
+    replaces ``grading``): the layer boundaries of both curved blocks.
     """
     if not (radius > 0 and np.isfinite(radius)):
         raise ValueError(f"ball radius must be positive, got {radius}")
     c = 0.55
     u_pole = graded_points(n_core, pole_grading)  # 0 at the axis, fine there if pole_grading > 1
+    if pole_points is not None:
+        u_pole = _check_points(pole_points, n_core, "pole_points")
     u_eq = np.linspace(0.0, 1.0, n_core + 1)
     v = graded_points(n_radial, 1.0 / grading)  # 0 at the core, 1 at the surface (fine there)
+    if radial_points is not None:
+        v = _check_points(radial_points, n_radial, "radial_points")
 
     pts, quads = [], []
 
@@ -184,8 +208,13 @@ def ball_section(
     Q = np.concatenate(quads)
     key = np.round(P, 12)
     _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
-    inv = inv.ravel()
-    P, Q = P[first], inv[Q]
+    # number the merged points in order of first appearance (not sorted by coordinates), so meshes with
+    # the same divisions share one node numbering whatever their point positions (pole_points ...)
+    seq = np.argsort(first, kind="stable")
+    rank = np.empty_like(seq)
+    rank[seq] = np.arange(seq.size)
+    inv = rank[inv.ravel()]
+    P, Q = P[first[seq]], inv[Q]
     # counterclockwise orientation
     x, y = P[Q, 0], P[Q, 1]
     area = 0.5 * np.sum(x * np.roll(y, -1, 1) - np.roll(x, -1, 1) * y, axis=1)
