@@ -161,6 +161,8 @@ def ball_section(
     order: int = 2,
     pole_points: np.ndarray | None = None,
     radial_points: np.ndarray | None = None,
+    n_equator: int | None = None,
+    split_angle: float = 0.25 * np.pi,
 ) -> AxiMesh:
     """O-grid quarter disk of a solid ball (lengths scaled by ``radius``).
 
@@ -171,15 +173,26 @@ def ball_section(
     positions along the pole block, as fractions of its arc (the surface angle from the pole is
     (pi/4) u) and of the core's top edge (R = c u): e.g. a surface node placed on a contact edge.
     ``radial_points`` (n_radial + 1 increasing values from 0 at the core to 1 at the surface;
-    replaces ``grading``): the layer boundaries of both curved blocks.
+    replaces ``grading``): the layer boundaries of both curved blocks. ``n_equator`` (default ``n_core``):
+    divisions of the equator block's arc and of the core in Z (the core is n_core x n_equator).
+    ``split_angle`` (rad from the pole, default pi/4): where the pole block's arc ends and the equator
+    block's begins; the core is the rectangle [0, c sqrt2 sin(split)] x [0, c sqrt2 cos(split)].
     """
     if not (radius > 0 and np.isfinite(radius)):
         raise ValueError(f"ball radius must be positive, got {radius}")
     c = 0.55
+    if not (0.05 < split_angle < 0.5 * np.pi - 0.05):
+        raise ValueError(f"split_angle must be in (0.05, pi/2 - 0.05) rad, got {split_angle}")
+    cr, cz = c * np.sqrt(2) * np.sin(split_angle), c * np.sqrt(2) * np.cos(split_angle)
+    if abs(split_angle - 0.25 * np.pi) < 1e-15:
+        cr = cz = c
     u_pole = graded_points(n_core, pole_grading)  # 0 at the axis, fine there if pole_grading > 1
     if pole_points is not None:
         u_pole = _check_points(pole_points, n_core, "pole_points")
-    u_eq = np.linspace(0.0, 1.0, n_core + 1)
+    n_eq = n_core if n_equator is None else int(n_equator)
+    if n_eq < 1:
+        raise ValueError(f"a mesh needs at least one division, got n_equator = {n_equator}")
+    u_eq = np.linspace(0.0, 1.0, n_eq + 1)
     v = graded_points(n_radial, 1.0 / grading)  # 0 at the core, 1 at the surface (fine there)
     if radial_points is not None:
         v = _check_points(radial_points, n_radial, "radial_points")
@@ -193,15 +206,16 @@ def ball_section(
         idx = off + np.arange((n1 + 1) * (n2 + 1)).reshape(n1 + 1, n2 + 1)
         quads.append(np.stack([idx[:-1, :-1], idx[1:, :-1], idx[1:, 1:], idx[:-1, 1:]], -1).reshape(-1, 4))
 
-    # core: R = c u_pole (graded toward the axis), Z = c u_eq
-    block(np.stack(np.meshgrid(c * u_pole, c * u_eq, indexing="ij"), -1))
-    # equator block: inner edge (c, c u), outer arc angle pi/4 u
-    inner = np.stack([np.full_like(u_eq, c), c * u_eq], -1)
-    outer = np.stack([np.cos(0.25 * np.pi * u_eq), np.sin(0.25 * np.pi * u_eq)], -1)
+    # core: R = cr u_pole (graded toward the axis), Z = cz u_eq
+    block(np.stack(np.meshgrid(cr * u_pole, cz * u_eq, indexing="ij"), -1))
+    # equator block: inner edge (cr, cz u), outer arc at angle (pi/2 - split) u from the equator
+    inner = np.stack([np.full_like(u_eq, cr), cz * u_eq], -1)
+    phi = (0.5 * np.pi - split_angle) * u_eq
+    outer = np.stack([np.cos(phi), np.sin(phi)], -1)
     block((1 - v)[:, None, None] * inner[None] + v[:, None, None] * outer[None])
-    # pole block: inner edge (c u, c), outer arc (sin(pi/4 u), cos(pi/4 u))
-    inner = np.stack([c * u_pole, np.full_like(u_pole, c)], -1)
-    outer = np.stack([np.sin(0.25 * np.pi * u_pole), np.cos(0.25 * np.pi * u_pole)], -1)
+    # pole block: inner edge (cr u, cz), outer arc at angle split u from the pole
+    inner = np.stack([cr * u_pole, np.full_like(u_pole, cz)], -1)
+    outer = np.stack([np.sin(split_angle * u_pole), np.cos(split_angle * u_pole)], -1)
     block((1 - v)[None, :, None] * inner[:, None] + v[None, :, None] * outer[:, None])
 
     P = np.concatenate(pts)

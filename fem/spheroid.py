@@ -56,16 +56,24 @@ from tissuemech.reduced.material import validate_branches, validate_material, va
 
 __all__ = ["compress", "make_mesh", "fitted_mesh", "MESHES", "LEVELS", "hertz_force"]
 
-# level -> (n_core, n_radial, surface grading, n_contact). On a level the surface nodes of the pole block are
-# placed so that node n_contact sits exactly on the contact edge (``fitted_mesh``): n_contact elements across
-# the contact zone, n_core - n_contact beyond it, graded toward the edge, radial layers thin enough for the
-# contact size. The edge is found per state from the Signorini condition N_edge = 0 (see ``compress``); the
-# force is then a smooth function of delta and of h (no node-to-node jitter): compare.bench fem-spheroid.
-LEVELS = {0: (6, 3, 2.0, 2), 1: (12, 5, 2.0, 4), 2: (24, 10, 2.0, 8), 3: (36, 15, 2.0, 12), 4: (48, 20, 2.0, 16)}
+# level -> (n_core, n_radial, surface grading, n_contact, n_equator) of ``fitted_mesh``: the surface nodes of
+# the pole block are placed so that node n_contact sits exactly on the contact edge (n_contact elements across
+# the contact zone, n_core - n_contact beyond it, graded toward the edge; radial layers thin enough for the
+# contact size; n_equator divisions of the equator block). The edge is found per state from the Signorini
+# condition N_edge = 0 (see ``compress``); the force is then a smooth function of delta and of h (no
+# node-to-node jitter). Levels 1..4 are one self-similar sequence (h ~ 1/n_core): compare.bench fem-spheroid.
+LEVELS = {
+    0: (8, 3, 2.0, 4, 3),
+    1: (16, 6, 2.0, 7, 6),
+    2: (32, 12, 2.0, 14, 12),
+    3: (48, 18, 2.0, 21, 18),
+    4: (64, 24, 2.0, 28, 24),
+}
 MESHES = {"coarse": 0, "default": 1, "fine": 2}
 FORCE_CHECK = 1e-6  # |F_contact - F_reaction| / F
 EDGE_TOL = 1e-4  # |N_edge| / F at the fitted contact edge (F is stationary in the edge position there)
-EDGE_MAX = 0.92  # largest edge position, as a fraction of the pole block's arc (45 deg from the pole)
+SPLIT = np.radians(55.0)  # the pole block's arc: 0..55 deg from the pole (holds the edge to delta/(2 a0) ~ 0.45)
+EDGE_MAX = 0.92  # largest edge position, as a fraction of the pole block's arc
 _INNER_GRADING = 1.5  # contact-zone elements: first / last (finer at the edge)
 _DEPTH = 2.0  # outermost radial layer <= _DEPTH x the mean contact-zone element length
 
@@ -87,25 +95,28 @@ def fitted_mesh(radius: float, level: int, edge: float) -> AxiMesh:
     """The level's ball_section mesh with a surface node on the contact edge.
 
     ``edge``: reference position of the edge node as a fraction of the pole block's arc (the surface angle
-    from the pole is (pi/4) edge), in (0, EDGE_MAX]. Every edge gives the same topology and node numbering.
+    from the pole is SPLIT * edge, SPLIT = 55 deg), in (0, EDGE_MAX]. Every edge gives the same topology and node numbering.
     """
     if level not in LEVELS:
         raise ValueError(f"mesh level must be an integer 0..4 (0 coarse, 1 default, 2 fine), got {level!r}")
     if not (0 < edge <= EDGE_MAX):
         raise ValueError(
-            f"the contact edge at {45 * edge:.3g} deg from the pole is outside the meshable range "
-            f"(0, {45 * EDGE_MAX:.3g}] deg; reduce the approach"
+            f"the contact edge at {np.degrees(SPLIT) * edge:.3g} deg from the pole is outside the meshable range "
+            f"(0, {np.degrees(SPLIT) * EDGE_MAX:.3g}] deg; reduce the approach"
         )
-    nc, nr, gr, k = LEVELS[level]
+    nc, nr, gr, k = LEVELS[level][:4]
+    neq = LEVELS[level][4] if len(LEVELS[level]) > 4 else None
     inner = edge * graded_points(k, 1.0 / _INNER_GRADING)
     he = inner[-1] - inner[-2]
     outer = edge + _geometric(nc - k, 1.0 - edge, min(he, (1.0 - edge) / (nc - k)))
     v = graded_points(nr, 1.0 / gr)
-    c_thick = 0.45  # pole-block thickness at the axis (1 - c of ball_section)
-    hc = _DEPTH * edge * (np.pi / 4) / k
+    c_thick = 1.0 - 0.55 * np.sqrt(2) * np.cos(SPLIT)  # pole-block thickness at the axis (ball_section)
+    hc = _DEPTH * edge * SPLIT / k
     if hc < c_thick * (v[-1] - v[-2]):
         v = 1.0 - _geometric(nr, 1.0, hc / c_thick)[::-1]
-    m = ball_section(radius, nc, nr, pole_points=np.r_[inner, outer[1:]], radial_points=v)
+    m = ball_section(
+        radius, nc, nr, pole_points=np.r_[inner, outer[1:]], radial_points=v, n_equator=neq, split_angle=SPLIT
+    )
     return AxiMesh(
         m.mesh, skfem.CellBasis(m.mesh, skfem.ElementQuad2(), intorder=4), 2, m.length_scale, m.nodes, m.edges
     )
@@ -271,7 +282,7 @@ class _EdgeFit:
 
     def __init__(self, radius: float, level: int, mat: Material, rtol: float):
         self.a0, self.level, self.mat, self.rtol = radius, level, mat, rtol
-        self.k = LEVELS[level][3]
+        self.k = int(LEVELS[level][3])
         self.slope = 0.0
         self._cache: dict = {}
 
@@ -337,12 +348,13 @@ class _EdgeFit:
             st_b, it, phi_b = self._state(self.problem(e_b), d, [st_a.x, x0], load)
             its, n = its + it, n + 1
             if abs(phi_b) < tol:
-                if phi_b != phi_a:
+                if phi_b != phi_a and e_b != e_a:
                     self.slope = (phi_b - phi_a) / np.log(e_b / e_a)
                 return self.problem(e_b), st_b, e_b, its, n
             if phi_b == phi_a:
                 break
-            self.slope = (phi_b - phi_a) / np.log(e_b / e_a)
+            if e_b != e_a:
+                self.slope = (phi_b - phi_a) / np.log(e_b / e_a)
             e_new = e_b - phi_b * (e_b - e_a) / (phi_b - phi_a)
             e_new = float(np.clip(e_new, 0.5 * e_b, min(1.5 * e_b, EDGE_MAX)))
             if e_new == e_b:
@@ -358,7 +370,7 @@ class _EdgeFit:
 def _edge_guess(ds: list, es: list, d: float) -> float:
     """Edge position extrapolated in sqrt(d) from the previous states (Hertz: contact radius ~ sqrt(d))."""
     if not ds:
-        return 1.06 * np.sqrt(d) / (np.pi / 4)
+        return 1.06 * np.sqrt(d) / SPLIT
     if len(ds) == 1:
         return es[-1] * np.sqrt(d / ds[-1])
     s0, s1, s = np.sqrt(ds[-2]), np.sqrt(ds[-1]), np.sqrt(d)
