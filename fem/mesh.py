@@ -12,11 +12,14 @@ API
                             hollow sphere, lengths scaled by A; tags "inner", "outer", "symmetry" (Z = 0),
                             "axis" (R = 0; for ``half`` the two axis segments). ``grading`` > 1 refines
                             toward the inner surface (geometric ratio of the outermost to innermost layer).
-``ball_section(a0, n_core, n_radial, *, grading=1.0, pole_grading=1.0, order=2)``
+``ball_section(a0, n_core, n_radial, *, grading=1.0, pole_grading=1.0, order=2, pole_points=None,
+radial_points=None, n_equator=None, split_angle=pi/4)``
                             quarter disk (R >= 0, Z >= 0) of a solid ball as an O-grid (core square + two
                             curved blocks), lengths scaled by a0, refined toward the surface (``grading``)
                             and toward the top pole R = 0, Z = a0 (``pole_grading``); tags "axis" (R = 0),
-                            "symmetry" (Z = 0), "outer" (surface).
+                            "symmetry" (Z = 0), "outer" (surface). Explicit node positions
+                            (``pole_points``, ``radial_points``) place a node on a contact edge; the node
+                            numbering depends on the divisions only, not on the positions.
 Coordinates: (R, Z) = (radial, axial); the axis of symmetry is R = 0.
 """
 

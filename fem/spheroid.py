@@ -6,7 +6,8 @@ mesh="default", static=False, field_times=(), n_ramp=None, n_hold=None, n_static
 
 Model (physics.md, scene 2): by symmetry a quarter section R >= 0, Z >= 0 of the ball of radius a0
 (u_r = 0 on the axis, u_z = 0 on the midplane Z = 0) and one rigid flat plane z = a0 - delta(t)/2 at
-the top (``fem.contact``: exact unilateral contact by an active set, no penalty), mixed
+the top (exact unilateral contact, no penalty: on the fitted levels the contact edge is a node placed where
+its multiplier vanishes; ``fem.contact``'s active set otherwise), mixed
 Q2/P1-discontinuous elements (``fem.forms``), generalized Maxwell branches on S_iso
 (``fem.viscoelastic``), quasi-static time stepping (``fem.timestepping``, inertia ~1e-6 of the stresses).
 Inside, lengths are scaled by a0, stresses by C, forces by C a0^2.
@@ -17,12 +18,20 @@ Inside, lengths are scaled by a0, stresses by C, forces by C a0^2.
   the ramp's step (steps are halved until it does).
 * ``branches``: sequence of (beta_m, tau_m [s]); empty for elastic.
 * ``static=True``: branches and times are ignored; the steps are equilibrium states from delta = 0 to
-  ``displacement`` (``n_static`` equal steps, cut back on failure): the F_eq(delta) curve; ``time`` then
-  holds the load fraction delta/displacement.
-* ``mesh``: "coarse", "default", "fine", a level 0..4 (0 = coarse, 1 = default, 2 = fine; ``LEVELS``
-  gives (n_core, n_radial, surface grading, pole grading) of ``fem.mesh.ball_section``; 3 x 3 Gauss
-  points) or an ``AxiMesh`` from ``fem.mesh.ball_section`` (built with length_scale = radius; refine it
-  toward the pole, e.g. pole_grading = 30, for Hertz-scale approaches delta < 1 % of the radius).
+  ``displacement`` (``n_static`` equal steps, default 0.02 in delta/(2 a0) on a level, cut back on failure):
+  the F_eq(delta) curve; ``time`` then holds the load fraction delta/displacement. On a level every state
+  has its own mesh (same topology and numbering); the result's ``mesh`` is the last state's.
+* ``mesh``: "coarse", "default", "fine" or a level 0..4 (0 = coarse, 1 = default, 2 = fine; ``LEVELS``
+  gives (n_core, n_radial, surface grading, n_contact, n_equator) of ``fitted_mesh``; 3 x 3 Gauss points):
+  CONTACT-EDGE-FITTED meshes. Static runs solve every state on its own mesh whose surface node
+  ``n_contact`` sits on the contact edge, the edge position found by a secant iteration on the Signorini
+  condition at the edge (its nodal multiplier N_edge = 0, to ``EDGE_TOL`` of the force; the force is
+  stationary in the edge position there): the plate force is a smooth function of delta and converges
+  smoothly under refinement (no node-to-node jitter; levels 1..4 are self-similar, h ~ 1/n_core). Time
+  runs use one mesh, fitted to the edge of the static state at the held (largest) approach, with the
+  active-set contact below (the edge moves during the ramp, not in the hold). Or an ``AxiMesh`` from
+  ``fem.mesh.ball_section`` (built with length_scale = radius): a fixed mesh with node-by-node contact
+  (its force carries the edge quantisation, ~0.2 %).
 * ``field_times``: times (s) at which the deformed mesh, von Mises and pressure fields are stored
   (they become step times; static runs: load fractions delta/displacement in (0, 1], the stored field is
   the closest step); the last step is always stored.
@@ -31,8 +40,9 @@ Outputs per converged step: plate force from the contact multipliers (sum of the
 active nodes; they include the 2 pi R of the axisymmetric volume element, so this is the force on the
 whole plate), the midplane reaction (must be equal: checked to 1e-6 relative, else RuntimeError),
 midplane radius (deformed equator), nominal stress F / (pi r_mid^2), volume-averaged von Mises stress
-(deformed volume), contact radius (edge estimate between the outermost active node and the next one,
-from the gaps of the first free nodes; ``contact_radius_node``: the outermost active node itself).
+(deformed volume), contact radius (static runs on a level: the edge node; else an edge estimate between
+the outermost active node and the next one, from the gaps of the first free nodes;
+``contact_radius_node``: the outermost active node itself).
 """
 
 from __future__ import annotations

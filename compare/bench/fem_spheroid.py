@@ -230,7 +230,7 @@ def richardson(values: Sequence[float], h: Sequence[float]) -> tuple[float, floa
     return p, v3 + d2 / ((h2 / h3) ** p - 1.0)
 
 
-def reference(quick: bool, levels: Sequence[int] | None = None) -> dict:
+def reference(quick: bool, levels: Sequence[int] | None = None, alphas: Sequence[float] = REF_ALPHAS) -> dict:
     """The converged reference: level sequence, observed order, Richardson estimate, errors per level."""
     levels = list(levels or ((1, 2, 3) if quick else (1, 2, 3, 4)))
     h = [1.0 / LEVELS[lev][0] for lev in levels]
@@ -241,7 +241,7 @@ def reference(quick: bool, levels: Sequence[int] | None = None) -> dict:
     head = f"{'case':>22} " + " ".join(f"{'lev ' + str(v):>10}" for v in levels) + f" {'p':>6} {'F_inf':>14}"
     print(head)
     out = {}
-    rows = [(f"alpha {a:g} x {x:g}", (lambda lev, a=a, x=x: static_force(x, a, lev))) for a in REF_ALPHAS for x in XS]
+    rows = [(f"alpha {a:g} x {x:g}", (lambda lev, a=a, x=x: static_force(x, a, lev))) for a in alphas for x in XS]
     fig = {}
 
     def fig10_at(lev, k):
