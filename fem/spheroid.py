@@ -341,35 +341,49 @@ class _EdgeFit:
             N = pl.normal_force(r)
             F = float(N[act].sum())
             st = _State(res.x, act, None, d, r, 1.0, None, 1)
-            return st, res.iterations, float(N[n_act - 1]) / max(F, 1e-300)
+            phi = float(N[n_act - 1]) / max(F, 1e-300)
+            # a tensile node inside the last contact element: the zone is too large (a spurious root of
+            # N_edge = 0 with the element lifting off in its middle): report it as negative
+            inner = float(np.min(N[max(n_act - 3, 0) : n_act - 1])) / max(F, 1e-300)
+            return st, res.iterations, min(phi, inner) if inner < 0 else phi
         raise err if err is not None else NewtonError("no admissible initial guess", load=load, hint="reduce the step")
 
     def solve(self, d: float, edge0: float, x0, load, tol: float = EDGE_TOL):
-        """(problem, state, edge, Newton iterations, solves) at plate displacement d (scaled)."""
-        e_a = float(np.clip(edge0, 1e-4, EDGE_MAX))
+        """(problem, state, edge, Newton iterations, solves) at plate displacement d (scaled).
+
+        Safeguarded secant on phi(edge): phi > 0 (edge node pressed) means the zone is too small, phi < 0
+        (edge node or its element pulled) too large; the root is kept inside that bracket (bisection when a
+        secant step leaves it)."""
+        lo, hi = 1e-4, EDGE_MAX  # phi(lo) > 0 > phi(hi) (bounds until evaluated)
+        e_a = float(np.clip(edge0, lo, hi))
         st_a, its, phi_a = self._state(self.problem(e_a), d, [x0], load)
         n = 1
         if abs(phi_a) < tol:
             return self.problem(e_a), st_a, e_a, its, n
+        lo, hi = (e_a, hi) if phi_a > 0 else (lo, e_a)
         # first secant point: a step along the slope dphi/dln(edge) of the previous state (about -2)
         step = float(np.clip(-phi_a / self.slope, -0.1, 0.1)) if self.slope < 0 else 0.03 * np.sign(phi_a)
-        e_b = float(np.clip(e_a * (1.0 + step), 1e-4, EDGE_MAX))
-        for _ in range(14):
+        e_b = float(np.clip(e_a * (1.0 + step), lo, hi))
+        for _ in range(30):
             st_b, it, phi_b = self._state(self.problem(e_b), d, [st_a.x, x0], load)
             its, n = its + it, n + 1
             if abs(phi_b) < tol:
                 if phi_b != phi_a and e_b != e_a:
                     self.slope = (phi_b - phi_a) / np.log(e_b / e_a)
                 return self.problem(e_b), st_b, e_b, its, n
-            if phi_b == phi_a:
-                break
-            if e_b != e_a:
+            if phi_b > 0:
+                lo = max(lo, e_b)
+            else:
+                hi = min(hi, e_b)
+            e_new = e_b - phi_b * (e_b - e_a) / (phi_b - phi_a) if phi_b != phi_a and e_b != e_a else np.nan
+            if e_b != e_a and phi_b != phi_a:
                 self.slope = (phi_b - phi_a) / np.log(e_b / e_a)
-            e_new = e_b - phi_b * (e_b - e_a) / (phi_b - phi_a)
-            e_new = float(np.clip(e_new, 0.5 * e_b, min(1.5 * e_b, EDGE_MAX)))
-            if e_new == e_b:
+            if not (lo < e_new < hi):  # outside the bracket: bisect (or expand toward the open bound)
+                e_new = 0.5 * (lo + hi) if hi < EDGE_MAX or lo > 1e-4 else e_b * (1.2 if phi_b > 0 else 0.8)
+                e_new = float(np.clip(e_new, 1e-4, EDGE_MAX))
+            if hi - lo < 1e-12 * hi:
                 break
-            e_a, st_a, phi_a, e_b = e_b, st_b, phi_b, e_new
+            e_a, st_a, phi_a, e_b = e_b, st_b, phi_b, float(e_new)
         raise ContactError(
             "the contact edge did not settle (the edge node multiplier does not vanish)",
             load=load,
