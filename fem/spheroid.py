@@ -345,7 +345,13 @@ class _EdgeFit:
             # a tensile node inside the last contact element: the zone is too large (a spurious root of
             # N_edge = 0 with the element lifting off in its middle): report it as negative
             inner = float(np.min(N[max(n_act - 3, 0) : n_act - 1])) / max(F, 1e-300)
-            return st, res.iterations, min(phi, inner) if inner < 0 else phi
+            if inner < 0:
+                phi = min(phi, inner)
+            # a free node beyond the edge below the plate: the zone is too small (report it as positive)
+            g = pl.gap(res.x, 1.0 - d)[n_act : n_act + 6]
+            if g.size and g.min() < -1e-9 * d:
+                phi = max(phi, -float(g.min()) / d)
+            return st, res.iterations, phi
         raise err if err is not None else NewtonError("no admissible initial guess", load=load, hint="reduce the step")
 
     def solve(self, d: float, edge0: float, x0, load, tol: float = EDGE_TOL):
