@@ -6,15 +6,18 @@ gives the equilibrium plate force and equator radius as
     F_eq / (C a0^2) = f(x; alpha),    r_mid / a0 = g(x; alpha),    x = delta / (2 a0),
 
 (``delta`` the total approach, m; ``C`` in Pa). One static FE run per ``alpha``
-(``fem.spheroid.compress(..., static=True)``, the whole curve from 0 to ``delta``) is interpolated
-onto a grid ``x`` in ``[0, x_max]`` (default 0.3). The table is written to
-``reduced/data/spheroid_master.npz`` with arrays ``x`` (n_x,), ``alpha`` (n_a,), ``f`` and ``g``
-(n_a, n_x), ``f_over_hertz`` = f / ((32/3) x^1.5) (smooth, -> 1 as x -> 0; interpolate this, not
-``f``, whose x-derivative is singular at 0), and ``metadata`` (JSON: mesh, command, kappa/C, the
-estimated discretisation error = max relative difference of f between the mesh and a coarser one).
+(``fem.spheroid.compress(..., static=True)`` on a contact-edge-fitted level: the force is smooth in x,
+no node-to-node jitter), run as two pieces (x up to ``x_small`` in fine steps, then to ``x_max``) whose
+states ARE the table grid ``x`` (default 0, 0.0025 .. 0.01, 0.02 .. 0.36: no interpolation). The table is
+written to ``reduced/data/spheroid_master.npz`` with arrays ``x`` (n_x,), ``alpha`` (n_a,), ``f`` and
+``g`` (n_a, n_x), ``f_over_hertz`` h = f / ((32/3) x^1.5) (-> 1 as x -> 0; its leading correction grows
+like sqrt(x): interpolate h in s = sqrt(x), not f in x), and ``metadata`` (JSON: mesh, command, kappa/C,
+the discretisation error = max relative difference of f against an independent finer-level run at
+``check_alphas``, and the residual of the small-x basis fit h = 1 + sum_k c_k s^k).
 
-``python -m tissuemech.compare.calibrate [--out PATH] [--store DIR] [--n-x N] [--alphas a,b,..] [--mesh M]
-[--error-mesh M]`` regenerates it through ``compare.batch`` (resumable with ``--store``).
+``python -m tissuemech.compare.calibrate [--out PATH] [--store DIR] [--n-x N] [--x-max X] [--alphas a,b,..]
+[--mesh M] [--error-mesh M] [--check-alphas a,b,..]`` regenerates it through ``compare.batch`` (resumable
+with ``--store``).
 """
 
 from __future__ import annotations
@@ -28,9 +31,22 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-__all__ = ["MasterCurves", "tabulate", "smooth", "write", "load", "main", "DEFAULT_ALPHAS", "DEFAULT_OUT"]
+__all__ = [
+    "MasterCurves",
+    "tabulate",
+    "table_grid",
+    "smooth",
+    "sqrt_basis",
+    "write",
+    "load",
+    "main",
+    "DEFAULT_ALPHAS",
+    "CHECK_ALPHAS",
+    "DEFAULT_OUT",
+]
 
-DEFAULT_ALPHAS = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0)
+DEFAULT_ALPHAS = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0, 1.25, 1.5)
+CHECK_ALPHAS = (0.0, 0.5, 1.0)
 DEFAULT_OUT = Path(__file__).resolve().parent.parent / "reduced" / "data" / "spheroid_master.npz"
 RADIUS, C_REF, KAPPA = 500e-6, 200.0, 2.2e9  # the seed's ball; kappa/C = 1.1e7 (nearly incompressible)
 
@@ -50,9 +66,17 @@ def hertz_f(x: np.ndarray) -> np.ndarray:
 
 
 def static_curve(
-    *, alpha: float, x_max: float, mesh: Any = "default", radius: float = RADIUS, C: float = C_REF, kappa: float = KAPPA
+    *,
+    alpha: float,
+    x_max: float,
+    mesh: Any = "default",
+    radius: float = RADIUS,
+    C: float = C_REF,
+    kappa: float = KAPPA,
+    n: int | None = None,
 ) -> dict:
-    """One static FE run (module level, picklable): approach (m), force (N), midplane radius (m)."""
+    """One static FE run (module level, picklable): approach (m), force (N), midplane radius (m);
+    ``n`` equal steps in the approach up to x_max (None: the default of ``compress``)."""
     from tissuemech.fem import spheroid as fem_spheroid
 
     r = fem_spheroid.compress(
@@ -66,6 +90,7 @@ def static_curve(
         kappa=kappa,
         mesh=mesh,
         static=True,
+        n_static=n,
     )
     return {
         "approach": np.asarray(r.approach),
@@ -91,50 +116,76 @@ def _to_master(run: Any, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return f, g
 
 
+def table_grid(n_x: int = 37, x_max: float = 0.36, x_small: float = 0.01, n_small: int = 4) -> np.ndarray:
+    """0, then n_small steps to x_small, then equal steps x_small apart... to x_max (n_x points from x_small
+    on when x_max / x_small = n_x - 1): the states of the two static runs, i.e. the table grid."""
+    main = np.linspace(0.0, x_max, n_x)[1:]
+    small = np.linspace(0.0, x_small, n_small + 1)[1:] if 0 < x_small < main[0] * (1 + 1e-12) else np.array([])
+    return np.unique(np.r_[0.0, small[small < main[0] * (1 - 1e-9)], main])
+
+
 def tabulate(
     *,
     alphas: Sequence[float] = DEFAULT_ALPHAS,
-    n_x: int = 31,
-    x_max: float = 0.3,
-    mesh: Any = "default",
+    n_x: int = 37,
+    x_max: float = 0.36,
+    x_small: float = 0.01,
+    n_small: int = 4,
+    mesh: Any = 2,
     executor: Any = None,
     store: str | None = None,
     curve: Callable[..., Any] = static_curve,
 ) -> MasterCurves:
-    """Run one static FE curve per alpha (through ``compare.batch``) and tabulate f, g on x in [0, x_max]."""
+    """Static FE curves per alpha (through ``compare.batch``): one run to x_max in n_x - 1 equal steps and
+    one to x_small in n_small steps (skipped if n_small = 0); f, g on ``table_grid`` (the run states)."""
     from tissuemech.compare import batch
 
     if not 0 < x_max < 0.5:
         raise ValueError(f"x_max = delta/(2 a0) must be in (0, 0.5); got {x_max}")
     if any(a < 0 for a in alphas):
         raise ValueError("alpha must be >= 0 (0 is neo-Hookean)")
-    x = np.linspace(0.0, x_max, n_x)
-    runs = batch.run(
-        curve, [dict(alpha=float(a), x_max=float(x_max), mesh=mesh) for a in alphas], executor=executor, store=store
-    )
-    fg = [_to_master(r, x) for r in runs]
+    x = table_grid(n_x, x_max, x_small if n_small else 0.0, n_small)
+    jobs = [dict(alpha=float(a), x_max=float(x_max), mesh=mesh, n=n_x - 1) for a in alphas]
+    if n_small and x[1] < x_max / (n_x - 1) * (1 - 1e-9):
+        jobs += [dict(alpha=float(a), x_max=float(x_small), mesh=mesh, n=n_small) for a in alphas]
+    if curve is not static_curve:  # a user/fake curve may not take n
+        jobs = [{k: v for k, v in j.items() if k != "n"} for j in jobs]
+    runs = batch.run(curve, jobs, executor=executor, store=store)
+    na = len(alphas)
+    fg = []
+    for i in range(na):
+        parts = [runs[i]] + ([runs[na + i]] if len(runs) > na else [])
+        merged = {
+            "approach": np.concatenate([p["approach"] for p in parts]),
+            "force": np.concatenate([p["force"] for p in parts]),
+            "midplane_radius": np.concatenate([p["midplane_radius"] for p in parts]),
+            "radius": parts[0]["radius"],
+            "C": parts[0]["C"],
+        }
+        fg.append(_to_master(merged, x))
     return MasterCurves(x, np.asarray(alphas, dtype=float), np.array([a for a, _ in fg]), np.array([b for _, b in fg]))
 
 
-def _xlogx(x: np.ndarray) -> np.ndarray:
-    return np.where(x > 0, x * np.log(np.where(x > 0, x, 1.0)), 0.0)
+def sqrt_basis(x: np.ndarray, degree: int) -> np.ndarray:
+    """Columns s^k, k = 1..degree, s = sqrt(x): the small-x basis of h = f / f_Hertz - 1."""
+    s = np.sqrt(np.maximum(np.asarray(x, float), 0.0))
+    return np.stack([s**k for k in range(1, degree + 1)], axis=1)
 
 
-def smooth(curves: MasterCurves, degree: int = 3) -> tuple[MasterCurves, float]:
-    """Least-squares fits in x (per alpha) that keep the exact small-strain limits:
+def smooth(curves: MasterCurves, degree: int = 8) -> tuple[MasterCurves, float]:
+    """Least-squares fits in s = sqrt(x) (per alpha) that keep the exact small-strain limits:
 
-        f / f_Hertz = 1 + c_0 x ln x + sum_{k=1..degree} c_k x^k,   g = 1 + sum_{k=1..degree+1} d_k x^k.
+        f / f_Hertz = 1 + sum_{k=1..degree} c_k s^k,   g = 1 + sum_{k=1..degree/2+1} d_k x^k.
 
-    (The x ln x term is the finite-ball correction to the half-space Hertz law; with it the fit
-    residual is at the FE's own contact-discretisation noise, ~0.3 %, from nodes entering contact one
-    at a time.) The noise is removed, so dF_eq/ddelta, which drives the Maxwell branches, is smooth.
-    Returns (smoothed curves, max relative change of f)."""
+    The basis contains the true small-x behaviour of a finite ball between plates (f / f_Hertz - 1 grows
+    like sqrt(x), physics: the finite-size correction to the half-space Hertz law). With the fitted-edge
+    FE the data are smooth already; the returned max relative change of f is the fit residual (a check that
+    the basis represents the curves, not a noise filter). Returns (smoothed curves, max relative change of f)."""
     x = curves.x
     pos = x > 0
     xp = x[pos]
-    Vf = np.stack([_xlogx(xp)] + [xp**k for k in range(1, degree + 1)], axis=1)
-    Vf_all = np.stack([_xlogx(x)] + [x**k for k in range(1, degree + 1)], axis=1)
-    Vg = np.stack([x**k for k in range(1, degree + 2)], axis=1)
+    Vf, Vf_all = sqrt_basis(xp, degree), sqrt_basis(x, degree)
+    Vg = np.stack([x**k for k in range(1, degree // 2 + 2)], axis=1)
     f_s, g_s = np.empty_like(curves.f), np.empty_like(curves.g)
     for i in range(len(curves.alpha)):
         ratio = curves.f[i, pos] / hertz_f(xp)
@@ -151,8 +202,8 @@ def write(path: str | Path, curves: MasterCurves, metadata: dict, raw: MasterCur
     x = curves.x
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(x > 0, curves.f / hertz_f(x), np.nan)
-    if x[0] == 0 and len(x) > 2:  # x -> 0 limit: extrapolate linearly from the first two positive nodes
-        ratio[:, 0] = 2 * ratio[:, 1] - ratio[:, 2]
+    if x[0] == 0:  # the Hertz limit of a ball between plates (h - 1 ~ sqrt(x) -> 0)
+        ratio[:, 0] = 1.0
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     extra = {} if raw is None else dict(f_raw=raw.f, g_raw=raw.g)
     np.savez(
@@ -204,13 +255,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     ap.add_argument("--install", action="store_true", help="write the shipped table reduced/data/spheroid_master.npz")
     ap.add_argument("--store", default=None, help="folder for per-run results (resume)")
-    ap.add_argument(
-        "--n-x", type=_count, default=31, help="points in x = delta/(2 a0) per alpha (default: %(default)s)"
-    )
+    ap.add_argument("--n-x", type=_count, default=37, help="states of the main run, from x = 0 (default: %(default)s)")
     ap.add_argument(
         "--x-max",
         type=_fraction,
-        default=0.3,
+        default=0.36,
         help="largest x = delta/(2 a0) of the table, in (0, 0.8) (default: %(default)s)",
     )
     ap.add_argument(
@@ -218,48 +267,58 @@ def main(argv: Sequence[str] | None = None) -> int:
         default=",".join(str(a) for a in DEFAULT_ALPHAS),
         help="comma list of Fung exponents alpha >= 0 to tabulate (default: %(default)s)",
     )
+    ap.add_argument("--mesh", default="2", help="FE level of the table (default: %(default)s)")
     ap.add_argument(
-        "--mesh", default="3", help="FE mesh of the table: a fem.spheroid level or name (default: %(default)s)"
+        "--error-mesh", default="3", help="finer level of the independent check ('' to skip; default: %(default)s)"
     )
-    ap.add_argument(
-        "--error-mesh", default="fine", help="coarser mesh for the error estimate ('' to skip; default: %(default)s)"
-    )
-    ap.add_argument("--degree", type=int, default=3, help="degree of the smoothing polynomials in x (0: none)")
+    ap.add_argument("--check-alphas", default=",".join(str(a) for a in CHECK_ALPHAS))
+    ap.add_argument("--degree", type=int, default=8, help="degree in sqrt(x) of the small-x basis fit (a check)")
     a = ap.parse_args(list(sys.argv[1:] if argv is None else argv))
     try:
         alphas = [float(v) for v in a.alphas.split(",")]
+        chk = [float(v) for v in a.check_alphas.split(",")]
     except ValueError:
-        ap.error(f"--alphas must be a comma list of numbers, got {a.alphas!r}")
+        ap.error(f"--alphas / --check-alphas must be comma lists of numbers, got {a.alphas!r} / {a.check_alphas!r}")
     if any(not (v >= 0) for v in alphas):
         ap.error(f"--alphas must be >= 0, got {a.alphas!r}")
+    if any(c not in alphas for c in chk):
+        ap.error(f"--check-alphas must be a subset of --alphas, got {a.check_alphas!r}")
     if a.install:
         a.out = str(DEFAULT_OUT)
-    a.mesh = int(a.mesh) if str(a.mesh).isdigit() else a.mesh  # "fine" or a level number of fem.spheroid
-    a.error_mesh = int(a.error_mesh) if str(a.error_mesh).isdigit() else a.error_mesh
-    kw = dict(alphas=alphas, n_x=a.n_x, x_max=a.x_max)
-    raw = tabulate(mesh=a.mesh, store=a.store, **kw)
-    curves, change = smooth(raw, a.degree) if a.degree > 0 else (raw, 0.0)
-    err = None
-    if a.error_mesh:
-        coarse = tabulate(mesh=a.error_mesh, store=a.store, **kw)
-        err = float(np.max(np.abs(coarse.f[:, 1:] / raw.f[:, 1:] - 1.0)))
+    lev = lambda v: int(v) if str(v).isdigit() else v  # a fem.spheroid level number or name
+    a.mesh, a.error_mesh = lev(a.mesh), lev(a.error_mesh)
+    kw = dict(n_x=a.n_x, x_max=a.x_max)
+    raw = tabulate(alphas=alphas, mesh=a.mesh, store=a.store, **kw)
+    _, change = smooth(raw, a.degree) if a.degree > 0 else (raw, float("nan"))
+    err, err_x = None, None
+    if a.error_mesh != "":
+        fine = tabulate(alphas=chk, mesh=a.error_mesh, store=a.store, **kw)
+        rows = [alphas.index(c) for c in chk]
+        rel = np.abs(raw.f[rows][:, 1:] / fine.f[:, 1:] - 1.0)
+        err = float(rel.max())
+        err_x = float(raw.x[1:][np.argmax(rel.max(axis=0))])
     meta = dict(
         mesh=a.mesh,
         error_mesh=a.error_mesh or None,
+        check_alphas=a.check_alphas,
         discretisation_error_f=err,
-        smoothing_degree=a.degree,
-        smoothing_max_change_f=change,
+        discretisation_error_at_x=err_x,
+        # the relative 1-sigma error of F_eq the fits add to their noise model (compare.fit model_error="auto")
+        model_error_rel=err,
+        interpolation="f = f_Hertz(x) h(sqrt(x), alpha), h natural cubic splines in s = sqrt(x) and alpha",
+        sqrt_basis_degree=a.degree,
+        sqrt_basis_max_residual_f=change,
         command="python -m tissuemech.compare.calibrate " + " ".join(sys.argv[1:] if argv is None else argv),
         radius_m=RADIUS,
         C_Pa=C_REF,
         kappa_Pa=KAPPA,
         definition="f = F_eq/(C a0^2), g = r_mid/a0, x = delta/(2 a0) (total approach delta)",
     )
-    write(a.out, curves, meta, raw=raw)
+    write(a.out, raw, meta)
     print(
-        f"wrote {a.out}: {len(curves.alpha)} alphas x {len(curves.x)} points; "
-        f"estimated discretisation error of f: {err if err is not None else 'not estimated'}; "
-        f"smoothing changed f by at most {change:.2e}"
+        f"wrote {a.out}: {len(raw.alpha)} alphas x {len(raw.x)} points (x up to {raw.x[-1]:g}); "
+        f"discretisation error of f vs level {a.error_mesh}: {err if err is not None else 'not estimated'}"
+        f"{'' if err_x is None else f' (largest at x = {err_x:g})'}; sqrt(x)-basis fit residual {change:.2e}"
     )
     return 0
 

@@ -12,11 +12,14 @@ API
                             hollow sphere, lengths scaled by A; tags "inner", "outer", "symmetry" (Z = 0),
                             "axis" (R = 0; for ``half`` the two axis segments). ``grading`` > 1 refines
                             toward the inner surface (geometric ratio of the outermost to innermost layer).
-``ball_section(a0, n_core, n_radial, *, grading=1.0, pole_grading=1.0, order=2)``
+``ball_section(a0, n_core, n_radial, *, grading=1.0, pole_grading=1.0, order=2, pole_points=None,
+radial_points=None, n_equator=None, split_angle=pi/4)``
                             quarter disk (R >= 0, Z >= 0) of a solid ball as an O-grid (core square + two
                             curved blocks), lengths scaled by a0, refined toward the surface (``grading``)
                             and toward the top pole R = 0, Z = a0 (``pole_grading``); tags "axis" (R = 0),
-                            "symmetry" (Z = 0), "outer" (surface).
+                            "symmetry" (Z = 0), "outer" (surface). Explicit node positions
+                            (``pole_points``, ``radial_points``) place a node on a contact edge; the node
+                            numbering depends on the divisions only, not on the positions.
 Coordinates: (R, Z) = (radial, axial); the axis of symmetry is R = 0.
 """
 
@@ -144,21 +147,58 @@ def shell_section(
     return _finish(m1, order, mapper, inner_radius, tags)
 
 
+def _check_points(p, n: int, name: str) -> np.ndarray:
+    p = np.asarray(p, dtype=float)
+    if p.shape != (n + 1,) or abs(p[0]) > 1e-14 or abs(p[-1] - 1) > 1e-14 or np.any(np.diff(p) <= 0):
+        raise ValueError(f"{name} must be {n + 1} increasing numbers from 0 to 1 (fractions of the block edge)")
+    return np.r_[0.0, p[1:-1], 1.0]
+
+
 def ball_section(
-    radius: float, n_core: int, n_radial: int, *, grading: float = 1.0, pole_grading: float = 1.0, order: int = 2
+    radius: float,
+    n_core: int,
+    n_radial: int,
+    *,
+    grading: float = 1.0,
+    pole_grading: float = 1.0,
+    order: int = 2,
+    pole_points: np.ndarray | None = None,
+    radial_points: np.ndarray | None = None,
+    n_equator: int | None = None,
+    split_angle: float = 0.25 * np.pi,
 ) -> AxiMesh:
     """O-grid quarter disk of a solid ball (lengths scaled by ``radius``).
 
     Core square [0, c]^2 (c = 0.55) with ``n_core`` divisions per side, two curved blocks between the
     square and the arc with ``n_radial`` layers. ``grading`` > 1 refines toward the surface,
     ``pole_grading`` > 1 refines toward the top pole (R = 0, Z = 1), the plate contact zone.
+    ``pole_points`` (n_core + 1 increasing values from 0 to 1; replaces ``pole_grading``): the node
+    positions along the pole block, as fractions of its arc (the surface angle from the pole is
+    (pi/4) u) and of the core's top edge (R = c u): e.g. a surface node placed on a contact edge.
+    ``radial_points`` (n_radial + 1 increasing values from 0 at the core to 1 at the surface;
+    replaces ``grading``): the layer boundaries of both curved blocks. ``n_equator`` (default ``n_core``):
+    divisions of the equator block's arc and of the core in Z (the core is n_core x n_equator).
+    ``split_angle`` (rad from the pole, default pi/4): where the pole block's arc ends and the equator
+    block's begins; the core is the rectangle [0, c sqrt2 sin(split)] x [0, c sqrt2 cos(split)].
     """
     if not (radius > 0 and np.isfinite(radius)):
         raise ValueError(f"ball radius must be positive, got {radius}")
     c = 0.55
+    if not (0.05 < split_angle < 0.5 * np.pi - 0.05):
+        raise ValueError(f"split_angle must be in (0.05, pi/2 - 0.05) rad, got {split_angle}")
+    cr, cz = c * np.sqrt(2) * np.sin(split_angle), c * np.sqrt(2) * np.cos(split_angle)
+    if abs(split_angle - 0.25 * np.pi) < 1e-15:
+        cr = cz = c
     u_pole = graded_points(n_core, pole_grading)  # 0 at the axis, fine there if pole_grading > 1
-    u_eq = np.linspace(0.0, 1.0, n_core + 1)
+    if pole_points is not None:
+        u_pole = _check_points(pole_points, n_core, "pole_points")
+    n_eq = n_core if n_equator is None else int(n_equator)
+    if n_eq < 1:
+        raise ValueError(f"a mesh needs at least one division, got n_equator = {n_equator}")
+    u_eq = np.linspace(0.0, 1.0, n_eq + 1)
     v = graded_points(n_radial, 1.0 / grading)  # 0 at the core, 1 at the surface (fine there)
+    if radial_points is not None:
+        v = _check_points(radial_points, n_radial, "radial_points")
 
     pts, quads = [], []
 
@@ -169,23 +209,29 @@ def ball_section(
         idx = off + np.arange((n1 + 1) * (n2 + 1)).reshape(n1 + 1, n2 + 1)
         quads.append(np.stack([idx[:-1, :-1], idx[1:, :-1], idx[1:, 1:], idx[:-1, 1:]], -1).reshape(-1, 4))
 
-    # core: R = c u_pole (graded toward the axis), Z = c u_eq
-    block(np.stack(np.meshgrid(c * u_pole, c * u_eq, indexing="ij"), -1))
-    # equator block: inner edge (c, c u), outer arc angle pi/4 u
-    inner = np.stack([np.full_like(u_eq, c), c * u_eq], -1)
-    outer = np.stack([np.cos(0.25 * np.pi * u_eq), np.sin(0.25 * np.pi * u_eq)], -1)
+    # core: R = cr u_pole (graded toward the axis), Z = cz u_eq
+    block(np.stack(np.meshgrid(cr * u_pole, cz * u_eq, indexing="ij"), -1))
+    # equator block: inner edge (cr, cz u), outer arc at angle (pi/2 - split) u from the equator
+    inner = np.stack([np.full_like(u_eq, cr), cz * u_eq], -1)
+    phi = (0.5 * np.pi - split_angle) * u_eq
+    outer = np.stack([np.cos(phi), np.sin(phi)], -1)
     block((1 - v)[:, None, None] * inner[None] + v[:, None, None] * outer[None])
-    # pole block: inner edge (c u, c), outer arc (sin(pi/4 u), cos(pi/4 u))
-    inner = np.stack([c * u_pole, np.full_like(u_pole, c)], -1)
-    outer = np.stack([np.sin(0.25 * np.pi * u_pole), np.cos(0.25 * np.pi * u_pole)], -1)
+    # pole block: inner edge (cr u, cz), outer arc at angle split u from the pole
+    inner = np.stack([cr * u_pole, np.full_like(u_pole, cz)], -1)
+    outer = np.stack([np.sin(split_angle * u_pole), np.cos(split_angle * u_pole)], -1)
     block((1 - v)[None, :, None] * inner[:, None] + v[None, :, None] * outer[:, None])
 
     P = np.concatenate(pts)
     Q = np.concatenate(quads)
     key = np.round(P, 12)
     _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
-    inv = inv.ravel()
-    P, Q = P[first], inv[Q]
+    # number the merged points in order of first appearance (not sorted by coordinates), so meshes with
+    # the same divisions share one node numbering whatever their point positions (pole_points ...)
+    seq = np.argsort(first, kind="stable")
+    rank = np.empty_like(seq)
+    rank[seq] = np.arange(seq.size)
+    inv = rank[inv.ravel()]
+    P, Q = P[first[seq]], inv[Q]
     # counterclockwise orientation
     x, y = P[Q, 0], P[Q, 1]
     area = 0.5 * np.sum(x * np.roll(y, -1, 1) - np.roll(x, -1, 1) * y, axis=1)

@@ -9,8 +9,8 @@ frictionless plates; ``delta(t)`` is the total approach (m). The plate force (N)
 F_eq is pluggable (``equilibrium=``):
 
 * ``"fem"`` (default): the master curves f(x; alpha) tabulated by the FE (``python -m tissuemech.compare.calibrate``,
-  shipped as ``reduced/data/spheroid_master.npz``; x = delta/(2 a0) in [0, 0.3], alpha in [0, 1]),
-  interpolated by C^2 splines of f / f_Hertz in x and alpha (differentiable in both);
+  shipped as ``reduced/data/spheroid_master.npz``; x = delta/(2 a0) in [0, 0.36], alpha in [0, 1.5]),
+  interpolated by C^2 splines of f / f_Hertz in sqrt(x) and alpha (differentiable in both);
 * ``"hertz"``: small-strain Hertz for two plates, F = (4/3) E* sqrt(a0) (delta/2)^(3/2) with
   E* = 8 C (incompressible), i.e. F_eq = C a0^2 f(x), f(x) = (32/3) x^(3/2), x = delta / (2 a0)
   (independent of alpha; 4 % soft at x = 0.05, 30 % at x = 0.3 against the FE);
@@ -103,8 +103,10 @@ class MasterCurve:
     """Tabulated equilibrium master curves f(x; alpha) = F_eq/(C a0^2), g(x; alpha) = r_mid/a0.
 
     ``x`` (n_x,) from 0 (x = delta / (2 a0)), ``alpha`` (n_a,) or None for a single curve,
-    ``f``/``g`` shaped (n_a, n_x) or (n_x,). Interpolated as f = f_Hertz(x) * h(x, alpha) with h a C^2
-    spline (h -> 1 at x = 0 for a ball), and g directly. ``x_max``/``alpha_range`` bound the table.
+    ``f``/``g`` shaped (n_a, n_x) or (n_x,). Interpolated as f = f_Hertz(x) * h(sqrt(x), alpha) with h a
+    C^2 spline in s = sqrt(x) (h -> 1 at x = 0 for a ball, h - 1 ~ sqrt(x)), and g directly in x. ``h``
+    (optional, same shape as f) gives h = f / f_Hertz at the knots (its x = 0 value included), else it is
+    computed from f (x = 0: extrapolated in s). ``x_max``/``alpha_range`` bound the table.
     """
 
     def __init__(
@@ -114,6 +116,7 @@ class MasterCurve:
         g: np.ndarray | None = None,
         alpha: np.ndarray | None = None,
         metadata: dict | None = None,
+        h: np.ndarray | None = None,
     ):
         x = np.asarray(x, dtype=float)
         f = np.asarray(f, dtype=float)
@@ -125,19 +128,31 @@ class MasterCurve:
         self.x_max = float(x[-1])
         pos = x > 0
         hz = (32.0 / 3.0) * x[pos] ** 1.5
+        # h = f / f_Hertz is splined in s = sqrt(x): for a ball between plates h - 1 grows like sqrt(x),
+        # smooth in s (a spline in x would miss that; compare.calibrate)
+        self.s = np.sqrt(x)
 
         def ratio(fr):
             r = np.empty_like(x)
             r[pos] = fr[pos] / hz
-            if not pos.all():  # x = 0: extrapolate the ratio from the next two points
-                r[0] = r[1] - (r[2] - r[1]) * (x[1] - x[0]) / (x[2] - x[1])
+            if not pos.all():  # x = 0: extrapolate the ratio (quadratic in s) from the next points
+                s1, s2, s3 = self.s[1:4] if x.size > 3 else (self.s[1], self.s[2], None)
+                if s3 is None:
+                    r[0] = r[1] - (r[2] - r[1]) * s1 / (s2 - s1)
+                else:
+                    l1, l2, l3 = (
+                        s2 * s3 / ((s1 - s2) * (s1 - s3)),
+                        s1 * s3 / ((s2 - s1) * (s2 - s3)),
+                        s1 * s2 / ((s3 - s1) * (s3 - s2)),
+                    )
+                    r[0] = l1 * r[1] + l2 * r[2] + l3 * r[3]
             return r
 
         if alpha is None:
             if f.shape != x.shape:
                 raise ValueError(f"master curve: f needs shape {x.shape}; got {f.shape}")
             self.alpha = None
-            self._h = Spline1D(x, ratio(f))
+            self._h = Spline1D(self.s, ratio(f) if h is None else np.asarray(h, float))
             self._g = None if g is None else Spline1D(x, np.asarray(g, dtype=float))
             self.alpha_range = (0.0, np.inf)
         else:
@@ -147,19 +162,21 @@ class MasterCurve:
                     f"master curve: f needs shape (n_alpha, n_x) = ({alpha.size}, {x.size}); got {f.shape}"
                 )
             self.alpha = alpha
-            self._h = Spline2D(x, alpha, np.stack([ratio(fr) for fr in f]))
+            hv = np.stack([ratio(fr) for fr in f]) if h is None else np.asarray(h, float)
+            self._h = Spline2D(self.s, alpha, hv)
             self._g = None if g is None else Spline2D(x, alpha, np.asarray(g, dtype=float))
             self.alpha_range = (float(alpha[0]), float(alpha[-1]))
 
     def f(self, x: Any, alpha: Any = 0.0) -> jnp.ndarray:
         """F_eq / (C a0^2) at x = delta/(2 a0)."""
-        h = self._h(x) if self.alpha is None else self._h(x, alpha)
+        s = _sqrt_safe(jnp.maximum(jnp.asarray(x, dtype=jnp.float64), 0.0))
+        h = self._h(s) if self.alpha is None else self._h(s, alpha)
         return hertz_f(x) * h
 
     def f_curve(self, alpha: Any = 0.0) -> Callable:
         """x -> F_eq/(C a0^2) at one alpha (alpha interpolation done once: fast inside ODEs)."""
         h = self._h if self.alpha is None else self._h.curve(alpha)
-        return lambda x: hertz_f(x) * h(x)
+        return lambda x: hertz_f(x) * h(_sqrt_safe(jnp.maximum(jnp.asarray(x, dtype=jnp.float64), 0.0)))
 
     def g_curve(self, alpha: Any = 0.0) -> Callable:
         """x -> r_mid / a0 at one alpha."""
@@ -211,7 +228,10 @@ def master_curve(path: str | None = None) -> MasterCurve:
         )
     with np.load(p, allow_pickle=False) as z:
         meta = json.loads(str(z["metadata"])) if "metadata" in z.files else {}
-        return MasterCurve(z["x"], z["f"], z["g"] if "g" in z.files else None, alpha=z["alpha"], metadata=meta)
+        h = z["f_over_hertz"] if "f_over_hertz" in z.files else None
+        if h is not None and not np.all(np.isfinite(h)):
+            h = None
+        return MasterCurve(z["x"], z["f"], z["g"] if "g" in z.files else None, alpha=z["alpha"], metadata=meta, h=h)
 
 
 # ---------------------------------------------------------------- equilibrium laws (dimensionless)

@@ -26,7 +26,7 @@ def fake_curve(*, alpha, x_max, mesh="default"):
 
 def test_tabulate_reproduces_curve_and_file_roundtrip(tmp_path):
     curves = calibrate.tabulate(
-        alphas=(0.0, 0.5, 1.0), n_x=16, executor="serial", store=str(tmp_path / "s"), curve=fake_curve
+        alphas=(0.0, 0.5, 1.0), n_x=16, x_max=0.3, executor="serial", store=str(tmp_path / "s"), curve=fake_curve
     )
     x = curves.x
     assert x[0] == 0.0 and x[-1] == pytest.approx(0.3)
@@ -40,7 +40,18 @@ def test_tabulate_reproduces_curve_and_file_roundtrip(tmp_path):
     with np.load(out) as z:
         r = z["f_over_hertz"]
     assert np.allclose(r[:, 1:], np.exp(curves.alpha[:, None] * x[None, 1:]), rtol=2e-3)
-    assert np.allclose(r[:, 0], 1.0, atol=1e-2)  # Hertz limit at x -> 0
+    assert np.all(r[:, 0] == 1.0)  # Hertz limit at x -> 0
+    # the grid: fine steps to x_small, then the main run's states
+    assert np.allclose(x[:6], [0, 0.0025, 0.005, 0.0075, 0.01, 0.02])
+
+
+def test_sqrt_basis_contains_the_small_x_law():
+    """h = 1 + c1 sqrt(x) + c2 x is represented exactly by the sqrt(x) basis (an x ln x basis cannot)."""
+    x = calibrate.table_grid(19, 0.36)
+    h = 1 + 0.3 * np.sqrt(x) + 0.5 * x
+    c = calibrate.MasterCurves(x, np.array([0.0]), (calibrate.hertz_f(x) * h)[None], (1 + x / 2)[None])
+    sm, change = calibrate.smooth(c, degree=4)
+    assert change < 1e-12 and np.allclose(sm.f, c.f, rtol=1e-12, atol=1e-15)
 
 
 def _short_curve(*, alpha, x_max, mesh="default"):

@@ -224,6 +224,60 @@ def test_bad_input_messages(kw, msg):
         compress(**{**FIG10, **kw})
 
 
+# ---- contact-edge-fitted levels: smooth in delta and in h ------------------------------------------
+def _static(x, mesh, n=None, alpha=0.2):
+    return compress(
+        radius=A0,
+        C=200.0,
+        alpha=alpha,
+        branches=(),
+        displacement=2 * A0 * x,
+        ramp_time=1.0,
+        end_time=1.0,
+        mesh=mesh,
+        static=True,
+        n_static=n,
+    )
+
+
+def test_fitted_static_curve_is_smooth_and_signorini():
+    """No node-to-node jitter: F/F_Hertz on a 20-point curve is a smooth function of sqrt(x) to < 1e-4
+    (nodal contact on a fixed mesh: ~2e-3)."""
+    r = _static(0.2, "coarse", n=20)
+    x = r.approach / (2 * A0)
+    h = r.force / hertz_force(r.approach, A0, 200.0)
+    s = np.sqrt(x)
+    V = np.stack([s**k for k in range(6)], axis=1)
+    fit = V @ np.linalg.lstsq(V, h, rcond=None)[0]
+    assert np.sqrt(np.mean((h / fit - 1) ** 2)) < 1e-4
+    assert np.all(r.min_gap >= -1e-12 * A0) and np.all(r.min_contact_force >= -2e-4 * r.force)
+    assert np.max(np.abs(r.force - r.reaction_force) / r.force) < 1e-6
+    # the contact edge is a node: the reported radius grows smoothly, close to Hertz at small x
+    assert np.all(np.diff(r.contact_radius) > 0)
+    assert 0.9 < r.contact_radius[0] / np.sqrt(A0 * r.approach[0] / 2) < 1.2
+
+
+def test_fitted_mesh_topology_is_fixed_and_edge_node_on_target():
+    from tissuemech.fem.spheroid import LEVELS, SPLIT, fitted_mesh
+
+    a, b = fitted_mesh(A0, 1, 0.2), fitted_mesh(A0, 1, 0.6)
+    assert np.array_equal(a.mesh.t, b.mesh.t) and np.array_equal(a.nodes["outer"], b.nodes["outer"])
+    k = LEVELS[1][3]
+    for m, e in ((a, 0.2), (b, 0.6)):
+        th = np.arctan2(m.X[0, m.nodes["outer"]], m.X[1, m.nodes["outer"]])
+        assert np.isclose(np.sort(th)[2 * k], SPLIT * e, rtol=1e-12)
+    with pytest.raises(ValueError, match="contact edge"):
+        fitted_mesh(A0, 1, 0.99)
+
+
+@pytest.mark.slow
+def test_mesh_sequence_converges_smoothly():
+    """Successive differences of F on levels 0, 1, 2 shrink at a regular rate (no jitter)."""
+    F = [_static(0.1, lev, n=2).force[-1] for lev in (0, 1, 2)]
+    d1, d2 = F[1] - F[0], F[2] - F[1]
+    assert abs(d2) < 0.3 * abs(d1) and abs(d2) / F[2] < 2e-4
+
+
 # ---- slow: the acceptance cases -------------------------------------------------------------------
 @pytest.mark.slow
 def test_static_to_30_percent_and_40():

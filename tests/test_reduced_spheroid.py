@@ -265,3 +265,39 @@ def test_quadrature_and_ode_paths_agree(tau):
         assert np.max(np.abs(sq - so)) < 5e-8 * so.max()
     with pytest.raises(ValueError, match="method"):
         sp.force(T, **kw, method="euler")
+
+
+def test_master_curve_small_x_behaviour():
+    """h = f / f_Hertz -> 1 with a leading correction ~ sqrt(x): (h - 1) / sqrt(x) tends to a finite,
+    positive constant, and the sqrt-spline reproduces it between the knots."""
+    if not sp.DATA_FILE.exists():
+        pytest.skip("no shipped table")
+    mc = sp.master_curve()
+    for alpha in (0.0, 0.5, 1.0):
+        h = lambda x: float(mc.f(x, alpha) / sp.hertz_f(x))
+        c = [(h(x) - 1) / np.sqrt(x) for x in (0.0025, 0.005, 0.01)]
+        assert 0.1 < c[0] < 1.0 and abs(c[1] / c[0] - 1) < 0.15 and abs(c[2] / c[0] - 1) < 0.3
+        assert abs(h(1e-6) - 1) < 2e-3 * 1.0  # h(0) = 1: the Hertz limit
+        # between the first knots the spline in sqrt(x) follows the same law (no kink / overshoot)
+        assert c[0] * np.sqrt(0.001) * 0.7 < h(0.001) - 1 < c[0] * np.sqrt(0.001) * 1.3
+    # a user table of a pure sqrt(x) correction is reproduced between its knots (spline in sqrt(x))
+    x = np.r_[0.0, np.linspace(0.01, 0.36, 36)]
+    f = (32 / 3) * x**1.5 * (1 + 0.3 * np.sqrt(x))
+    tab = sp.MasterCurve(x, f)
+    xt = np.array([0.0004, 0.003, 0.0151, 0.2233])
+    assert np.allclose(np.asarray(tab.f(xt)) / ((32 / 3) * xt**1.5 * (1 + 0.3 * np.sqrt(xt))), 1.0, atol=2e-5)
+
+
+@pytest.mark.slow
+def test_master_curve_matches_fresh_fe_at_random_points():
+    """The shipped table against fresh FE runs (its own level, other x and alpha than its knots)."""
+    if not sp.DATA_FILE.exists():
+        pytest.skip("no shipped table")
+    from tissuemech.compare.bench.fem_spheroid import static_force
+
+    mc = sp.master_curve()
+    level = int(mc.metadata.get("mesh", 2))
+    rng = np.random.default_rng(10)
+    for x, alpha in zip(rng.uniform(0.015, 0.3, 2), rng.uniform(0.05, 1.45, 2)):
+        fe = static_force(float(x), float(alpha), level)
+        assert float(mc.f(x, alpha)) / fe == pytest.approx(1.0, abs=1e-4)

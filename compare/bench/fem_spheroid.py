@@ -6,16 +6,20 @@ the seed's Fig. 10 run (C = 150 Pa, alpha = 0.2, beta = 0.4, tau = 200 s, 50 um 
 Newton iterations per step, force error vs the fine meshes; the fitted relaxation time; F(1500 s) vs
 the static F_eq(50 um) corrected for the branch stress left at 1500 s; contact vs reaction force; the
 static curve to 30 % (and 40 %) compression; the Hertz ratio at small approach on a pole-refined mesh;
-the mesh-convergence table of F at t = 0.2 s and 1500 s; the Figs 8-9 case. Baselines (FElupe, from the
-issue): Fig. 10 run 47 s, static curve to 30 % 15 s. The machine is shared: timings are pessimistic.
+the mesh-convergence table of F at t = 0.2 s and 1500 s; the converged reference (``reference``: static
+F_eq at x = delta/(2 a0) in XS for alpha 0, 0.2, 1 and the Fig. 10 force at 0.2 s and 1500 s on levels
+1..4, observed order from the three finest, Richardson estimate, each level's error against it); the
+Figs 8-9 case. Baselines (FElupe, from the issue): Fig. 10 run 47 s, static curve to 30 % 15 s. The machine
+is shared: timings are pessimistic. ``--reference`` prints only the reference table (``--quick``: levels 1..3).
 """
 
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 
 import numpy as np
-from scipy.optimize import curve_fit
+from scipy.optimize import brentq, curve_fit
 
 from tissuemech.fem.mesh import ball_section
 from tissuemech.fem.spheroid import LEVELS, compress, hertz_force
@@ -54,7 +58,10 @@ def fig10(quick: bool) -> None:
         r, w = _timed(**FIG10)
         times.append(w)
     n = len(r.time)
-    print(f"default mesh {LEVELS[1]} (n_core, n_radial, grading, pole grading), {r.mesh.mesh.nelements} Q2 elements")
+    print(
+        f"default mesh {LEVELS[1]} (n_core, n_radial, grading, n_contact; fitted to the contact edge), "
+        f"{r.mesh.mesh.nelements} Q2 elements"
+    )
     print(
         f"wall time min {min(times):.3f} s, median {np.median(times):.3f} s ({len(times)} runs; FElupe baseline 47 s)"
     )
@@ -180,6 +187,78 @@ def convergence(quick: bool) -> None:
         )
 
 
+XS = (0.005, 0.01, 0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.35)
+REF_ALPHAS = (0.0, 0.2, 1.0)
+
+
+def static_force(x: float, alpha: float, level, C: float = 200.0) -> float:
+    """F_eq / (C a0^2) at x = delta/(2 a0): one static run on a fitted level (steps <= 0.05 in x)."""
+    r = compress(
+        radius=A0,
+        C=C,
+        alpha=alpha,
+        branches=(),
+        displacement=2 * A0 * x,
+        ramp_time=1.0,
+        end_time=1.0,
+        static=True,
+        mesh=level,
+        n_static=max(2, int(np.ceil(x / 0.05 - 1e-9))),
+    )
+    return float(r.force[-1] / (C * A0**2))
+
+
+def richardson(values: Sequence[float], h: Sequence[float]) -> tuple[float, float]:
+    """(observed order p, extrapolated value) from the three finest levels (h decreasing, any ratios).
+
+    p solves (v2 - v1) / (v3 - v2) = (h1^p - h2^p) / (h2^p - h3^p); the estimate is
+    v3 + (v3 - v2) / ((h2 / h3)^p - 1). A non-monotone triple (no asymptotic range) gives p = nan and
+    returns the finest value."""
+    v1, v2, v3 = (float(v) for v in values[-3:])
+    h1, h2, h3 = (float(v) for v in h[-3:])
+    d1, d2 = v2 - v1, v3 - v2
+    if d2 == 0:
+        return np.inf, v3
+    q = d1 / d2
+    if not q > 0:
+        return np.nan, v3
+    g = lambda p: (h1**p - h2**p) / (h2**p - h3**p) - q
+    try:
+        p = brentq(g, 0.05, 12.0)
+    except ValueError:
+        return np.nan, v3
+    return p, v3 + d2 / ((h2 / h3) ** p - 1.0)
+
+
+def reference(quick: bool, levels: Sequence[int] | None = None, alphas: Sequence[float] = REF_ALPHAS) -> dict:
+    """The converged reference: level sequence, observed order, Richardson estimate, errors per level."""
+    levels = list(levels or ((1, 2, 3) if quick else (1, 2, 3, 4)))
+    h = [1.0 / LEVELS[lev][0] for lev in levels]
+    print(
+        f"\n## Converged reference: levels {levels} (h ~ 1/n_core = {', '.join(f'1/{LEVELS[v][0]}' for v in levels)}), "
+        "observed order p from the three finest, Richardson estimate F_inf; errors F_level / F_inf - 1"
+    )
+    head = f"{'case':>22} " + " ".join(f"{'lev ' + str(v):>10}" for v in levels) + f" {'p':>6} {'F_inf':>14}"
+    print(head)
+    out = {}
+    rows = [(f"alpha {a:g} x {x:g}", (lambda lev, a=a, x=x: static_force(x, a, lev))) for a in alphas for x in XS]
+    fig = {}
+
+    def fig10_at(lev, k):
+        if lev not in fig:
+            r = compress(**FIG10, mesh=lev)
+            fig[lev] = (np.interp(0.2, r.time, r.force), r.force[-1])
+        return fig[lev][k] / (150.0 * A0**2)
+
+    rows += [("Fig. 10 F(0.2 s)", lambda lev: fig10_at(lev, 0)), ("Fig. 10 F(1500 s)", lambda lev: fig10_at(lev, 1))]
+    for name, fn in rows:
+        v = [fn(lev) for lev in levels]
+        p, finf = richardson(v, h)
+        out[name] = dict(values=v, order=p, reference=finf)
+        print(f"{name:>22} " + " ".join(f"{vi / finf - 1:+10.2e}" for vi in v) + f" {p:6.2f} {finf:14.9f}", flush=True)
+    return out
+
+
 def fig89() -> None:
     print(
         "\n## Figs 8-9 case: C = 200 Pa, alpha = 0.2, beta = 1.2, tau = 200 s, delta = 200 um in 0.2 s, held to 1500 s"
@@ -224,6 +303,9 @@ def main(argv: list[str] | None = None) -> int:
     """Options: --quick (fewer meshes/repeats), --figure PATH.png (seed Figs 8-9 + VTU)."""
     argv = list(argv or [])
     quick = "--quick" in argv
+    if "--reference" in argv:
+        reference(quick)
+        return 0
     print(
         "# FE spheroid benchmark (fem.spheroid.compress; a0 = 500 um, kappa = 2.2 GPa, quarter section, "
         "exact active-set contact)"
@@ -232,6 +314,7 @@ def main(argv: list[str] | None = None) -> int:
     static_curve(quick)
     hertz(quick)
     convergence(quick)
+    reference(quick)
     r = fig89()
     if "--figure" in argv:
         figure(argv[argv.index("--figure") + 1], r)
