@@ -547,7 +547,7 @@ def compress(
             d_hold = dscaled(end_time) if d_max is not None else max(dscaled(t) for t in np.linspace(0, end_time, 401))
             if d_hold > 0:
                 edge = _static_fitted(
-                    fit, lambda t: d_hold, [1.0], lambda t: f"delta = {2 * a0 * d_hold * 1e6:.4g} um"
+                    fit, lambda t: d_hold * t, [1.0], lambda t: f"delta = {2 * a0 * d_hold * t * 1e6:.4g} um"
                 )[-1][6]
             else:
                 edge = 0.5

@@ -30,8 +30,13 @@ def _interval(k: jnp.ndarray, x: jnp.ndarray) -> jnp.ndarray:
     return jnp.sum(x[..., None] >= k[1:-1], axis=-1)
 
 
-def second_derivative_map(knots: np.ndarray) -> np.ndarray:
-    """Matrix L (n, n) with M = L y the knot second derivatives of the natural spline through y."""
+def second_derivative_map(knots: np.ndarray, ends: str = "natural") -> np.ndarray:
+    """Matrix L (n, n) with M = L y the knot second derivatives of the cubic spline through y.
+
+    ``ends``: "natural" (M = 0 at both ends) or "extrapolated" (M linear over the two end intervals: no
+    spurious flattening where the curve still bends at the ends; needs >= 4 knots, else natural)."""
+    if ends not in ("natural", "extrapolated"):
+        raise ValueError(f"spline ends must be 'natural' or 'extrapolated', got {ends!r}")
     k = np.asarray(knots, dtype=float)
     n = k.size
     if n < 2 or np.any(np.diff(k) <= 0):
@@ -42,6 +47,9 @@ def second_derivative_map(knots: np.ndarray) -> np.ndarray:
     A = np.zeros((n, n))
     B = np.zeros((n, n))
     A[0, 0] = A[-1, -1] = 1.0
+    if ends == "extrapolated" and n >= 4:  # M_0 = M_1 + (M_1 - M_2) h_0 / h_1, likewise at the far end
+        A[0, 1], A[0, 2] = -(1 + h[0] / h[1]), h[0] / h[1]
+        A[-1, -2], A[-1, -3] = -(1 + h[-1] / h[-2]), h[-1] / h[-2]
     for i in range(1, n - 1):
         A[i, i - 1], A[i, i], A[i, i + 1] = h[i - 1] / 6, (h[i - 1] + h[i]) / 3, h[i] / 6
         B[i, i - 1], B[i, i], B[i, i + 1] = 1 / h[i - 1], -1 / h[i - 1] - 1 / h[i], 1 / h[i]
@@ -77,14 +85,14 @@ def spline_eval(knots: np.ndarray, y: Any, M: Any, x: Any) -> jnp.ndarray:
 class Spline1D:
     """s(x) through (knots, values), natural cubic; callable on JAX arrays (jit/vmap/grad)."""
 
-    def __init__(self, knots: np.ndarray, values: np.ndarray):
+    def __init__(self, knots: np.ndarray, values: np.ndarray, ends: str = "natural"):
         self.knots = np.asarray(knots, dtype=float)
         self.values = np.asarray(values, dtype=float)
         if self.values.shape != self.knots.shape:
             raise ValueError(f"table: {self.knots.size} knots but values of shape {self.values.shape}")
         if not np.all(np.isfinite(self.values)):
             raise ValueError("table values must be finite numbers")
-        self.L = second_derivative_map(self.knots)
+        self.L = second_derivative_map(self.knots, ends)
         self.M = self.L @ self.values
 
     def __call__(self, x: Any) -> jnp.ndarray:
@@ -94,7 +102,7 @@ class Spline1D:
 class Spline2D:
     """s(x, alpha) on a tensor grid: values (n_alpha, n_x); natural cubic in each direction."""
 
-    def __init__(self, x_knots: np.ndarray, alpha_knots: np.ndarray, values: np.ndarray):
+    def __init__(self, x_knots: np.ndarray, alpha_knots: np.ndarray, values: np.ndarray, ends: str = "natural"):
         self.x = np.asarray(x_knots, dtype=float)
         self.alpha = np.asarray(alpha_knots, dtype=float)
         self.values = np.asarray(values, dtype=float)
@@ -102,9 +110,9 @@ class Spline2D:
             raise ValueError(
                 f"table values need shape (n_alpha, n_x) = ({self.alpha.size}, {self.x.size}); got {self.values.shape}"
             )
-        self.Lx = second_derivative_map(self.x)
+        self.Lx = second_derivative_map(self.x, ends)
         self.Mx = self.values @ self.Lx.T  # knot second derivatives in x of every alpha row
-        self.La = second_derivative_map(self.alpha) if self.alpha.size > 1 else None
+        self.La = second_derivative_map(self.alpha, ends) if self.alpha.size > 1 else None
 
     def at(self, alpha: Any) -> tuple[jnp.ndarray, jnp.ndarray]:
         """(values, x-second-derivatives) of the 1-D spline in x at this alpha (a spline in alpha of

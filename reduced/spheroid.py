@@ -152,7 +152,7 @@ class MasterCurve:
             if f.shape != x.shape:
                 raise ValueError(f"master curve: f needs shape {x.shape}; got {f.shape}")
             self.alpha = None
-            self._h = Spline1D(self.s, ratio(f) if h is None else np.asarray(h, float))
+            self._h = Spline1D(self.s, ratio(f) if h is None else np.asarray(h, float), ends="extrapolated")
             self._g = None if g is None else Spline1D(x, np.asarray(g, dtype=float))
             self.alpha_range = (0.0, np.inf)
         else:
@@ -163,7 +163,7 @@ class MasterCurve:
                 )
             self.alpha = alpha
             hv = np.stack([ratio(fr) for fr in f]) if h is None else np.asarray(h, float)
-            self._h = Spline2D(self.s, alpha, hv)
+            self._h = Spline2D(self.s, alpha, hv, ends="extrapolated")
             self._g = None if g is None else Spline2D(x, alpha, np.asarray(g, dtype=float))
             self.alpha_range = (float(alpha[0]), float(alpha[-1]))
 
