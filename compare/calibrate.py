@@ -303,8 +303,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         check_alphas=a.check_alphas,
         discretisation_error_f=err,
         discretisation_error_at_x=err_x,
-        # the relative 1-sigma error of F_eq the fits add to their noise model (compare.fit model_error="auto")
-        model_error_rel=err,
         interpolation="f = f_Hertz(x) h(sqrt(x), alpha), h natural cubic splines in s = sqrt(x) and alpha",
         sqrt_basis_degree=a.degree,
         sqrt_basis_max_residual_f=change,
