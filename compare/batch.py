@@ -163,7 +163,7 @@ def _save(path: Path, fields: dict[str, np.ndarray], point: Mapping[str, Any], f
     tmp = path.with_name(f"{path.name}.{os.getpid()}.{uuid.uuid4().hex[:12]}.part")
     try:
         with open(tmp, "wb") as fh:
-            np.savez(fh, __point__=np.asarray(point_json), __meta__=np.asarray(json.dumps(meta)), **fields)
+            np.savez(fh, __point__=np.asarray(point_json), __meta__=np.asarray(json.dumps(meta)), **fields)  # type: ignore[arg-type]  # numpy stubs: savez **kwds typed as bool
             fh.flush()
             os.fsync(fh.fileno())
         os.replace(tmp, path)
@@ -369,6 +369,7 @@ def run(
     if isinstance(points, (str, bytes, Mapping)) or not isinstance(points, Iterable):
         raise ValueError(f"points must be a sequence of dicts of keyword arguments; got {type(points).__name__}")
     pts = []
+    j: int | None  # a point index here, first_of.get(...) below
     for j, p in enumerate(points):
         if not isinstance(p, Mapping):
             raise ValueError(f"points[{j}] must be a dict of keyword arguments; got {p!r}")
@@ -454,6 +455,7 @@ def run(
                         collect(fut)
                 continue
             if waiting:  # nothing of our own in flight: look at the points others hold
+                assert folder is not None  # only a store's locks put points in waiting
                 still = []
                 for i in waiting:
                     got = _load_or_quarantine(folder / f"{keys[i]}.npz")

@@ -214,7 +214,7 @@ def write(path: str | Path, curves: MasterCurves, metadata: dict, raw: MasterCur
         g=curves.g,
         f_over_hertz=ratio,
         metadata=np.asarray(json.dumps(metadata)),
-        **extra,
+        **extra,  # type: ignore[arg-type]  # numpy stubs: savez **kwds typed as the allow_pickle bool
     )
 
 

@@ -29,7 +29,7 @@ import math
 import sys
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pandas as pd
@@ -213,11 +213,12 @@ def recommend(
     Fs = [level_fisher(float(d), protocol, truth, model_error=model_error) for d in cand]
     best, best_w = None, math.inf
     for combo in itertools.combinations(range(len(cand)), n_levels):
-        pr = _from_fisher(sum(Fs[k] for k in combo), protocol, truth)
+        pr = _from_fisher(cast(np.ndarray, sum(Fs[k] for k in combo)), protocol, truth)
         if pr.width[target] < best_w:
             best, best_w = combo, pr.width[target]
+    best = cast(tuple[int, ...], best)  # set once any combination has a finite width
     levels = tuple(float(cand[k]) for k in best)
-    return levels, _from_fisher(sum(Fs[k] for k in best), replace(protocol, levels=levels), truth)
+    return levels, _from_fisher(cast(np.ndarray, sum(Fs[k] for k in best)), replace(protocol, levels=levels), truth)
 
 
 def figure(scans: Sequence[pd.DataFrame], path: str, title: str = "") -> None:
@@ -261,8 +262,8 @@ def check(
         pr = predict(pc, truth)
         prot = dict(radius=pc.radius, levels=pc.levels, ramp_time=pc.ramp_time, times=pc.times)
         clean = coverage.reduced_records(truth, prot)
-        est = {n: [] for n in NAMES}
-        wid = {n: [] for n in NAMES}
+        est: dict[str, list[float]] = {n: [] for n in NAMES}
+        wid: dict[str, list[float]] = {n: [] for n in NAMES}
         inside = {n: 0 for n in NAMES}
         nfit = 0
         for _ in range(n_draws):

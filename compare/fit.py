@@ -474,7 +474,7 @@ class _Problem:
     def model(self, th: np.ndarray) -> np.ndarray:
         return np.asarray(self.res_fn(jnp.asarray(th))) * self.scale + self.y
 
-    def factor(self, z: np.ndarray) -> np.ndarray:
+    def factor(self, z: np.ndarray) -> np.ndarray | float:
         return np.exp(z[self.P :])[self.idx] if self.eps > 0 else 1.0
 
     def data_residual(self, z: np.ndarray) -> np.ndarray:

@@ -725,7 +725,7 @@ def to_netcdf(table_or_dataset: Any, path: Any, *, engine: str = "scipy") -> Any
     if engine == "scipy":
         ds.to_netcdf(path, engine="scipy", format="NETCDF3_64BIT")
     elif engine in ("h5netcdf", "netcdf4"):
-        ds.to_netcdf(path, engine=engine)
+        ds.to_netcdf(path, engine=engine)  # type: ignore[call-overload]  # xarray stubs: engine is a checked str, not a Literal
     else:
         raise ValueError(f'engine must be "scipy", "h5netcdf" or "netcdf4"; got {engine!r}')
     return path

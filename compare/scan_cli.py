@@ -552,6 +552,7 @@ def _run(args: argparse.Namespace, scene: str) -> int:
         if axes and name in axes:
             raise ScanInputError(f"--fix {name}=...: {name} is a map axis")
     if scene == "spheroid":
+        assert end_time is not None  # parsed above for the spheroid scene
         times = _spheroid_times(pts["ramp_time"].to_numpy(), end_time)
         kw = dict(times=times, equilibrium=args.equilibrium, curves=True, seed=seed, log=log)
         stiff_row = int(np.argmax(pts["ramp_time"].to_numpy() / pts["tau"].to_numpy()))

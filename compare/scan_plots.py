@@ -651,6 +651,7 @@ def sensitivities(
     n_rows = len(rows)
     pad = -n_rows % 64  # point counts rounded up to 64: the compiled derivative is reused across calls
     p = np.concatenate([p, np.repeat(p[:1], pad, axis=0)])
+    quantities: tuple[str, ...]
     if scene == "spheroid":
         if times is None:
             times = table.attrs.get("time [s]")

@@ -141,6 +141,7 @@ def total_stress(
     sw = iso_scale if weight is None else iso_scale * weight
     s1 = sw * w1
     # P = s W' dIbar + P_vol + F S0, dIbar = 2 J^(-2/3) f - 2/3 J^(-5/3) I1 gJ
+    pv: np.ndarray | float
     if q is not None:
         pv = q
     elif kappa is not None:

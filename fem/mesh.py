@@ -25,6 +25,7 @@ Coordinates: (R, Z) = (radial, axial); the axis of symmetry is R = 0.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -200,7 +201,8 @@ def ball_section(
     if radial_points is not None:
         v = _check_points(radial_points, n_radial, "radial_points")
 
-    pts, quads = [], []
+    pts: list[np.ndarray] = []
+    quads: list[np.ndarray] = []
 
     def block(P):  # P: (n1+1, n2+1, 2) structured block -> quads (counterclockwise checked later)
         n1, n2 = P.shape[0] - 1, P.shape[1] - 1
@@ -238,6 +240,7 @@ def ball_section(
     Q[area < 0] = Q[area < 0][:, ::-1]
     m1 = skfem.MeshQuad(P.T.copy(), Q.T.copy())
 
+    mapper: Callable[..., np.ndarray]
     if order == 2:
         m2 = skfem.MeshQuad2.from_mesh(m1)
         dl = m2.doflocs.copy()

@@ -92,7 +92,8 @@ class _Cache:
     stored ``indptr``/``indices`` (identity first, then equality: O(nnz), far below a factorisation)."""
 
     def __init__(self, size: int = 8):
-        self.size, self.items = size, []
+        self.size = size
+        self.items: list[tuple] = []
 
     def get(self, K, extra, build):
         key = (K.format, K.shape, K.nnz, extra)

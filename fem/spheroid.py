@@ -412,7 +412,10 @@ def _static_fitted(fit: _EdgeFit, d_of_t, times, load_of_t, max_cuts: int = 6):
     """Static states on fitted meshes at the load fractions ``times``: [(t, problem, state, its, passes, wall, edge)]."""
     import time as _time
 
-    out, ds, es, xs = [], [], [], []
+    out: list[tuple] = []
+    ds: list[float] = []
+    es: list[float] = []
+    xs: list[np.ndarray] = []
     t_done = 0.0
     for t in times:
         targets, cuts = [t], 0
@@ -509,6 +512,7 @@ def compress(
     mat = Material(1.0, float(alpha), float(kappa) / C)
     fit = _EdgeFit(a0, level, mat, rtol) if level is not None else None
     if static:
+        assert d_max is not None  # static=True rejects a callable displacement above
         # fitted levels: every state is solved on its own mesh, states 0.02 apart in x suffice
         n = n_static or max(8, int(np.ceil(d_max / a0 / (0.04 if fit is not None else 0.02) - 1e-9)))
         times = np.linspace(0.0, 1.0, n + 1)[1:]

@@ -39,8 +39,8 @@ try:  # jax is a core dependency; keep this module importable for pure-NumPy cal
     import jax
     import jax.numpy as jnp
 except ImportError:  # pragma: no cover
-    jax = None
-    jnp = None
+    jax = None  # type: ignore[assignment]  # optional-module fallback
+    jnp = None  # type: ignore[assignment]  # optional-module fallback
 
 __all__ = [
     "fung_energy",

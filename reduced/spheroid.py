@@ -54,7 +54,7 @@ import functools
 import json
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any, NamedTuple, Union
+from typing import Any, NamedTuple, Union, cast
 
 import diffrax
 import jax
@@ -316,7 +316,7 @@ def _content_key(table: tuple) -> tuple:
 @functools.lru_cache(maxsize=32)
 def _cached_table(kind: str, key: tuple):
     arrays = [np.frombuffer(b, dtype=float).reshape(shape) for shape, b in key]
-    return MasterCurve(*arrays) if kind == "f" else _Midplane1D(*arrays)
+    return MasterCurve(*cast(list[Any], arrays)) if kind == "f" else _Midplane1D(*arrays)
 
 
 def _table_object(table: tuple, kind: str):

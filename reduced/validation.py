@@ -18,14 +18,14 @@ from __future__ import annotations
 
 import numbers
 from collections.abc import Iterable, Sequence
-from typing import Any
+from typing import Any, SupportsInt, cast
 
 import numpy as np
 
 try:  # jax is a core dependency; keep this module importable for pure-NumPy callers anyway
     import jax
 except ImportError:  # pragma: no cover
-    jax = None
+    jax = None  # type: ignore[assignment]  # optional-module fallback
 
 __all__ = [
     "InputError",
@@ -200,7 +200,7 @@ def validate_int(name: str, value: Any, minimum: int | None = None, maximum: int
     if isinstance(value, numbers.Integral):
         n = int(value)
     elif isinstance(value, numbers.Real) and np.isfinite(float(value)) and float(value).is_integer():
-        n = int(value)
+        n = int(cast(SupportsInt, value))  # numbers.Real has no __int__ in the stubs
     else:
         raise InputTypeError(f"{name} must be a whole number; got {_describe(value)}")
     if minimum is not None and n < minimum:

@@ -36,7 +36,7 @@ from __future__ import annotations
 import contextlib
 import time
 from collections.abc import Callable, Iterator, Sequence
-from typing import Any
+from typing import Any, TypeVar, cast
 
 import numpy as np
 import pandas as pd
@@ -54,7 +54,10 @@ FE_MESHES_QUICK = ((1, 2), (2, 4), (4, 8), (8, 16))
 __all__ = ["blastula_accuracy", "spheroid_accuracy", "pareto", "timed", "timed_stats", "FE_MESHES", "FE_MESHES_QUICK"]
 
 
-def timed_stats(fn: Callable[[], object], repeats: int = 5) -> tuple[float, np.ndarray, object]:
+_T = TypeVar("_T")
+
+
+def timed_stats(fn: Callable[[], _T], repeats: int = 5) -> tuple[float, np.ndarray, _T]:
     """(first-call seconds, seconds of each of ``repeats`` further calls, last result)."""
     t0 = time.perf_counter()
     out = fn()
@@ -78,7 +81,7 @@ def _wall_columns(first: float, walls: np.ndarray) -> dict:
     )
 
 
-def timed(fn: Callable[[], object], repeats: int = 3) -> tuple[float, float, object]:
+def timed(fn: Callable[[], _T], repeats: int = 3) -> tuple[float, float, _T]:
     """(first-call seconds, best seconds of ``repeats`` further calls, last result)."""
     t0 = time.perf_counter()
     out = fn()
@@ -276,7 +279,9 @@ def spheroid_accuracy(
         )
     for name, kw in equilibria.items():
         fn = jax.jit(lambda tt, kw=kw: rs.nominal_stress(tt, **FIG10, **kw))  # tables become constants
-        first, wall, s = timed(lambda fn=fn: np.asarray(jax.block_until_ready(fn(ts))), 3)
+        first, wall, s = timed(
+            cast(Callable[[], np.ndarray], lambda fn=fn: np.asarray(jax.block_until_ready(fn(ts)))), 3
+        )
         rows.append(
             dict(
                 method=f"reduced ({name})",

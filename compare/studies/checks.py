@@ -42,7 +42,9 @@ def blastula(*, n_random: int = 10, seed: int = 0, mesh: str = "default", kappa:
     from tissuemech.reduced import blastula as red
 
     rng = np.random.default_rng(seed)
-    cases = [(f"seed alpha={a:g}", a, 75 * UM, (200.0, 500.0, 1000.0)) for a in (0.1, 0.2, 0.3)]
+    cases: list[tuple[str, float, float, tuple[float, ...]]] = [
+        (f"seed alpha={a:g}", a, 75 * UM, (200.0, 500.0, 1000.0)) for a in (0.1, 0.2, 0.3)
+    ]
     cases += [(f"seed B={b:g} um", 0.2, b * UM, (200.0, 500.0, 1000.0)) for b in (52, 60)]
     cases += [("neo-Hookean B=75 um", 1e-5, 75 * UM, (50.0, 100.0, 150.0))]
     for k in range(n_random):

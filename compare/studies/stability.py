@@ -42,7 +42,7 @@ UM = cases.UM
 A, C = cases.BLASTULA_INNER_RADIUS, cases.BLASTULA_C
 
 
-def _positive_list(name: str, values: Sequence[float], unit: str = "") -> np.ndarray:
+def _positive_list(name: str, values: Sequence[float] | np.ndarray, unit: str = "") -> np.ndarray:
     v = np.atleast_1d(np.asarray(values, dtype=float))
     if v.size == 0 or not np.all(np.isfinite(v)) or np.any(v <= 0):
         raise ValueError(f"{name} must be a non-empty list of positive numbers{unit}; got {list(np.ravel(values))!r}")
@@ -361,7 +361,7 @@ def _lumped_steps(t: np.ndarray, update: str, beta: float, tau: float, ramp_time
 
 
 def viscous_step_map(
-    steps: Sequence[float] | None = None,
+    steps: Sequence[float] | np.ndarray | None = None,
     *,
     beta: float = 1.2,
     tau: float = 200.0,
