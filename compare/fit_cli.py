@@ -35,6 +35,8 @@ from typing import Any
 
 import numpy as np
 
+from tissuemech.compare.cli.common import nonnegative, positive
+
 UM = 1e-6
 __all__ = ["Table", "read_table", "add_parser", "run", "load_records"]
 
@@ -192,26 +194,16 @@ def _incompressible_model():
     return functools.partial(spheroid.nominal_stress, midplane="incompressible", adjoint="forward")
 
 
-def _positive(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not v > 0:
-        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
-    return v
+_positive = positive()
 
 
 def _model_error(text: str):
     if text == "auto":
         return "auto"
     try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected 'auto' or a relative error such as 0.005, got {text!r}") from None
-    if not v >= 0:
-        raise argparse.ArgumentTypeError(f"must not be negative, got {text}")
-    return v
+        return nonnegative(text)
+    except argparse.ArgumentTypeError as err:
+        raise argparse.ArgumentTypeError(f"expected 'auto' or a relative error such as 0.005 ({err})") from None
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
