@@ -59,7 +59,7 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
     nel = {m: int(r.mesh.mesh.nelements) for m, r in fe_runs.items()}
     df["setting"] = [
         (f"level {int(st.split()[1])} ({nel[int(st.split()[1])]} el.)" + (" reference" if "reference" in st else ""))
-        if str(st).startswith("level")
+        if str(st).startswith("level ")
         else ("jitted, after compile" if st == "jit" else st)
         for st in df.setting
     ]

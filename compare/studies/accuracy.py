@@ -255,7 +255,7 @@ def spheroid_accuracy(
     rows = [
         dict(
             method="FE Richardson",
-            setting=f"levels {meshes[-3:]} (reference)",
+            setting="Richardson over levels " + ", ".join(str(m) for m in meshes[-3:]),
             wall_s=np.nan,
             first_s=np.nan,
             error=np.nan,
