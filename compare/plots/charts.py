@@ -90,7 +90,8 @@ def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16, note: 
     ax.set_ylabel("relative error")
     ax.set_title(title, fontsize=10)
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7, loc="center right")
+    # outside the axes: no data point or label can hide behind it
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     if note:
         import textwrap
 
