@@ -63,7 +63,7 @@ def test_fit_relaxation(tmp_path):
     out = run_example("fit_relaxation.py", tmp_path)
     rows = {
         m.group(1): tuple(map(float, m.groups()[1:]))
-        for m in re.finditer(r"^\s*(\w+) \[.*?\]\s+(\S+)\s+(\S+)\s+(\S+)$", out, re.M)
+        for m in re.finditer(r"^\s*(\w+) \[.*?\]\s+(\S+)\s+(\S+)\s+(\S+)(?:\s|$)", out, re.M)
     }
     for name, true in (("C", 150.0), ("beta", 0.4), ("tau", 200.0)):
         _, lo, hi = rows[name]
