@@ -291,7 +291,9 @@ def fig10(
             ax.set_xlabel("time t (s)")
     axes[0, 0].set_title("ramp and early hold", fontsize=9)
     axes[0, 1].set_title("relaxation (log time)", fontsize=9)
-    axes[0, 0].legend(fontsize=7, loc="lower right")
+    # one legend for both columns, below the panels: the fit's label is long and must not cover data
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, fontsize=7, loc="lower center", ncol=2, frameon=False)
     fig.suptitle(label, fontsize=10)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
     return fig
