@@ -83,3 +83,23 @@ def describe_spheroid(case: dict[str, Any]) -> str:
         f"C = {case['C']:g} Pa, alpha = {case['alpha']:g}, beta = {beta:g}, tau = {tau:g} s, "
         f"{case['displacement'] / UM:g} um in {case['ramp_time']:g} s (a0 = {case['radius'] / UM:g} um)"
     )
+
+
+def spheroid_keywords(
+    params: dict[str, Any], *, radius: float, displacement: float, ramp_time: float
+) -> dict[str, Any]:
+    """The keywords a single-branch spheroid case passes both to ``reduced.spheroid.nominal_stress`` and to
+    ``fem.spheroid.compress``.
+
+    Arguments:
+        params: ``C`` [Pa], ``alpha`` [-], ``beta`` [-], ``tau`` [s].
+        radius: ball radius a0 [m]. displacement: plate approach [m]. ramp_time: ramp duration [s].
+    """
+    return dict(
+        radius=radius,
+        C=params["C"],
+        alpha=params["alpha"],
+        branches=[(params["beta"], params["tau"])],
+        displacement=displacement,
+        ramp_time=ramp_time,
+    )

@@ -31,6 +31,8 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
+from tissuemech.compare import cases
+
 __all__ = ["PROTOCOL", "BOX", "sample_truths", "reduced_records", "fe_records", "fit_many", "summarise", "main"]
 
 A0 = 500e-6
@@ -60,6 +62,13 @@ def sample_truths(n: int, rng: np.random.Generator, box: dict = BOX) -> list[dic
     return out
 
 
+def _case(truth: dict, protocol: dict, displacement: float) -> dict:
+    """The keywords one record shares between the reduced model and the FE (SI units)."""
+    return cases.spheroid_keywords(
+        truth, radius=protocol["radius"], displacement=displacement, ramp_time=protocol["ramp_time"]
+    )
+
+
 def reduced_records(truth: dict, protocol: dict = PROTOCOL, equilibrium="fem") -> list[tuple]:
     """Noise-free records (time s, nominal stress Pa, displacement m) from the reduced model."""
     from tissuemech.reduced import spheroid
@@ -67,16 +76,7 @@ def reduced_records(truth: dict, protocol: dict = PROTOCOL, equilibrium="fem") -
     t = np.asarray(protocol["times"], dtype=float)
     out = []
     for d in protocol["levels"]:
-        y = spheroid.nominal_stress(
-            t,
-            radius=protocol["radius"],
-            C=truth["C"],
-            alpha=truth["alpha"],
-            branches=[(truth["beta"], truth["tau"])],
-            displacement=d,
-            ramp_time=protocol["ramp_time"],
-            equilibrium=equilibrium,
-        )
+        y = spheroid.nominal_stress(t, **_case(truth, protocol, d), equilibrium=equilibrium)
         out.append((t, np.asarray(y), d))
     return out
 
@@ -88,16 +88,7 @@ def fe_records(truth: dict, protocol: dict = PROTOCOL, mesh="default", n_ramp: i
     out = []
     for d in protocol["levels"]:
         r = fe.compress(
-            radius=protocol["radius"],
-            C=truth["C"],
-            alpha=truth["alpha"],
-            branches=[(truth["beta"], truth["tau"])],
-            displacement=d,
-            ramp_time=protocol["ramp_time"],
-            end_time=protocol["end_time"],
-            mesh=mesh,
-            n_ramp=n_ramp,
-            n_hold=n_hold,
+            **_case(truth, protocol, d), end_time=protocol["end_time"], mesh=mesh, n_ramp=n_ramp, n_hold=n_hold
         )
         keep = np.asarray(r.time) > 0
         out.append((np.asarray(r.time)[keep], np.asarray(r.nominal_stress)[keep], d))

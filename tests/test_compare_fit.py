@@ -10,44 +10,15 @@ q decays exactly as exp(-(t - t_r)/tau).
 
 from __future__ import annotations
 
-import jax.numpy as jnp
 import numpy as np
 import pytest
+from fakes import fake_nominal_stress
 
 import tissuemech.reduced  # noqa: F401
 from tissuemech.compare import fit
 
 A0 = 500e-6
 TR = 0.2
-
-
-def fake_nominal_stress(t, *, radius, C, alpha, branches, displacement, ramp_time, equilibrium="fake"):
-    t = jnp.asarray(t, dtype=jnp.float64)
-    x_end = displacement / (2 * radius)
-
-    def feq(x):
-        return C * radius**2 * (32.0 / 3.0) * x**1.5 * jnp.exp(4.0 * alpha * x)
-
-    n = 400
-    s = jnp.linspace(0.0, 1.0, n + 1)
-    f = feq(x_end * s)
-    dt = ramp_time / n
-    xt = jnp.clip(t / ramp_time, 0.0, 1.0)
-    force = feq(x_end * xt)
-    for beta, tau in branches:
-        h = dt / tau
-        a = jnp.exp(-h)
-        g = beta * (-jnp.expm1(-h)) / h
-        # q_{k+1} = a q_k + g (f_{k+1} - f_k): closed sum over the ramp nodes
-        df = jnp.diff(f)
-        k = jnp.arange(1, n + 1)
-        qn = jnp.cumsum(df * a ** (-k)) * a**k
-        qn = jnp.concatenate([jnp.zeros(1), qn]) * g
-        q_ramp = jnp.interp(t, s * ramp_time, qn)
-        q_hold = qn[-1] * jnp.exp(-(jnp.maximum(t, ramp_time) - ramp_time) / tau)
-        force = force + jnp.where(t <= ramp_time, q_ramp, q_hold)
-    return force / (jnp.pi * radius**2 * (1.0 + x_end * xt))
-
 
 TRUE = dict(C=150.0, alpha=0.2, beta=0.4, tau=200.0)
 TIMES = np.concatenate([np.linspace(0, TR, 21), np.geomspace(0.3, 1500, 120)])

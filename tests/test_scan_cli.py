@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
-from test_compare_fit import fake_nominal_stress
+from fakes import fake_nominal_stress
 
 from tissuemech.compare import cli, scan
 from tissuemech.compare import scan_cli as sc

@@ -10,7 +10,7 @@ matplotlib.use("Agg")
 
 import numpy as np
 import pytest
-from test_compare_fit import fake_nominal_stress
+from fakes import fake_nominal_stress
 
 from tissuemech.compare import scan
 from tissuemech.compare import scan_plots as sp

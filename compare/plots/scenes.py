@@ -30,21 +30,21 @@ def blastula_figure(
             label = f"alpha={c['alpha']:g}" if name == "Fig. 4" else f"B={c['outer_radius'] / UM:g} um"
             geo = dict(inner_radius=inner_radius, outer_radius=c["outer_radius"], C=C, alpha=c["alpha"])
             lim = c["limit"]
-            if lim is None or float(lim[0]) >= max_pressure:
+            if lim is None or float(lim.pressure) >= max_pressure:
                 la_top = float(blastula.inner_stretch(max_pressure, **geo))
             else:
-                la_top = 1.6 * float(lim[1])
+                la_top = 1.6 * float(lim.inner_stretch)
             la = np.linspace(1.0, la_top, 600)
             p = np.asarray(blastula.pressure(la, **geo))
             keep = p <= max_pressure * 1.0001
             (line,) = ax.plot(la[keep], p[keep], label=label + " (inner)")
             lb = np.asarray(blastula.outer_stretch(la, inner_radius=inner_radius, outer_radius=c["outer_radius"]))
             ax.plot(lb[keep], p[keep], "--", color=line.get_color(), lw=1)
-            if lim is not None and float(lim[0]) < max_pressure:
-                ax.plot(float(lim[1]), float(lim[0]), "kx", ms=8)
+            if lim is not None and float(lim.pressure) < max_pressure:
+                ax.plot(float(lim.inner_stretch), float(lim.pressure), "kx", ms=8)
                 ax.annotate(
-                    f"limit {float(lim[0]):.0f} Pa",
-                    (float(lim[1]), float(lim[0])),
+                    f"limit {float(lim.pressure):.0f} Pa",
+                    (float(lim.inner_stretch), float(lim.pressure)),
                     textcoords="offset points",
                     xytext=(5, 5),
                     fontsize=8,

@@ -23,7 +23,7 @@ def _blastula_set(alpha: float, B: float, mesh, max_pressure: float = 1000.0, n:
 
     lim = bl.limit_point(inner_radius=A, outer_radius=B, C=C_BL, alpha=alpha)
     t0 = time.perf_counter()
-    if lim is not None and float(lim[0]) < max_pressure:
+    if lim is not None and float(lim.pressure) < max_pressure:
         fe = inflate(
             inner_radius=A,
             outer_radius=B,
@@ -31,7 +31,7 @@ def _blastula_set(alpha: float, B: float, mesh, max_pressure: float = 1000.0, n:
             alpha=alpha,
             pressures=None,
             method="arclength",
-            max_inner_stretch=1.3 * float(lim[1]),
+            max_inner_stretch=1.3 * float(lim.inner_stretch),
             mesh=mesh,
         )
     else:
@@ -118,8 +118,8 @@ def section(traces: dict, *, quick: bool = False, progress: Callable[[str], None
                 final_inner_stretch=float(s["fe"].inner_stretch[-1]),
                 final_outer_stretch=float(s["fe"].outer_stretch[-1]),
                 max_rel_pressure_err=s["error"],
-                limit_p_Pa=np.nan if lim is None else float(lim[0]),
-                limit_stretch=np.nan if lim is None else float(lim[1]),
+                limit_p_Pa=np.nan if lim is None else float(lim.pressure),
+                limit_stretch=np.nan if lim is None else float(lim.inner_stretch),
                 wall_s=s["wall"],
             )
         )

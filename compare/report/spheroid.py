@@ -195,47 +195,51 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
         "fig9_mean_von_mises.png",
     )
 
-    def at(r, t, y):
-        return float(np.interp(t, r.time, y))
+    def row(case, quantity, t, fe, fe_y, red_t, red_y, scale=1.0):
+        """One comparison row: the FE curve ``fe_y`` of result ``fe`` and the reduced curve at time t (s)."""
+        return dict(
+            case=case,
+            quantity=quantity,
+            fe=float(np.interp(t, fe.time, fe_y)) * scale,
+            reduced=float(np.interp(t, red_t, red_y)) * scale,
+        )
 
+    static_x_lumped = "(Pa); reduced = FE static x lumped factor"
     seed_rows = [
-        dict(
-            case="Figs 8-9",
-            quantity="mean von Mises at t = 0.2 s (Pa); reduced = FE static x lumped factor",
-            fe=at(fe89, 0.2, fe89.mean_von_mises),
-            reduced=float(np.interp(0.2, t89, vm_red)),
+        row("Figs 8-9", f"mean von Mises at t = 0.2 s {static_x_lumped}", 0.2, fe89, fe89.mean_von_mises, t89, vm_red),
+        row(
+            "Figs 8-9", f"mean von Mises at t = 1497 s {static_x_lumped}", 1497, fe89, fe89.mean_von_mises, t89, vm_red
         ),
-        dict(
-            case="Figs 8-9",
-            quantity="mean von Mises at t = 1497 s (Pa); reduced = FE static x lumped factor",
-            fe=at(fe89, 1497, fe89.mean_von_mises),
-            reduced=float(np.interp(1497, t89, vm_red)),
-        ),
-        dict(
-            case="Figs 8-9",
-            quantity="plate force at t = 0.2 s (uN); law calibrated on the same mesh",
-            fe=at(fe89, 0.2, fe89.force) * 1e6,
-            reduced=float(np.interp(0.2, t89, F_red)) * 1e6,
+        row(
+            "Figs 8-9",
+            "plate force at t = 0.2 s (uN); law calibrated on the same mesh",
+            0.2,
+            fe89,
+            fe89.force,
+            t89,
+            F_red,
+            scale=1e6,
         ),
         dict(case="Figs 8-9", quantity="FE wall time (s)", fe=wall89, reduced=np.nan),
-        dict(
-            case="Fig. 10",
-            quantity="sigma~ at t = 0.2 s (Pa); law calibrated on the reference mesh",
-            fe=at(ref, 0.2, ref.nominal_stress),
-            reduced=float(np.interp(0.2, t_dense, cal)),
+        row(
+            "Fig. 10",
+            "sigma~ at t = 0.2 s (Pa); law calibrated on the reference mesh",
+            0.2,
+            ref,
+            ref.nominal_stress,
+            t_dense,
+            cal,
         ),
-        dict(
-            case="Fig. 10",
-            quantity="sigma~ at t = 1500 s (Pa); law calibrated on the reference mesh",
-            fe=at(ref, 1500, ref.nominal_stress),
-            reduced=float(np.interp(1500, t_dense, cal)),
+        row(
+            "Fig. 10",
+            "sigma~ at t = 1500 s (Pa); law calibrated on the reference mesh",
+            1500,
+            ref,
+            ref.nominal_stress,
+            t_dense,
+            cal,
         ),
-        dict(
-            case="Fig. 10",
-            quantity="sigma~ at t = 0.2 s, Hertz law (Pa)",
-            fe=at(ref, 0.2, ref.nominal_stress),
-            reduced=float(np.interp(0.2, t_dense, hertz)),
-        ),
+        row("Fig. 10", "sigma~ at t = 0.2 s, Hertz law (Pa)", 0.2, ref, ref.nominal_stress, t_dense, hertz),
         dict(case="Fig. 10", quantity="calibration static FE run (s)", fe=calib_wall, reduced=np.nan),
     ]
     for n in fit.names:
@@ -255,7 +259,7 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
         hertz_error=float(df[df.method == "reduced (hertz)"].error.iloc[0]),
         calibrated_error=float(df[df.method == "reduced (calibrated on the reference mesh)"].error.iloc[0]),
         fit=dict(pf),
-        fig89_vm=[at(fe89, 0.2, fe89.mean_von_mises), at(fe89, 1497, fe89.mean_von_mises)],
+        fig89_vm=[seed_rows[0]["fe"], seed_rows[1]["fe"]],
         fig89_wall_s=wall89,
     )
     sec.md += [

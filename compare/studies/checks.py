@@ -171,27 +171,11 @@ def spheroid(
     rows = []
     for name, c in cases.items():
         t0 = time.perf_counter()
-        r = fe.compress(
-            radius=radius,
-            C=c["C"],
-            alpha=c["alpha"],
-            branches=[(c["beta"], c["tau"])],
-            displacement=c["displacement"],
-            ramp_time=ramp_time,
-            end_time=end_time,
-            mesh=mesh,
-        )
+        kw = cases.spheroid_keywords(c, radius=radius, displacement=c["displacement"], ramp_time=ramp_time)
+        r = fe.compress(**kw, end_time=end_time, mesh=mesh)
         wall = time.perf_counter() - t0
         t = np.asarray(r.time)
         s_fe = np.asarray(r.nominal_stress)
-        kw = dict(
-            radius=radius,
-            C=c["C"],
-            alpha=c["alpha"],
-            branches=[(c["beta"], c["tau"])],
-            displacement=c["displacement"],
-            ramp_time=ramp_time,
-        )
         s_red = np.asarray(red.nominal_stress(t, **kw, equilibrium="fem"))
         s_hz = np.asarray(red.nominal_stress(t, **kw, equilibrium="hertz"))
         ramp = (t > 0) & (t <= ramp_time * (1 + 1e-12))
@@ -241,18 +225,8 @@ def fit_demo(
     rng = np.random.default_rng(seed)
     records = []
     for d in levels:
-        r = fe.compress(
-            radius=radius,
-            C=truth["C"],
-            alpha=truth["alpha"],
-            branches=[(truth["beta"], truth["tau"])],
-            displacement=d,
-            ramp_time=ramp_time,
-            end_time=end_time,
-            mesh=mesh,
-            n_ramp=n_ramp,
-            n_hold=n_hold,
-        )
+        kw = cases.spheroid_keywords(truth, radius=radius, displacement=d, ramp_time=ramp_time)
+        r = fe.compress(**kw, end_time=end_time, mesh=mesh, n_ramp=n_ramp, n_hold=n_hold)
         s = np.asarray(r.nominal_stress)
         records.append((np.asarray(r.time), s + noise * s.max() * rng.standard_normal(s.shape), d))
     results, rows = {}, []

@@ -101,7 +101,7 @@ def limit_point_map(
         t0 = time.perf_counter()
         lim = bl.limit_point(**geo)
         wall = time.perf_counter() - t0
-        pmax, lstar = float(lim[0]), float(lim[1])
+        pmax, lstar = float(lim.pressure), float(lim.inner_stretch)
         base = dict(B_um=b, p_max_exact_Pa=pmax, stretch_limit_exact=lstar)
         note = "closed-form slope root; inner_stretch(p > p_max) raises ValueError (no solution)"
         try:
