@@ -37,14 +37,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from tissuemech.fem import constitutive as cm
 from tissuemech.fem import viscoelastic as ve
 from tissuemech.fem.continuation import LimitPointError, arc_length, load_control
-from tissuemech.fem.forms import Assembler, Material
-from tissuemech.fem.kinematics import invariants
+from tissuemech.fem.forms import Material
 from tissuemech.fem.mesh import AxiMesh, shell_section
 from tissuemech.fem.newton import NewtonError, newton, sparse_solve, symmetric_solve
 from tissuemech.fem.output import BlastulaField, BlastulaResult
+from tissuemech.fem.problem import BLASTULA_MARGIN, SceneProblem, check_mesh, mesh_spec, roundoff_floor, secant
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
 from tissuemech.reduced.material import validate_branches, validate_material, validate_positive, validate_radii
 from tissuemech.reduced.validation import validate_choice, validate_finite
@@ -60,16 +59,11 @@ class LockingWarning(UserWarning):
 
 
 def _make_mesh(mesh, A: float, B: float) -> AxiMesh:
+    """The shell mesh of a ``mesh`` argument: a name of ``MESHES``, divisions (n_radial, n_circ) or an
+    ``AxiMesh`` built with length_scale = A (m); B (m) the outer radius. Raises ValueError otherwise."""
     if isinstance(mesh, AxiMesh):
-        if abs(mesh.length_scale - A) > 1e-12 * A:
-            raise ValueError("the mesh object must be built with length_scale = inner_radius")
-        return mesh
-    if isinstance(mesh, str):
-        if mesh not in MESHES:
-            raise ValueError(
-                f"mesh must be 'coarse', 'default', 'fine', a tuple (n_radial, n_circ) or a mesh object, got {mesh!r}"
-            )
-        mesh = MESHES[mesh]
+        return check_mesh(mesh, A, "the mesh object must be built with length_scale = inner_radius")
+    mesh = mesh_spec(mesh, MESHES, "a tuple (n_radial, n_circ) or a mesh object")
     if (
         not isinstance(mesh, (tuple, list))
         or len(mesh) != 2
@@ -79,26 +73,19 @@ def _make_mesh(mesh, A: float, B: float) -> AxiMesh:
     return shell_section(A, B, int(mesh[0]), int(mesh[1]))
 
 
-class _Problem:
+class _Problem(SceneProblem):
     """The scaled blastula equations r(u, p) = f_int(u) - p f_p(u) on the free dofs.
 
     ``iso_scale``/``extra_S`` (``fem.viscoelastic.algorithmic``) add the Maxwell branch stresses of a
     time step; the defaults are the elastic shell. ``ref`` = |f_p| at unit pressure (the force scale),
-    ``floor`` = the round-off floor of the residual (kappa/C times eps times the force scale)."""
+    ``floor`` = the round-off floor of the residual (``fem.problem.roundoff_floor`` over ``ref``).
+    Unlike :class:`SceneProblem`, states here are vectors of the FREE dofs (``full`` expands them)."""
 
-    def __init__(self, m: AxiMesh, mat: Material, formulation: str = "mixed"):
-        self.m, self.mat = m, mat
-        self.asm = Assembler(m, formulation)
-        fixed = np.concatenate([2 * m.nodes["axis"], 2 * m.nodes["symmetry"] + 1])
-        self.free = np.setdiff1d(np.arange(self.asm.ndof), fixed)
+    def __init__(self, m: AxiMesh, mat: Material, formulation: str = "mixed", beta=(), tau=()):
+        super().__init__(m, mat, formulation, beta, tau)
         self.inner = m.edges["inner"]
         self.ref = float(np.linalg.norm(self.rk(np.zeros(self.free.size), 0.0, tangent=False)[2]))
-        self.floor = 1e3 * np.finfo(float).eps * max(mat.kappa, 1.0) * self.ref
-
-    def full(self, uf):
-        u = np.zeros(self.asm.ndof)
-        u[self.free] = uf
-        return u
+        self.floor = roundoff_floor(mat.kappa, self.ref, BLASTULA_MARGIN)
 
     def rk(self, uf, p, tangent=True, iso_scale: float = 1.0, extra_S=None):
         u = self.full(uf)
@@ -125,13 +112,8 @@ class _Problem:
         )
 
     def admissible(self, uf):
-        f = self.asm.f_at(self.full(uf))
-        _, J = invariants(f)
-        if not np.all(J > 0):
-            return "J <= 0 (element turned inside out)"
-        if not np.all(f[..., 4] > 0):
-            return "hoop stretch <= 0"
-        return None
+        """:meth:`SceneProblem.admissible` of the free dofs ``uf`` (J > 0 and hoop stretch > 0)."""
+        return super().admissible(self.full(uf))
 
     def stretches(self, uf):
         u = self.full(uf)
@@ -143,38 +125,33 @@ class _Problem:
     def field(self, x, C, iso_scale: float = 1.0, extra_S=None):
         """(displacement (N, 2) [m], element von Mises [Pa], element hydrostatic pressure [Pa]) of the
         scaled state ``x`` (free dofs), with its step's branch stresses."""
-        A = self.m.length_scale
         xf = self.full(x)
-        u = xf[: self.asm.n_u].reshape(-1, 2) * A
-        f, P, _, q = self.asm.stress(xf, self.mat, extra_S, iso_scale)
-        vm = cm.von_mises(cm.cauchy(f, P)) * C
-        wq = self.asm.w
-        return u, (vm * wq).sum(1) / wq.sum(1), -(q * wq).sum(1) / wq.sum(1) * C
+        _, vm, q = self.point_stresses(xf, extra_S, iso_scale)
+        return (self.displacement(xf), *self.element_fields(vm, q, C))
 
     def result(
         self, lam, xs, its, wall, C, method, iso_scale: float = 1.0, extra_S=None, all_fields=None, **extra
     ) -> BlastulaResult:
         """BlastulaResult (SI) from the scaled states ``xs`` (free dofs) at scaled pressures ``lam``;
         the fields are those of the last state (with its step's branch stresses). ``all_fields``: None,
-        or one (time [s] or None, iso_scale, extra_S) per state to keep the fields of every step."""
-        A = self.m.length_scale
-        st = np.array([self.stretches(x) for x in xs])
+        or one ``_StepStress`` (time [s] or None, iso_scale, extra_S) per state to keep the fields of every step."""
+        inner, outer = (np.array(v) for v in zip(*(self.stretches(x) for x in xs)))
         u, vm, ph = self.field(xs[-1], C, iso_scale, extra_S)
         fields = None
         if all_fields is not None:
             fields = []
-            for x, l, (t, isc, ex) in zip(xs, lam, all_fields):
-                uk, vmk, phk = self.field(x, C, isc, ex)
-                fields.append(BlastulaField(float(l) * C, t, uk, self.m.X.T * A + uk, vmk, phk))
+            for x, l, st in zip(xs, lam, all_fields):
+                uk, vmk, phk = self.field(x, C, st.iso_scale, st.extra_S)
+                fields.append(BlastulaField(float(l) * C, st.time, uk, self.deformed_nodes(uk), vmk, phk))
         return BlastulaResult(
             pressure=np.asarray(lam, float) * C,
-            inner_stretch=st[:, 0],
-            outer_stretch=st[:, 1],
+            inner_stretch=inner,
+            outer_stretch=outer,
             newton_iterations=np.asarray(its, int),
             wall_time=np.asarray(wall, float),
             mesh=self.m,
             displacement=u,
-            deformed_nodes=self.m.X.T * A + u,
+            deformed_nodes=self.deformed_nodes(u),
             hydrostatic_pressure=ph,
             von_mises=vm,
             method=method,
@@ -183,13 +160,25 @@ class _Problem:
         )
 
 
-def _setup(inner_radius, outer_radius, C, alpha, kappa, mesh, formulation: str = "mixed") -> _Problem:
-    """Validate the shell inputs and build the scaled problem (lengths / A, stresses / C)."""
+class _StepStress(NamedTuple):
+    """The branch stresses a stored state was solved with (for its fields)."""
+
+    time: float | None  # s (creep runs; None for load-controlled and arc-length runs)
+    iso_scale: float
+    extra_S: object
+
+
+_ELASTIC = _StepStress(None, 1.0, None)
+
+
+def _setup(inner_radius, outer_radius, C, alpha, kappa, mesh, formulation: str = "mixed", beta=(), tau=()) -> _Problem:
+    """Validate the shell inputs and build the scaled problem (lengths / A, stresses / C; branches
+    ``beta``, ``tau`` [s] for creep)."""
     validate_radii(inner_radius, outer_radius)
     validate_material(C, alpha, kappa)
     A, B = float(inner_radius), float(outer_radius)
     m = _make_mesh(mesh, A, B)
-    return _Problem(m, Material(1.0, float(alpha), float(kappa) / float(C)), formulation)
+    return _Problem(m, Material(1.0, float(alpha), float(kappa) / float(C)), formulation, beta, tau)
 
 
 def inflate(
@@ -248,10 +237,10 @@ def inflate(
 
     if method == "load":
         steps = load_control(solve, p / C, u0, monitor=lambda x: prob.stretches(x)[0], unit=" Pa", scale=C)
-        lam = np.array([s[0] for s in steps])
-        xs = [s[1].x for s in steps]
-        its = np.array([s[1].iterations for s in steps])
-        wall = np.array([s[2] for s in steps])
+        lam = np.array([s.load for s in steps])
+        xs = [s.solution.x for s in steps]
+        its = np.array([s.solution.iterations for s in steps])
+        wall = np.array([s.wall_time for s in steps])
     else:
         pos = p[p > 0] if pressures is not None else np.array([])
         if pos.size:
@@ -273,13 +262,11 @@ def inflate(
             atol=floor,
             ds_max=2 * ds,
         )
-        lam = np.array([0.0] + [s[0] for s in steps])
-        xs = [u0] + [s[1] for s in steps]
-        its = np.array([0] + [s[2] for s in steps])
-        wall = np.array([0.0] + [s[3] for s in steps])
-    return prob.result(
-        lam, xs, its, wall, C, method, all_fields=[(None, 1.0, None)] * len(xs) if store_fields else None
-    )
+        lam = np.array([0.0] + [s.load for s in steps])
+        xs = [u0] + [s.x for s in steps]
+        its = np.array([0] + [s.newton_iterations for s in steps])
+        wall = np.array([0.0] + [s.wall_time for s in steps])
+    return prob.result(lam, xs, its, wall, C, method, all_fields=[_ELASTIC] * len(xs) if store_fields else None)
 
 
 class _CreepState(NamedTuple):
@@ -335,10 +322,10 @@ def creep(
     ts = np.atleast_1d(np.asarray(times, float)) if len(np.atleast_1d(times)) else np.array([])
     if ts.size and (not np.all(np.isfinite(ts)) or np.any(ts <= 0) or np.any(ts > end_time * (1 + 1e-12))):
         raise ValueError(f"times (extra output times) must be finite and in (0, end_time = {end_time} s]")
-    prob = _setup(inner_radius, outer_radius, C, alpha, kappa, mesh)
-    C, p0, tr = float(C), float(pressure), float(ramp_time)
     beta = np.array([float(b) for b, _ in br])
     tau = np.array([float(t) for _, t in br])
+    prob = _setup(inner_radius, outer_radius, C, alpha, kappa, mesh, beta=beta, tau=tau)
+    C, p0, tr = float(C), float(pressure), float(ramp_time)
     schedule = ramp_hold_schedule(
         tr, float(end_time), n_ramp=int(n_ramp), n_hold=int(n_hold), first_hold=first_hold, breakpoints=list(ts)
     )
@@ -350,20 +337,20 @@ def creep(
     def step(t0, s: _CreepState, t1, prev):
         tried[0] = t1
         dt = t1 - t0
-        iso_scale, extra = ve.algorithmic(s.visco, beta, tau, dt)
+        iso_scale, extra = prob.maxwell_factors(s.visco, dt)
         lam = lam_at(t1)
         guess = s.x
-        if prev is not None and on_ramp(t1) == on_ramp(t0) and on_ramp(prev[0]) == on_ramp(t0):
+        if prev is not None and on_ramp(t1) == on_ramp(t0) and on_ramp(prev.time) == on_ramp(t0):
             # secant predictor in time, within one segment (ramp or hold) of the history
-            cand = s.x + (s.x - prev[1].x) * dt / (t0 - prev[0])
+            cand = secant(s.x, prev.state.x, dt, t0 - prev.time)
             if prob.admissible(cand) is None:
                 guess = cand
         load = f"t = {t1:.6g} s, p = {lam * C:.6g} Pa"
         sol = prob.solve(lam, guess, rtol, load, iso_scale, extra)
-        S_new = prob.asm.iso_S(prob.full(sol.x), prob.mat)
-        return _CreepState(sol.x, ve.update(s.visco, beta, tau, dt, S_new), lam, iso_scale, extra), sol.iterations
+        visco = prob.maxwell_update(s.visco, dt, prob.full(sol.x))
+        return _CreepState(sol.x, visco, lam, iso_scale, extra), sol.iterations
 
-    s0 = _CreepState(np.zeros(prob.free.size), ve.initial_state(beta.size, prob.asm.w.shape + (5,)), 0.0, 1.0, None)
+    s0 = _CreepState(np.zeros(prob.free.size), prob.maxwell_initial(), 0.0, 1.0, None)
     try:
         steps = march(step, s0, schedule)
     except NewtonError as err:
@@ -391,14 +378,16 @@ def creep(
     return prob.result(
         [st.state.lam for st in steps],
         [st.state.x for st in steps],
-        [st.iterations for st in steps],
-        [st.wall_s for st in steps],
+        [st.newton_iterations for st in steps],
+        [st.wall_time for st in steps],
         C,
         "creep",
         last.iso_scale,
         last.extra_S,
-        all_fields=[(float(st.t), st.state.iso_scale, st.state.extra_S) for st in steps] if store_fields else None,
-        time=np.array([st.t for st in steps]),
+        all_fields=[_StepStress(float(st.time), st.state.iso_scale, st.state.extra_S) for st in steps]
+        if store_fields
+        else None,
+        time=np.array([st.time for st in steps]),
         parameters=dict(
             inner_radius=float(inner_radius),
             outer_radius=float(outer_radius),

@@ -54,14 +54,14 @@ from typing import NamedTuple
 import numpy as np
 import skfem
 
-from tissuemech.fem import constitutive as cm
 from tissuemech.fem import viscoelastic as ve
 from tissuemech.fem.contact import ContactError, RigidPlane
-from tissuemech.fem.forms import Assembler, Material
+from tissuemech.fem.forms import Material
 from tissuemech.fem.kinematics import invariants
 from tissuemech.fem.mesh import AxiMesh, ball_section, graded_points
 from tissuemech.fem.newton import NewtonError, newton, symmetric_solve
 from tissuemech.fem.output import SpheroidField, SpheroidResult
+from tissuemech.fem.problem import SPHEROID_MARGIN, SceneProblem, check_mesh, mesh_spec, roundoff_floor, secant
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
 from tissuemech.reduced.material import validate_branches, validate_material, validate_positive
 
@@ -142,12 +142,7 @@ def _level(mesh):
     """The mesh level (int) of a ``mesh`` argument, or None for an AxiMesh (validated)."""
     if isinstance(mesh, AxiMesh):
         return None
-    if isinstance(mesh, str):
-        if mesh not in MESHES:
-            raise ValueError(
-                f"mesh must be 'coarse', 'default', 'fine', a level 0..4 or a ball_section mesh, got {mesh!r}"
-            )
-        mesh = MESHES[mesh]
+    mesh = mesh_spec(mesh, MESHES, "a level 0..4 or a ball_section mesh")
     if isinstance(mesh, (bool, np.bool_)) or not isinstance(mesh, (int, np.integer)) or int(mesh) not in LEVELS:
         raise ValueError(f"mesh level must be an integer 0..4 (0 coarse, 1 default, 2 fine), got {mesh!r}")
     return int(mesh)
@@ -157,11 +152,39 @@ def make_mesh(mesh, radius: float) -> AxiMesh:
     """Resolve the ``mesh`` argument to an AxiMesh of the quarter ball (see the module docstring); a level
     gives its mesh with the contact edge node half-way along the pole block (``fitted_mesh(radius, level, 0.5)``)."""
     if isinstance(mesh, AxiMesh):
-        if abs(mesh.length_scale - radius) > 1e-12 * radius or "outer" not in mesh.nodes:
-            raise ValueError("the mesh object must come from fem.mesh.ball_section(radius, ...) with the same radius")
-        return mesh
+        msg = "the mesh object must come from fem.mesh.ball_section(radius, ...) with the same radius"
+        return check_mesh(mesh, radius, msg, tags=("outer",))
     # 3 x 3 Gauss points (exact enough for Q2: forces change < 1e-5 relative vs 4 x 4), 1.8x cheaper
     return fitted_mesh(radius, _level(mesh), 0.5)
+
+
+class _Solved(NamedTuple):
+    """A converged step of ``compress`` before its observables are taken."""
+
+    time: float  # s (static runs: the load fraction)
+    problem: _Problem  # the mesh's problem the state belongs to
+    state: _State
+    newton_iterations: int
+    contact_passes: int
+    wall_time: float  # s
+
+
+class _Row(NamedTuple):
+    """One step's entry of ``SpheroidResult`` (SI: s, m, N, Pa)."""
+
+    time: float
+    approach: float  # m, the total plate approach delta
+    force: float  # N
+    reaction_force: float  # N
+    midplane_radius: float  # m
+    contact_radius: float  # m
+    mean_von_mises: float  # Pa
+    newton_iterations: int
+    contact_passes: int
+    wall_time: float  # s
+    contact_radius_node: float  # m
+    min_gap: float  # m
+    min_contact_force: float  # N
 
 
 class _State(NamedTuple):
@@ -175,14 +198,33 @@ class _State(NamedTuple):
     passes: int
 
 
-class _Problem:
+class Observation(NamedTuple):
+    """Observables of one converged state (scaled: lengths / a0, forces / (C a0^2), stresses / C)."""
+
+    plate_force: float  # sum of the active nodes' contact multipliers N_i [C a0^2]
+    reaction_force: float  # reaction of the midplane constraint u_z = 0 [C a0^2]
+    midplane_radius: float  # deformed equator radius [a0]
+    contact_radius: float  # edge estimate between the outermost active node and the next [a0]
+    contact_radius_node: float  # the outermost active node [a0]
+    mean_von_mises: float  # von Mises averaged over the deformed volume [C]
+    von_mises: np.ndarray  # at the quadrature points (n_el, n_qp) [C]
+    pressure: np.ndarray  # the mixed field q = mean Cauchy stress at the points (n_el, n_qp) [C]; hydrostatic = -q
+    normal_force: np.ndarray  # compressive nodal contact force per candidate node, 0 off contact [C a0^2]
+    min_gap: float  # smallest plate gap of the candidates [a0]
+    min_normal_force: float  # smallest contact force of the active nodes (0 without contact) [C a0^2]
+
+
+class _Problem(SceneProblem):
+    """The scaled ball between rigid plates: f_int(x) = 0 with u_z = h - Z on the active contact nodes.
+
+    ``_Problem(m, mat, beta, tau, rtol)``: the mesh (scaled by a0), the scaled material, the Maxwell
+    branches (beta_m, tau_m [s]) and Newton's relative tolerance. ``plane`` is the rigid plate over the
+    surface nodes off the midplane, ``equator`` the node at (R, Z) = (a0, 0), ``floor`` the round-off
+    floor of the residual (``fem.problem.roundoff_floor``, unit force scale)."""
+
     def __init__(self, m: AxiMesh, mat: Material, beta, tau, rtol: float):
-        self.m, self.mat = m, mat
-        self.asm = Assembler(m, "mixed")
-        self.beta, self.tau = np.asarray(beta, float), np.asarray(tau, float)
+        super().__init__(m, mat, "mixed", beta, tau)
         self.sym = m.nodes["symmetry"]
-        fixed = np.concatenate([2 * m.nodes["axis"], 2 * self.sym + 1])
-        self.free = np.setdiff1d(np.arange(self.asm.ndof), fixed)
         cand = np.setdiff1d(m.nodes["outer"], self.sym)
         self.plane = RigidPlane(m.X, cand)
         X = m.X
@@ -191,19 +233,11 @@ class _Problem:
             raise ValueError("the ball mesh has no node at the equator (R = a0, Z = 0)")
         self.equator = int(eq[0])
         self.rtol = rtol
-        # the round-off floor of the residual grows with kappa/C (q carries kappa (J - 1))
-        self.floor = 1e2 * np.finfo(float).eps * max(mat.kappa, 1.0)
-
-    def admissible(self, x):
-        f = self.asm.f_at(x)
-        _, J = invariants(f)
-        if not np.all(J > 0):
-            return "J <= 0 (an element turned inside out)"
-        if not np.all(f[..., 4] > 0):
-            return "hoop stretch <= 0"
-        return None
+        self.floor = roundoff_floor(mat.kappa, 1.0, SPHEROID_MARGIN)
 
     def solve(self, s0: _State, d1: float, iso_scale, extra, guess, load):
+        """Equilibrium with exact contact under the plate at h = 1 - d1 (scaled), from ``guess``, with the
+        step's branch stresses; the active set starts from ``s0.active``. Returns ``ContactSolution``."""
         h = 1.0 - d1
         fun = lambda x: self.asm.internal(x, self.mat, extra_S=extra, iso_scale=iso_scale)
         ref = max(32.0 / 3.0 * max(d1, 1e-6) ** 1.5 * iso_scale, 1e-12)
@@ -227,37 +261,39 @@ class _Problem:
         return sol
 
     def step(self, s0: _State, d1: float, dt: float | None, prev, load):
-        """Equilibrium at plate displacement d1 after a time step dt (None: static)."""
-        if dt is None:
-            iso_scale, extra = 1.0, None
-        else:
-            iso_scale, extra = ve.algorithmic(s0.visco, self.beta, self.tau, dt)
+        """(state, Newton iterations): equilibrium at plate displacement d1 (scaled) after a time step
+        dt [s] (None: static), predicted by the secant through ``prev`` (a ``_State`` or None)."""
+        iso_scale, extra = self.maxwell_factors(s0.visco, dt)
         guess = s0.x
         if prev is not None and abs(s0.delta - prev.delta) > 1e-14:
-            guess = s0.x + (s0.x - prev.x) * (d1 - s0.delta) / (s0.delta - prev.delta)
+            guess = secant(s0.x, prev.x, d1 - s0.delta, s0.delta - prev.delta)
         sol = self.solve(s0, d1, iso_scale, extra, guess, load)
-        S_new = self.asm.iso_S(sol.x, self.mat)
-        visco = (
-            ve.update(s0.visco, self.beta, self.tau, dt, S_new) if dt is not None else s0.visco._replace(S_iso=S_new)
-        )
+        visco = self.maxwell_update(s0.visco, dt, sol.x)
         return _State(sol.x, sol.active, visco, d1, sol.residual, iso_scale, extra, sol.sets), sol.iterations
 
     # ---- observables (scaled) --------------------------------------------------------------
-    def observe(self, s: _State):
+    def observe(self, s: _State) -> Observation:
+        """The observables of state ``s`` (see ``Observation``)."""
         r, pl = s.residual, self.plane
         N = np.where(s.active, pl.normal_force(r), 0.0)
-        F = float(N.sum())
-        Fr = float(r[2 * self.sym + 1].sum())
         x = s.x
-        r_mid = 1.0 + x[2 * self.equator]
         rc, rc_node = _contact_radius(pl, x, s.active, 1.0 - s.delta)
-        f, P, _, q = self.asm.stress(x, self.mat, s.extra_S, s.iso_scale)
-        vm = cm.von_mises(cm.cauchy(f, P))
+        f, vm, q = self.point_stresses(x, s.extra_S, s.iso_scale)
         _, J = invariants(f)
         wJ = self.asm.w * J
-        gmin = float(np.min(pl.gap(x, 1.0 - s.delta)))
-        nmin = float(np.min(N[s.active])) if s.active.any() else 0.0
-        return F, Fr, r_mid, rc, rc_node, float(np.sum(vm * wJ) / np.sum(wJ)), vm, q, N, gmin, nmin
+        return Observation(
+            plate_force=float(N.sum()),
+            reaction_force=float(r[2 * self.sym + 1].sum()),
+            midplane_radius=1.0 + x[2 * self.equator],
+            contact_radius=rc,
+            contact_radius_node=rc_node,
+            mean_von_mises=float(np.sum(vm * wJ) / np.sum(wJ)),
+            von_mises=vm,
+            pressure=q,
+            normal_force=N,
+            min_gap=float(np.min(pl.gap(x, 1.0 - s.delta))),
+            min_normal_force=float(np.min(N[s.active])) if s.active.any() else 0.0,
+        )
 
 
 def _contact_radius(pl: RigidPlane, x: np.ndarray, active: np.ndarray, h: float):
@@ -544,8 +580,8 @@ def compress(
 
     if fit is not None and static:
         done = _static_fitted(fit, dscaled, times, load_of)
-        steps = [(t, pr, st, its, n_s, w) for t, pr, st, its, n_s, w, _ in done]
-        m = done[-1][1].m
+        steps = [_Solved(t, pr, st, its, n_s, w) for t, pr, st, its, n_s, w, _ in done]
+        m = steps[-1].problem.m
     else:
         if fit is not None:  # one mesh fitted to the contact edge of the held (largest) approach
             d_hold = dscaled(end_time) if d_max is not None else max(dscaled(t) for t in np.linspace(0, end_time, 401))
@@ -563,87 +599,76 @@ def compress(
         pole = np.argmin(np.hypot(prob.plane.R, prob.plane.Z - 1.0))
         active0 = np.zeros(prob.plane.nodes.size, bool)
         active0[pole] = True
-        s0 = _State(
-            np.zeros(n0), active0, ve.initial_state(beta.size, prob.asm.w.shape + (5,)), 0.0, np.zeros(n0), 1.0, None, 0
-        )
+        s0 = _State(np.zeros(n0), active0, prob.maxwell_initial(), 0.0, np.zeros(n0), 1.0, None, 0)
 
         def step(t0, s_old, t1, prev):
             return prob.step(
-                s_old, dscaled(t1), None if static else t1 - t0, prev[1] if prev is not None else None, load_of(t1)
+                s_old, dscaled(t1), None if static else t1 - t0, prev.state if prev is not None else None, load_of(t1)
             )
 
         steps = [
-            (st.t, prob, st.state, st.iterations, st.state.passes, st.wall_s)
+            _Solved(st.time, prob, st.state, st.newton_iterations, st.state.passes, st.wall_time)
             for st in march(step, s0, times, too_large=too_large)
         ]
 
     L2 = C * a0**2
-    rows, fields = [], []
+    rows: list[_Row] = []
+    fields = []
     want = set()
     for tf in ft:
-        want.add(int(np.argmin([abs(st[0] - tf) for st in steps])))
+        want.add(int(np.argmin([abs(st.time - tf) for st in steps])))
     want.add(len(steps) - 1)
     if store_all:
         want = set(range(len(steps)))
-    for k, (t_k, prob, s, its_k, passes_k, wall_k) in enumerate(steps):
-        F, Fr, rm, rc, rcn, vmm, vm, q, N, gmin, nmin = prob.observe(s)
-        if fit is not None and static:
-            rc = rcn  # the edge node is the contact edge
+    for k, st in enumerate(steps):
+        prob, s = st.problem, st.state
+        ob = prob.observe(s)
+        F, Fr = ob.plate_force, ob.reaction_force
+        # fitted static states: the edge node is the contact edge
+        rc = ob.contact_radius_node if fit is not None and static else ob.contact_radius
         if F > 0 and abs(F - Fr) > FORCE_CHECK * abs(F) + 1e3 * prob.floor:
             raise RuntimeError(
                 f"contact force {F * L2:.6g} N and midplane reaction {Fr * L2:.6g} N differ by "
-                f"{abs(F - Fr) / F:.2e} (relative) at t = {t_k:.6g} s: equilibrium not reached. "
+                f"{abs(F - Fr) / F:.2e} (relative) at t = {st.time:.6g} s: equilibrium not reached. "
                 "Hint: tighten rtol"
             )
         rows.append(
-            (
-                t_k,
-                2 * a0 * s.delta,
-                F * L2,
-                Fr * L2,
-                rm * a0,
-                rc * a0,
-                vmm * C,
-                its_k,
-                passes_k,
-                wall_k,
-                rcn * a0,
-                gmin * a0,
-                nmin * L2,
+            _Row(
+                time=st.time,
+                approach=2 * a0 * s.delta,
+                force=F * L2,
+                reaction_force=Fr * L2,
+                midplane_radius=ob.midplane_radius * a0,
+                contact_radius=rc * a0,
+                mean_von_mises=ob.mean_von_mises * C,
+                newton_iterations=st.newton_iterations,
+                contact_passes=st.contact_passes,
+                wall_time=st.wall_time,
+                contact_radius_node=ob.contact_radius_node * a0,
+                min_gap=ob.min_gap * a0,
+                min_contact_force=ob.min_normal_force * L2,
             )
         )
         if k in want:
-            w = prob.asm.w
-            u = s.x[: prob.asm.n_u].reshape(-1, 2) * a0
+            u = prob.displacement(s.x)
+            vm_el, ph_el = prob.element_fields(ob.von_mises, ob.pressure, C)
             fields.append(
                 SpheroidField(
-                    time=t_k,
+                    time=st.time,
                     displacement=u,
-                    deformed_nodes=prob.m.X.T * a0 + u,
-                    von_mises=(vm * w).sum(1) / w.sum(1) * C,
-                    hydrostatic_pressure=-(q * w).sum(1) / w.sum(1) * C,
-                    contact_nodal_force=N * L2,
+                    deformed_nodes=prob.deformed_nodes(u),
+                    von_mises=vm_el,
+                    hydrostatic_pressure=ph_el,
+                    contact_nodal_force=ob.normal_force * L2,
                     contact_nodes=prob.plane.nodes,
                 )
             )
-    a = np.array(rows, float)
-    area = np.pi * a[:, 4] ** 2
+    col = {name: np.array(values) for name, values in zip(_Row._fields, zip(*rows))}
+    area = np.pi * col["midplane_radius"] ** 2
     return SpheroidResult(
-        time=a[:, 0],
-        approach=a[:, 1],
-        force=a[:, 2],
-        reaction_force=a[:, 3],
-        midplane_radius=a[:, 4],
+        **col,
         midplane_area=area,
-        nominal_stress=a[:, 2] / area,
-        mean_von_mises=a[:, 6],
-        contact_radius=a[:, 5],
-        contact_radius_node=a[:, 10],
-        min_gap=a[:, 11],
-        min_contact_force=a[:, 12],
-        newton_iterations=a[:, 7].astype(int),
-        contact_passes=a[:, 8].astype(int),
-        wall_time=a[:, 9],
+        nominal_stress=col["force"] / area,
         mesh=m,
         fields=fields,
         static=bool(static),
