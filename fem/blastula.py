@@ -1,32 +1,9 @@
 r"""FE blastula: a hollow Fung sphere inflated by a follower pressure (seed Figs 1-5).
 
-``inflate(*, inner_radius, outer_radius, C, alpha, pressures, kappa=2.2e9, mesh="default",
-method="load", max_inner_stretch=None, rtol=1e-10, store_fields=False) -> BlastulaResult``
-
-Quarter wall section A <= rho <= B, 0 <= theta <= 90 deg (u_z = 0 on Z = 0, u_r = 0 on the axis),
-mixed Q2/P1-discontinuous elements (perturbed Lagrangian, condensed), follower pressure on the
-deformed inner surface. Lengths scaled by A and stresses by C inside. ``pressures`` (Pa) must be
-finite, >= 0 and non-decreasing; ``method="load"`` returns one entry per requested pressure
-(steps are subdivided internally when Newton struggles); ``method="arclength"`` traces from p = 0
-until the inner stretch reaches ``max_inner_stretch`` (``pressures`` then only sets the first
-step: its first positive entry; None for an automatic step raising the stretch by ~0.02; steps
-adapt up to twice the first), through limit points. Stretch = mean deformed /
-reference radius over the inner (outer) surface. Mesh: "coarse", "default", "fine", a tuple
-(n_radial, n_circ) or an ``AxiMesh`` from ``fem.mesh.shell_section``.
-
-``creep(*, inner_radius, outer_radius, C, alpha, branches, pressure, ramp_time, end_time, kappa=2.2e9,
-mesh="default", times=(), n_ramp=8, n_hold=60, first_hold=None, rtol=1e-10, store_fields=False) -> BlastulaResult``
-
-The same shell with generalized Maxwell branches (beta_m, tau_m [s]) on the isochoric stress
-(``fem.viscoelastic``: dQ_m/dt + Q_m/tau_m = beta_m dS_iso/dt, exact exponential update for S_iso
-linear over a step) under a pressure ramp-and-hold: p(t) = pressure * min(t / ramp_time, 1) (Pa),
-held to ``end_time`` (s). Quasi-static time marching (``fem.timestepping``: ``n_ramp`` equal ramp
-steps, ``n_hold`` geometrically growing hold steps from ``first_hold`` (default ramp_time / 2),
-``times`` merged in as step times; a failed step is halved). The result has one entry per converged
-step in ``time`` [s], ``pressure``, ``inner_stretch``, ``outer_stretch``, ``newton_iterations``,
-``wall_time`` and the fields at ``end_time``. A hold pressure above the relaxed limit point makes the
-shell creep past it (it bursts): the step that cannot find equilibrium raises ``NewtonError`` naming
-the time. No branches (or beta = 0) is the elastic shell at every step.
+:func:`inflate` (elastic, load control or arc-length through limit points) and :func:`creep` (generalized
+Maxwell branches under a pressure ramp-and-hold). Quarter wall section A <= rho <= B, 0 <= theta <= 90 deg
+(u_z = 0 on Z = 0, u_r = 0 on the axis), mixed Q2/P1-discontinuous elements, follower pressure on the
+deformed inner surface; lengths scaled by A and stresses by C inside (``fem.problem.SceneProblem``).
 """
 
 from __future__ import annotations
@@ -196,10 +173,42 @@ def inflate(
     formulation: str = "mixed",
     store_fields: bool = False,
 ) -> BlastulaResult:
-    """Inflate the hollow sphere; see the module docstring. SI units (m, Pa).
+    """Inflate the hollow sphere by a cavity pressure p acting on its deformed inner surface.
 
-    ``store_fields=True`` keeps the fields (displacement, von Mises, pressure) of every converged step in
-    ``result.fields`` (``BlastulaField``; for ``result.to_pvd``); by default only the final ones are kept.
+    Solves f_int(u) = p f_p(u) on the quarter wall section (the exact incompressible shell is
+    ``tissuemech.reduced.blastula``). The stretches are surface means of deformed / reference radius.
+
+    Args:
+        inner_radius, outer_radius: reference radii A < B of the wall (m).
+        C: Fung stiffness (Pa); alpha: Fung exponent (dimensionless); kappa: bulk modulus (Pa).
+        pressures: the pressures to reach (Pa): finite, >= 0, non-decreasing. ``method="load"``: one
+            result entry per value (steps are subdivided internally when Newton struggles).
+            ``method="arclength"``: only its first positive entry is used, as the first step; None for an
+            automatic first step that raises the inner stretch by ~0.02.
+        mesh: "coarse", "default", "fine" (``MESHES``: (n_radial, n_circ) = (2, 4), (4, 8), (8, 16)), a
+            tuple (n_radial, n_circ) or an ``AxiMesh`` from ``fem.mesh.shell_section`` built with
+            length_scale = inner_radius.
+        method: "load" (load control to every pressure) or "arclength" (Riks from p = 0 until the inner
+            stretch reaches ``max_inner_stretch``, through limit points; steps adapt up to twice the first).
+        max_inner_stretch: where the arc-length trace stops (a/A > 1, dimensionless; "arclength" only).
+        rtol: Newton's relative residual tolerance (dimensionless).
+        formulation: "mixed" (default) or "displacement" (locks for kappa/C >> 100: a warning says so).
+        store_fields: keep the fields of every converged step in ``result.fields`` (``BlastulaField``, for
+            ``result.to_pvd``); by default only the final fields are kept.
+
+    Returns:
+        ``BlastulaResult`` (SI): per converged step ``pressure`` (Pa), ``inner_stretch``,
+        ``outer_stretch``, ``newton_iterations``, ``wall_time`` (s); the final ``displacement`` and
+        ``deformed_nodes`` (N, 2) (m), element ``von_mises`` and ``hydrostatic_pressure`` (Pa); ``method``.
+        An arc-length result starts with the reference state p = 0.
+
+    Raises:
+        ValueError: an input out of range (the message names the quantity and its unit).
+        LimitPointError: load control cannot pass the maximum of the pressure (use method="arclength";
+            ``last_converged`` holds the last pressure reached, Pa).
+        NewtonError: a step did not converge after its cut-backs (the message names the pressure).
+    Warns:
+        LockingWarning: formulation="displacement" with kappa/C > 100.
     """
     validate_choice("method", method, ("load", "arclength"))
     if pressures is not None:
@@ -296,14 +305,39 @@ def creep(
     rtol: float = 1e-10,
     store_fields: bool = False,
 ) -> BlastulaResult:
-    r"""Creep of the viscoelastic shell under p(t) = pressure min(t / ramp_time, 1); see the module docstring.
+    r"""Creep of the viscoelastic shell under the ramp-and-hold pressure p(t) = pressure min(t / ramp_time, 1).
 
-    SI units: radii (m), C, kappa, pressure (Pa), times (s); ``branches`` = [(beta_m, tau_m [s]), ...].
-    Every step solves the equilibrium r(u, t_{n+1}) = f_int(u; iso_scale, extra_S) - p(t_{n+1}) f_p(u) = 0
-    with the algorithmic Maxwell stress S = S_vol + (1 + sum beta_m g_m) S_iso + sum (e^{-h_m} Q_m^n -
-    beta_m g_m S_iso^n) (``fem.viscoelastic``), then updates Q_m. Returns a BlastulaResult with ``time``
-    and ``method="creep"`` (``parameters`` records the inputs). ``store_fields=True`` keeps the fields of
-    every converged step in ``result.fields`` (``BlastulaField`` with its time; for ``result.to_pvd``).
+    Generalized Maxwell branches on the isochoric stress (``fem.viscoelastic``: dQ_m/dt + Q_m/tau_m =
+    beta_m dS_iso/dt, exact exponential update for S_iso linear over a step). Every step solves
+    r(u, t_{n+1}) = f_int(u; iso_scale, extra_S) - p(t_{n+1}) f_p(u) = 0 with the algorithmic stress
+    S = S_vol + (1 + sum_m beta_m g_m) S_iso + sum_m (e^{-h_m} Q_m^n - beta_m g_m S_iso^n), then updates
+    the Q_m; quasi-static (``fem.timestepping``; a failed step is halved). No branches (or beta = 0) is
+    the elastic shell at every step.
+
+    Args:
+        inner_radius, outer_radius: reference radii A < B (m); C: Fung stiffness (Pa) of the relaxed
+            (long-time) shell; alpha: Fung exponent (dimensionless); kappa: bulk modulus (Pa).
+        branches: [(beta_m, tau_m), ...]: energy factors beta_m >= 0 (dimensionless) and relaxation
+            times tau_m > 0 (s).
+        pressure: the held cavity pressure (Pa, > 0); ramp_time: the ramp's duration (s, > 0);
+            end_time: the end of the hold (s, >= ramp_time).
+        mesh: as for :func:`inflate`.
+        times: extra step times (s, in (0, end_time]), merged into the schedule.
+        n_ramp: equal steps on the ramp; n_hold: geometrically growing steps through the hold, the first
+            ``first_hold`` long (s; default ramp_time / 2).
+        rtol: Newton's relative residual tolerance.
+        store_fields: keep the fields of every converged step (``BlastulaField`` with its time).
+
+    Returns:
+        ``BlastulaResult`` with ``method="creep"``: per converged step ``time`` (s), ``pressure`` (Pa),
+        ``inner_stretch``, ``outer_stretch``, ``newton_iterations``, ``wall_time`` (s); the fields at
+        ``end_time``; ``parameters`` records the inputs.
+
+    Raises:
+        ValueError: an input out of range (the message names the quantity and its unit).
+        NewtonError: no equilibrium at some step: on the ramp the shell passes its instantaneous limit
+            point, in the hold a pressure above the relaxed limit point makes it creep past it (it bursts);
+            the message names the time.
     """
     br = validate_branches(branches)
     validate_positive("pressure (the held cavity pressure)", pressure, "Pa")

@@ -1,49 +1,11 @@
 r"""FE spheroid: a Fung ball compressed between rigid frictionless plates, held, relaxing (seed Figs 6-10).
 
-``compress(*, radius, C, alpha, branches, displacement, ramp_time, end_time, kappa=2.2e9,
-mesh="default", static=False, field_times=(), n_ramp=None, n_hold=None, n_static=None, rtol=1e-10)
--> SpheroidResult`` (``fem.output``).
-
-Model (physics.md, scene 2): by symmetry a quarter section R >= 0, Z >= 0 of the ball of radius a0
-(u_r = 0 on the axis, u_z = 0 on the midplane Z = 0) and one rigid flat plane z = a0 - delta(t)/2 at
-the top (exact unilateral contact, no penalty: on the fitted levels the contact edge is a node placed where
-its multiplier vanishes; ``fem.contact``'s active set otherwise), mixed
-Q2/P1-discontinuous elements (``fem.forms``), generalized Maxwell branches on S_iso
-(``fem.viscoelastic``), quasi-static time stepping (``fem.timestepping``, inertia ~1e-6 of the stresses).
-Inside, lengths are scaled by a0, stresses by C, forces by C a0^2.
-
-* ``displacement``: the total approach delta (m) of the two plates reached at ``ramp_time`` by a
-  linear ramp and then held to ``end_time``; or a callable delta(t) (m, t in s, delta(0) = 0), then
-  ``ramp_time`` is the time scale of the fine initial steps and each step moves the plate by at most
-  the ramp's step (steps are halved until it does).
-* ``branches``: sequence of (beta_m, tau_m [s]); empty for elastic.
-* ``static=True``: branches and times are ignored; the steps are equilibrium states from delta = 0 to
-  ``displacement`` (``n_static`` equal steps, default 0.02 in delta/(2 a0) on a level, cut back on failure):
-  the F_eq(delta) curve; ``time`` then holds the load fraction delta/displacement. On a level every state
-  has its own mesh (same topology and numbering); the result's ``mesh`` is the last state's.
-* ``mesh``: "coarse", "default", "fine" or a level 0..4 (0 = coarse, 1 = default, 2 = fine; ``LEVELS``
-  gives (n_core, n_radial, surface grading, n_contact, n_equator) of ``fitted_mesh``; 3 x 3 Gauss points):
-  CONTACT-EDGE-FITTED meshes. Static runs solve every state on its own mesh whose surface node
-  ``n_contact`` sits on the contact edge, the edge position found by a secant iteration on the Signorini
-  condition at the edge (its nodal multiplier N_edge = 0, to ``EDGE_TOL`` of the force; the force is
-  stationary in the edge position there): the plate force is a smooth function of delta and converges
-  smoothly under refinement (no node-to-node jitter; levels 1..4 are self-similar, h ~ 1/n_core). Time
-  runs use one mesh, fitted to the edge of the static state at the held (largest) approach, with the
-  active-set contact below (the edge moves during the ramp, not in the hold). Or an ``AxiMesh`` from
-  ``fem.mesh.ball_section`` (built with length_scale = radius): a fixed mesh with node-by-node contact
-  (its force carries the edge quantisation, ~0.2 %).
-* ``field_times``: times (s) at which the deformed mesh, von Mises and pressure fields are stored
-  (they become step times; static runs: load fractions delta/displacement in (0, 1], the stored field is
-  the closest step); the last step is always stored. ``field_times="all"``: every converged step
-  (for ``SpheroidResult.to_pvd``).
-
-Outputs per converged step: plate force from the contact multipliers (sum of the nodal reactions of the
-active nodes; they include the 2 pi R of the axisymmetric volume element, so this is the force on the
-whole plate), the midplane reaction (must be equal: checked to 1e-6 relative, else RuntimeError),
-midplane radius (deformed equator), nominal stress F / (pi r_mid^2), volume-averaged von Mises stress
-(deformed volume), contact radius (static runs on a level: the edge node; else an edge estimate between
-the outermost active node and the next one, from the gaps of the first free nodes;
-``contact_radius_node``: the outermost active node itself).
+:func:`compress` (``SpheroidResult``, ``fem.output``). By symmetry a quarter section R >= 0, Z >= 0 of the
+ball of radius a0 (u_r = 0 on the axis, u_z = 0 on the midplane) under one rigid flat plane
+z = a0 - delta(t)/2 (exact unilateral contact, ``fem.contact``), mixed Q2/P1-discontinuous elements,
+generalized Maxwell branches on S_iso (``fem.viscoelastic``), quasi-static time stepping
+(``fem.timestepping``; inertia ~1e-6 of the stresses). Inside, lengths are scaled by a0, stresses by C,
+forces by C a0^2 (``fem.problem.SceneProblem``). Contact-edge-fitted meshes: :func:`fitted_mesh`, ``LEVELS``.
 """
 
 from __future__ import annotations
@@ -500,7 +462,62 @@ def compress(
     n_static: int | None = None,
     rtol: float = 1e-10,
 ) -> SpheroidResult:
-    """Compress the Fung ball between frictionless plates; see the module docstring. SI units (m, Pa, s, N)."""
+    """Compress the Fung ball between rigid frictionless plates, hold, and let it relax.
+
+    Every converged step is an equilibrium with exact contact (Signorini: gap >= 0, contact force >= 0,
+    their product 0) and the Maxwell branch stresses of its time step.
+
+    Args:
+        radius: the ball's radius a0 (m).
+        C: Fung stiffness of the relaxed (long-time) material (Pa); alpha: Fung exponent
+            (dimensionless); kappa: bulk modulus (Pa).
+        branches: [(beta_m, tau_m), ...]: energy factors beta_m >= 0 (dimensionless) and relaxation
+            times tau_m > 0 (s); empty for elastic.
+        displacement: the total approach delta (m, < 1.6 a0) of the two plates, reached at ``ramp_time``
+            by a linear ramp and then held to ``end_time``; or a callable delta(t) (m, t in s, delta(0) =
+            0): ``ramp_time`` is then the time scale of the fine initial steps and each step moves the
+            plate by at most the ramp's step (steps are halved until it does).
+        ramp_time, end_time: end of the ramp and of the hold (s, 0 < ramp_time <= end_time; ignored
+            when ``static``).
+        mesh: "coarse", "default", "fine" or a level 0..4 (0 = coarse, 1 = default, 2 = fine; ``LEVELS``
+            gives (n_core, n_radial, surface grading, n_contact, n_equator) of :func:`fitted_mesh`):
+            CONTACT-EDGE-FITTED meshes. Static runs solve every state on its own mesh whose surface node
+            ``n_contact`` sits on the contact edge, found by a secant iteration on the Signorini
+            condition there (its nodal multiplier N_edge = 0 to ``EDGE_TOL`` of the force; the force is
+            stationary in the edge position): the plate force is a smooth function of delta and converges
+            smoothly under refinement (levels 1..4 are self-similar, h ~ 1/n_core). Time runs use one
+            mesh, fitted to the edge of the static state at the held (largest) approach, with the
+            active-set contact. Or an ``AxiMesh`` from ``fem.mesh.ball_section`` built with length_scale =
+            radius: a fixed mesh with node-by-node contact (its force carries the edge quantisation, ~0.2 %).
+        static: equilibrium states from delta = 0 to ``displacement`` (the F_eq(delta) curve; branches and
+            times are ignored); ``time`` then holds the load fraction delta / displacement. On a level every
+            state has its own mesh (same topology and numbering); the result's ``mesh`` is the last state's.
+        field_times: times (s; static runs: load fractions in (0, 1]) at which the fields are stored (they
+            become step times; static runs store the closest step); the last step is always stored.
+            ``"all"``: every converged step (for ``SpheroidResult.to_pvd``).
+        n_ramp, n_hold: ramp steps (default 6) and geometrically growing hold steps (default 20).
+        n_static: static steps (default: 0.04 in delta / a0 on a level, 0.02 on a mesh object, at least 8;
+            failed steps are cut back).
+        rtol: Newton's relative residual tolerance.
+
+    Returns:
+        ``SpheroidResult`` with one entry per converged step: ``time`` (s), ``approach`` (m), plate
+        ``force`` (N: the sum of the active nodes' contact multipliers, which include the 2 pi R of the
+        axisymmetric volume element, so it is the force on the whole plate), ``reaction_force`` of the
+        midplane (N), ``midplane_radius`` (m), ``midplane_area`` (m^2), ``nominal_stress`` F / (pi
+        r_mid^2) (Pa), ``mean_von_mises`` over the deformed volume (Pa), ``contact_radius`` (m: static
+        runs on a level the edge node; else an edge estimate between the outermost active node and the
+        next from the gaps of the first free nodes), ``contact_radius_node`` (the outermost active node,
+        m), ``min_gap`` (m), ``min_contact_force`` (N), ``newton_iterations``, ``contact_passes``,
+        ``wall_time`` (s); ``fields`` (``SpheroidField``), ``mesh``, ``static``, ``parameters``.
+
+    Raises:
+        ValueError: an input out of range (the message names the quantity and its unit).
+        NewtonError: a step did not converge after its cut-backs (``ContactError``: the active set or the
+            fitted contact edge did not settle); the message names the step's time or approach.
+        RuntimeError: the plate force and the midplane reaction differ by more than 1e-6 (relative): the
+            equilibrium was not reached (tighten rtol).
+    """
     validate_positive("radius (the spheroid radius a0)", radius, "m")
     validate_material(C, alpha, kappa)
     br = validate_branches(branches)
