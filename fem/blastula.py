@@ -50,6 +50,11 @@ def _make_mesh(mesh, A: float, B: float) -> AxiMesh:
     return shell_section(A, B, int(mesh[0]), int(mesh[1]))
 
 
+class _Stretches(NamedTuple):
+    inner: float  # a/A
+    outer: float  # b/B
+
+
 class _Problem(SceneProblem):
     """The scaled blastula equations r(u, p) = f_int(u) - p f_p(u) on the free dofs.
 
@@ -92,11 +97,15 @@ class _Problem(SceneProblem):
         """:meth:`SceneProblem.admissible` of the free dofs ``uf`` (J > 0 and hoop stretch > 0)."""
         return super().admissible(self.full(uf))
 
-    def stretches(self, uf):
+    def inner_stretch(self, uf) -> float:
+        """a/A: the mean deformed / reference radius over the inner surface (area weights 2 pi R ds)."""
+        return self.asm.surface_mean_stretch(self.full(uf), self.inner)
+
+    def stretches(self, uf) -> _Stretches:
+        """Mean deformed / reference radius over the inner and the outer surface (dimensionless)."""
         u = self.full(uf)
-        return (
-            self.asm.surface_mean_stretch(u, self.m.edges["inner"]),
-            self.asm.surface_mean_stretch(u, self.m.edges["outer"]),
+        return _Stretches(
+            self.asm.surface_mean_stretch(u, self.inner), self.asm.surface_mean_stretch(u, self.m.edges["outer"])
         )
 
     def field(self, x, C, iso_scale: float = 1.0, extra_S=None):
@@ -112,7 +121,8 @@ class _Problem(SceneProblem):
         """BlastulaResult (SI) from the scaled states ``xs`` (free dofs) at scaled pressures ``lam``;
         the fields are those of the last state (with its step's branch stresses). ``all_fields``: None,
         or one ``_StepStress`` (time [s] or None, iso_scale, extra_S) per state to keep the fields of every step."""
-        inner, outer = (np.array(v) for v in zip(*(self.stretches(x) for x in xs)))
+        st = [self.stretches(x) for x in xs]
+        inner, outer = np.array([s.inner for s in st]), np.array([s.outer for s in st])
         u, vm, ph = self.field(xs[-1], C, iso_scale, extra_S)
         fields = None
         if all_fields is not None:
@@ -245,7 +255,7 @@ def inflate(
         return prob.solve(lam, guess, rtol, load=f"p = {lam * C:.6g} Pa")
 
     if method == "load":
-        steps = load_control(solve, p / C, u0, monitor=lambda x: prob.stretches(x)[0], unit=" Pa", scale=C)
+        steps = load_control(solve, p / C, u0, monitor=prob.inner_stretch, unit=" Pa", scale=C)
         lam = np.array([s.load for s in steps])
         xs = [s.solution.x for s in steps]
         its = np.array([s.solution.iterations for s in steps])
@@ -257,14 +267,14 @@ def inflate(
         else:  # automatic: a first step that raises the inner stretch by ~ 0.02 (linear estimate)
             _, K0, rl0 = prob.rk(u0, 0.0)
             t = sparse_solve(K0, -rl0)
-            dp = 0.02 / max((prob.stretches(1e-6 * t)[0] - 1.0) / 1e-6, 1e-12)
+            dp = 0.02 / max((prob.inner_stretch(1e-6 * t) - 1.0) / 1e-6, 1e-12)
         ds = np.sqrt(2.0) * dp  # the first tangent has equal parts in |x|/c and the load
         steps = arc_length(
             lambda x, l: prob.rk(x, l),
             u0,
             0.0,
             ds,
-            stop=lambda x, l: prob.stretches(x)[0] >= max_inner_stretch,
+            stop=lambda x, l: prob.inner_stretch(x) >= max_inner_stretch,
             admissible=prob.admissible,
             ref_norm=ref,
             rtol=rtol,
