@@ -269,12 +269,13 @@ def inflate(
             t = sparse_solve(K0, -rl0)
             dp = 0.02 / max((prob.inner_stretch(1e-6 * t) - 1.0) / 1e-6, 1e-12)
         ds = np.sqrt(2.0) * dp  # the first tangent has equal parts in |x|/c and the load
+        stop_at = float(max_inner_stretch)  # type: ignore[arg-type]  # checked > 1 above
         steps = arc_length(
             lambda x, l: prob.rk(x, l),
             u0,
             0.0,
             ds,
-            stop=lambda x, l: prob.inner_stretch(x) >= max_inner_stretch,
+            stop=lambda x, l: prob.inner_stretch(x) >= stop_at,
             admissible=prob.admissible,
             ref_norm=ref,
             rtol=rtol,
