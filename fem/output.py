@@ -348,6 +348,11 @@ class SpheroidField:
     contact_nodes: np.ndarray | None = None  # dof indices of contact_nodal_force (None: outer minus midplane)
 
 
+def _final_field(name: str, doc: str) -> property:
+    """A read-only attribute that reads ``name`` of the last stored field."""
+    return property(lambda self: getattr(self.fields[-1], name), doc=doc)
+
+
 @dataclass
 class SpheroidResult:
     """FE spheroid compression (``fem.spheroid.compress``); arrays have one entry per converged step.
@@ -391,25 +396,12 @@ class SpheroidResult:
         return min(self.fields, key=lambda f: abs(f.time - float(time)))
 
     # the final state's fields under the names BlastulaResult uses (read-only, from ``fields[-1]``)
-    @property
-    def displacement(self) -> np.ndarray:
-        """Final nodal displacement (N, 2) [m]."""
-        return self.fields[-1].displacement
-
-    @property
-    def deformed_nodes(self) -> np.ndarray:
-        """Final deformed dof coordinates (N, 2) [m]."""
-        return self.fields[-1].deformed_nodes
-
-    @property
-    def von_mises(self) -> np.ndarray:
-        """Final element von Mises stress [Pa]."""
-        return self.fields[-1].von_mises
-
-    @property
-    def hydrostatic_pressure(self) -> np.ndarray:
-        """Final element hydrostatic pressure (-mean Cauchy stress) [Pa]."""
-        return self.fields[-1].hydrostatic_pressure
+    displacement = _final_field("displacement", "Final nodal displacement (N, 2) [m].")
+    deformed_nodes = _final_field("deformed_nodes", "Final deformed dof coordinates (N, 2) [m].")
+    von_mises = _final_field("von_mises", "Final element von Mises stress [Pa].")
+    hydrostatic_pressure = _final_field(
+        "hydrostatic_pressure", "Final element hydrostatic pressure (-mean Cauchy) [Pa]."
+    )
 
     def _contact_nodes(self, f: SpheroidField) -> np.ndarray:
         if f.contact_nodes is not None:
