@@ -111,7 +111,7 @@ def _level(mesh):
 
 
 def make_mesh(mesh, radius: float) -> AxiMesh:
-    """Resolve the ``mesh`` argument to an AxiMesh of the quarter ball (see the module docstring); a level
+    """Resolve the ``mesh`` argument to an AxiMesh of the quarter ball (see :func:`compress`); a level
     gives its mesh with the contact edge node half-way along the pole block (``fitted_mesh(radius, level, 0.5)``)."""
     if isinstance(mesh, AxiMesh):
         msg = "the mesh object must come from fem.mesh.ball_section(radius, ...) with the same radius"
@@ -150,14 +150,16 @@ class _Row(NamedTuple):
 
 
 class _State(NamedTuple):
-    x: np.ndarray
-    active: np.ndarray
-    visco: ve.MaxwellState
+    """A converged state of the scaled ball (lengths / a0, stresses / C, forces / (C a0^2))."""
+
+    x: np.ndarray  # full unknown vector (u, q)
+    active: np.ndarray  # bool per contact candidate (``plane.nodes``): on the plate
+    visco: ve.MaxwellState  # branch stresses and S_iso after the step (None on _EdgeFit's static states)
     delta: float  # scaled plate displacement (= approach / 2 / a0)
-    residual: np.ndarray
-    iso_scale: float
+    residual: np.ndarray  # full internal residual at x: the reactions on the constrained dofs
+    iso_scale: float  # the step's algorithmic factors (for its stresses)
     extra_S: object
-    passes: int
+    passes: int  # contact active-set passes of the step
 
 
 class Observation(NamedTuple):

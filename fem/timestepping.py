@@ -123,7 +123,13 @@ def march(
     growth: float = 1.5,
     too_large: Callable | None = None,
 ) -> list[Step]:
-    """Advance from (t0, state0) through every time in ``times`` (see the module docstring)."""
+    """Advance from (t0, state0) through every time in ``times`` (s, increasing), halving a failed step.
+
+    ``step(t_old, state_old, t_new, previous) -> (state_new, newton_iterations)`` raises ``NewtonError``
+    when it fails; ``previous`` is the ``TimedState`` before t_old (None at the start). Returns one
+    ``Step(time, state, newton_iterations, wall_time)`` per converged (sub)step. Raises ``NewtonError``
+    (naming the step) after ``max_cuts`` cuts, ValueError for times that do not increase.
+    """
     out: list[Step] = []
     t_c, s_c, prev = float(t0), state0, None
     for target in np.asarray(times, float):
