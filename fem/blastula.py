@@ -1,32 +1,9 @@
 r"""FE blastula: a hollow Fung sphere inflated by a follower pressure (seed Figs 1-5).
 
-``inflate(*, inner_radius, outer_radius, C, alpha, pressures, kappa=2.2e9, mesh="default",
-method="load", max_inner_stretch=None, rtol=1e-10, store_fields=False) -> BlastulaResult``
-
-Quarter wall section A <= rho <= B, 0 <= theta <= 90 deg (u_z = 0 on Z = 0, u_r = 0 on the axis),
-mixed Q2/P1-discontinuous elements (perturbed Lagrangian, condensed), follower pressure on the
-deformed inner surface. Lengths scaled by A and stresses by C inside. ``pressures`` (Pa) must be
-finite, >= 0 and non-decreasing; ``method="load"`` returns one entry per requested pressure
-(steps are subdivided internally when Newton struggles); ``method="arclength"`` traces from p = 0
-until the inner stretch reaches ``max_inner_stretch`` (``pressures`` then only sets the first
-step: its first positive entry; None for an automatic step raising the stretch by ~0.02; steps
-adapt up to twice the first), through limit points. Stretch = mean deformed /
-reference radius over the inner (outer) surface. Mesh: "coarse", "default", "fine", a tuple
-(n_radial, n_circ) or an ``AxiMesh`` from ``fem.mesh.shell_section``.
-
-``creep(*, inner_radius, outer_radius, C, alpha, branches, pressure, ramp_time, end_time, kappa=2.2e9,
-mesh="default", times=(), n_ramp=8, n_hold=60, first_hold=None, rtol=1e-10, store_fields=False) -> BlastulaResult``
-
-The same shell with generalized Maxwell branches (beta_m, tau_m [s]) on the isochoric stress
-(``fem.viscoelastic``: dQ_m/dt + Q_m/tau_m = beta_m dS_iso/dt, exact exponential update for S_iso
-linear over a step) under a pressure ramp-and-hold: p(t) = pressure * min(t / ramp_time, 1) (Pa),
-held to ``end_time`` (s). Quasi-static time marching (``fem.timestepping``: ``n_ramp`` equal ramp
-steps, ``n_hold`` geometrically growing hold steps from ``first_hold`` (default ramp_time / 2),
-``times`` merged in as step times; a failed step is halved). The result has one entry per converged
-step in ``time`` [s], ``pressure``, ``inner_stretch``, ``outer_stretch``, ``newton_iterations``,
-``wall_time`` and the fields at ``end_time``. A hold pressure above the relaxed limit point makes the
-shell creep past it (it bursts): the step that cannot find equilibrium raises ``NewtonError`` naming
-the time. No branches (or beta = 0) is the elastic shell at every step.
+:func:`inflate` (elastic, load control or arc-length through limit points) and :func:`creep` (generalized
+Maxwell branches under a pressure ramp-and-hold). Quarter wall section A <= rho <= B, 0 <= theta <= 90 deg
+(u_z = 0 on Z = 0, u_r = 0 on the axis), mixed Q2/P1-discontinuous elements, follower pressure on the
+deformed inner surface; lengths scaled by A and stresses by C inside (``fem.problem.SceneProblem``).
 """
 
 from __future__ import annotations
@@ -37,14 +14,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from tissuemech.fem import constitutive as cm
 from tissuemech.fem import viscoelastic as ve
 from tissuemech.fem.continuation import LimitPointError, arc_length, load_control
-from tissuemech.fem.forms import Assembler, Material
-from tissuemech.fem.kinematics import invariants
+from tissuemech.fem.forms import Material
 from tissuemech.fem.mesh import AxiMesh, shell_section
 from tissuemech.fem.newton import NewtonError, newton, sparse_solve, symmetric_solve
 from tissuemech.fem.output import BlastulaField, BlastulaResult
+from tissuemech.fem.problem import BLASTULA_MARGIN, SceneProblem, check_mesh, mesh_spec, roundoff_floor, secant
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
 from tissuemech.reduced.material import validate_branches, validate_material, validate_positive, validate_radii
 from tissuemech.reduced.validation import validate_choice, validate_finite
@@ -60,16 +36,11 @@ class LockingWarning(UserWarning):
 
 
 def _make_mesh(mesh, A: float, B: float) -> AxiMesh:
+    """The shell mesh of a ``mesh`` argument: a name of ``MESHES``, divisions (n_radial, n_circ) or an
+    ``AxiMesh`` built with length_scale = A (m); B (m) the outer radius. Raises ValueError otherwise."""
     if isinstance(mesh, AxiMesh):
-        if abs(mesh.length_scale - A) > 1e-12 * A:
-            raise ValueError("the mesh object must be built with length_scale = inner_radius")
-        return mesh
-    if isinstance(mesh, str):
-        if mesh not in MESHES:
-            raise ValueError(
-                f"mesh must be 'coarse', 'default', 'fine', a tuple (n_radial, n_circ) or a mesh object, got {mesh!r}"
-            )
-        mesh = MESHES[mesh]
+        return check_mesh(mesh, A, "the mesh object must be built with length_scale = inner_radius")
+    mesh = mesh_spec(mesh, MESHES, "a tuple (n_radial, n_circ) or a mesh object")
     if (
         not isinstance(mesh, (tuple, list))
         or len(mesh) != 2
@@ -79,26 +50,24 @@ def _make_mesh(mesh, A: float, B: float) -> AxiMesh:
     return shell_section(A, B, int(mesh[0]), int(mesh[1]))
 
 
-class _Problem:
+class _Stretches(NamedTuple):
+    inner: float  # a/A
+    outer: float  # b/B
+
+
+class _Problem(SceneProblem):
     """The scaled blastula equations r(u, p) = f_int(u) - p f_p(u) on the free dofs.
 
     ``iso_scale``/``extra_S`` (``fem.viscoelastic.algorithmic``) add the Maxwell branch stresses of a
     time step; the defaults are the elastic shell. ``ref`` = |f_p| at unit pressure (the force scale),
-    ``floor`` = the round-off floor of the residual (kappa/C times eps times the force scale)."""
+    ``floor`` = the round-off floor of the residual (``fem.problem.roundoff_floor`` over ``ref``).
+    Unlike :class:`SceneProblem`, states here are vectors of the FREE dofs (``full`` expands them)."""
 
-    def __init__(self, m: AxiMesh, mat: Material, formulation: str = "mixed"):
-        self.m, self.mat = m, mat
-        self.asm = Assembler(m, formulation)
-        fixed = np.concatenate([2 * m.nodes["axis"], 2 * m.nodes["symmetry"] + 1])
-        self.free = np.setdiff1d(np.arange(self.asm.ndof), fixed)
+    def __init__(self, m: AxiMesh, mat: Material, formulation: str = "mixed", beta=(), tau=()):
+        super().__init__(m, mat, formulation, beta, tau)
         self.inner = m.edges["inner"]
         self.ref = float(np.linalg.norm(self.rk(np.zeros(self.free.size), 0.0, tangent=False)[2]))
-        self.floor = 1e3 * np.finfo(float).eps * max(mat.kappa, 1.0) * self.ref
-
-    def full(self, uf):
-        u = np.zeros(self.asm.ndof)
-        u[self.free] = uf
-        return u
+        self.floor = roundoff_floor(mat.kappa, self.ref, BLASTULA_MARGIN)
 
     def rk(self, uf, p, tangent=True, iso_scale: float = 1.0, extra_S=None):
         u = self.full(uf)
@@ -125,56 +94,51 @@ class _Problem:
         )
 
     def admissible(self, uf):
-        f = self.asm.f_at(self.full(uf))
-        _, J = invariants(f)
-        if not np.all(J > 0):
-            return "J <= 0 (element turned inside out)"
-        if not np.all(f[..., 4] > 0):
-            return "hoop stretch <= 0"
-        return None
+        """:meth:`SceneProblem.admissible` of the free dofs ``uf`` (J > 0 and hoop stretch > 0)."""
+        return super().admissible(self.full(uf))
 
-    def stretches(self, uf):
+    def inner_stretch(self, uf) -> float:
+        """a/A: the mean deformed / reference radius over the inner surface (area weights 2 pi R ds)."""
+        return self.asm.surface_mean_stretch(self.full(uf), self.inner)
+
+    def stretches(self, uf) -> _Stretches:
+        """Mean deformed / reference radius over the inner and the outer surface (dimensionless)."""
         u = self.full(uf)
-        return (
-            self.asm.surface_mean_stretch(u, self.m.edges["inner"]),
-            self.asm.surface_mean_stretch(u, self.m.edges["outer"]),
+        return _Stretches(
+            self.asm.surface_mean_stretch(u, self.inner), self.asm.surface_mean_stretch(u, self.m.edges["outer"])
         )
 
     def field(self, x, C, iso_scale: float = 1.0, extra_S=None):
         """(displacement (N, 2) [m], element von Mises [Pa], element hydrostatic pressure [Pa]) of the
         scaled state ``x`` (free dofs), with its step's branch stresses."""
-        A = self.m.length_scale
         xf = self.full(x)
-        u = xf[: self.asm.n_u].reshape(-1, 2) * A
-        f, P, _, q = self.asm.stress(xf, self.mat, extra_S, iso_scale)
-        vm = cm.von_mises(cm.cauchy(f, P)) * C
-        wq = self.asm.w
-        return u, (vm * wq).sum(1) / wq.sum(1), -(q * wq).sum(1) / wq.sum(1) * C
+        _, vm, q = self.point_stresses(xf, extra_S, iso_scale)
+        return (self.displacement(xf), *self.element_fields(vm, q, C))
 
     def result(
         self, lam, xs, its, wall, C, method, iso_scale: float = 1.0, extra_S=None, all_fields=None, **extra
     ) -> BlastulaResult:
         """BlastulaResult (SI) from the scaled states ``xs`` (free dofs) at scaled pressures ``lam``;
         the fields are those of the last state (with its step's branch stresses). ``all_fields``: None,
-        or one (time [s] or None, iso_scale, extra_S) per state to keep the fields of every step."""
-        A = self.m.length_scale
-        st = np.array([self.stretches(x) for x in xs])
+        or one ``_StepStress`` (time [s] or None, iso_scale, extra_S) per state to keep the fields of every step."""
+        st = [self.stretches(x) for x in xs]
+        inner, outer = np.array([s.inner for s in st]), np.array([s.outer for s in st])
         u, vm, ph = self.field(xs[-1], C, iso_scale, extra_S)
         fields = None
         if all_fields is not None:
             fields = []
-            for x, l, (t, isc, ex) in zip(xs, lam, all_fields):
-                uk, vmk, phk = self.field(x, C, isc, ex)
-                fields.append(BlastulaField(float(l) * C, t, uk, self.m.X.T * A + uk, vmk, phk))
+            for x, l, st in zip(xs, lam, all_fields):
+                uk, vmk, phk = self.field(x, C, st.iso_scale, st.extra_S)
+                fields.append(BlastulaField(float(l) * C, st.time, uk, self.deformed_nodes(uk), vmk, phk))
         return BlastulaResult(
             pressure=np.asarray(lam, float) * C,
-            inner_stretch=st[:, 0],
-            outer_stretch=st[:, 1],
+            inner_stretch=inner,
+            outer_stretch=outer,
             newton_iterations=np.asarray(its, int),
             wall_time=np.asarray(wall, float),
             mesh=self.m,
             displacement=u,
-            deformed_nodes=self.m.X.T * A + u,
+            deformed_nodes=self.deformed_nodes(u),
             hydrostatic_pressure=ph,
             von_mises=vm,
             method=method,
@@ -183,13 +147,25 @@ class _Problem:
         )
 
 
-def _setup(inner_radius, outer_radius, C, alpha, kappa, mesh, formulation: str = "mixed") -> _Problem:
-    """Validate the shell inputs and build the scaled problem (lengths / A, stresses / C)."""
+class _StepStress(NamedTuple):
+    """The branch stresses a stored state was solved with (for its fields)."""
+
+    time: float | None  # s (creep runs; None for load-controlled and arc-length runs)
+    iso_scale: float
+    extra_S: object
+
+
+_ELASTIC = _StepStress(None, 1.0, None)
+
+
+def _setup(inner_radius, outer_radius, C, alpha, kappa, mesh, formulation: str = "mixed", beta=(), tau=()) -> _Problem:
+    """Validate the shell inputs and build the scaled problem (lengths / A, stresses / C; branches
+    ``beta``, ``tau`` [s] for creep)."""
     validate_radii(inner_radius, outer_radius)
     validate_material(C, alpha, kappa)
     A, B = float(inner_radius), float(outer_radius)
     m = _make_mesh(mesh, A, B)
-    return _Problem(m, Material(1.0, float(alpha), float(kappa) / float(C)), formulation)
+    return _Problem(m, Material(1.0, float(alpha), float(kappa) / float(C)), formulation, beta, tau)
 
 
 def inflate(
@@ -207,10 +183,42 @@ def inflate(
     formulation: str = "mixed",
     store_fields: bool = False,
 ) -> BlastulaResult:
-    """Inflate the hollow sphere; see the module docstring. SI units (m, Pa).
+    """Inflate the hollow sphere by a cavity pressure p acting on its deformed inner surface.
 
-    ``store_fields=True`` keeps the fields (displacement, von Mises, pressure) of every converged step in
-    ``result.fields`` (``BlastulaField``; for ``result.to_pvd``); by default only the final ones are kept.
+    Solves f_int(u) = p f_p(u) on the quarter wall section (the exact incompressible shell is
+    ``tissuemech.reduced.blastula``). The stretches are surface means of deformed / reference radius.
+
+    Args:
+        inner_radius, outer_radius: reference radii A < B of the wall (m).
+        C: Fung stiffness (Pa); alpha: Fung exponent (dimensionless); kappa: bulk modulus (Pa).
+        pressures: the pressures to reach (Pa): finite, >= 0, non-decreasing. ``method="load"``: one
+            result entry per value (steps are subdivided internally when Newton struggles).
+            ``method="arclength"``: only its first positive entry is used, as the first step; None for an
+            automatic first step that raises the inner stretch by ~0.02.
+        mesh: "coarse", "default", "fine" (``MESHES``: (n_radial, n_circ) = (2, 4), (4, 8), (8, 16)), a
+            tuple (n_radial, n_circ) or an ``AxiMesh`` from ``fem.mesh.shell_section`` built with
+            length_scale = inner_radius.
+        method: "load" (load control to every pressure) or "arclength" (Riks from p = 0 until the inner
+            stretch reaches ``max_inner_stretch``, through limit points; steps adapt up to twice the first).
+        max_inner_stretch: where the arc-length trace stops (a/A > 1, dimensionless; "arclength" only).
+        rtol: Newton's relative residual tolerance (dimensionless).
+        formulation: "mixed" (default) or "displacement" (locks for kappa/C >> 100: a warning says so).
+        store_fields: keep the fields of every converged step in ``result.fields`` (``BlastulaField``, for
+            ``result.to_pvd``); by default only the final fields are kept.
+
+    Returns:
+        ``BlastulaResult`` (SI): per converged step ``pressure`` (Pa), ``inner_stretch``,
+        ``outer_stretch``, ``newton_iterations``, ``wall_time`` (s); the final ``displacement`` and
+        ``deformed_nodes`` (N, 2) (m), element ``von_mises`` and ``hydrostatic_pressure`` (Pa); ``method``.
+        An arc-length result starts with the reference state p = 0.
+
+    Raises:
+        ValueError: an input out of range (the message names the quantity and its unit).
+        LimitPointError: load control cannot pass the maximum of the pressure (use method="arclength";
+            ``last_converged`` holds the last pressure reached, Pa).
+        NewtonError: a step did not converge after its cut-backs (the message names the pressure).
+    Warns:
+        LockingWarning: formulation="displacement" with kappa/C > 100.
     """
     validate_choice("method", method, ("load", "arclength"))
     if pressures is not None:
@@ -247,11 +255,11 @@ def inflate(
         return prob.solve(lam, guess, rtol, load=f"p = {lam * C:.6g} Pa")
 
     if method == "load":
-        steps = load_control(solve, p / C, u0, monitor=lambda x: prob.stretches(x)[0], unit=" Pa", scale=C)
-        lam = np.array([s[0] for s in steps])
-        xs = [s[1].x for s in steps]
-        its = np.array([s[1].iterations for s in steps])
-        wall = np.array([s[2] for s in steps])
+        steps = load_control(solve, p / C, u0, monitor=prob.inner_stretch, unit=" Pa", scale=C)
+        lam = np.array([s.load for s in steps])
+        xs = [s.solution.x for s in steps]
+        its = np.array([s.solution.iterations for s in steps])
+        wall = np.array([s.wall_time for s in steps])
     else:
         pos = p[p > 0] if pressures is not None else np.array([])
         if pos.size:
@@ -259,27 +267,26 @@ def inflate(
         else:  # automatic: a first step that raises the inner stretch by ~ 0.02 (linear estimate)
             _, K0, rl0 = prob.rk(u0, 0.0)
             t = sparse_solve(K0, -rl0)
-            dp = 0.02 / max((prob.stretches(1e-6 * t)[0] - 1.0) / 1e-6, 1e-12)
+            dp = 0.02 / max((prob.inner_stretch(1e-6 * t) - 1.0) / 1e-6, 1e-12)
         ds = np.sqrt(2.0) * dp  # the first tangent has equal parts in |x|/c and the load
+        stop_at = float(max_inner_stretch)  # type: ignore[arg-type]  # checked > 1 above
         steps = arc_length(
             lambda x, l: prob.rk(x, l),
             u0,
             0.0,
             ds,
-            stop=lambda x, l: prob.stretches(x)[0] >= max_inner_stretch,
+            stop=lambda x, l: prob.inner_stretch(x) >= stop_at,
             admissible=prob.admissible,
             ref_norm=ref,
             rtol=rtol,
             atol=floor,
             ds_max=2 * ds,
         )
-        lam = np.array([0.0] + [s[0] for s in steps])
-        xs = [u0] + [s[1] for s in steps]
-        its = np.array([0] + [s[2] for s in steps])
-        wall = np.array([0.0] + [s[3] for s in steps])
-    return prob.result(
-        lam, xs, its, wall, C, method, all_fields=[(None, 1.0, None)] * len(xs) if store_fields else None
-    )
+        lam = np.array([0.0] + [s.load for s in steps])
+        xs = [u0] + [s.x for s in steps]
+        its = np.array([0] + [s.newton_iterations for s in steps])
+        wall = np.array([0.0] + [s.wall_time for s in steps])
+    return prob.result(lam, xs, its, wall, C, method, all_fields=[_ELASTIC] * len(xs) if store_fields else None)
 
 
 class _CreepState(NamedTuple):
@@ -309,14 +316,39 @@ def creep(
     rtol: float = 1e-10,
     store_fields: bool = False,
 ) -> BlastulaResult:
-    r"""Creep of the viscoelastic shell under p(t) = pressure min(t / ramp_time, 1); see the module docstring.
+    r"""Creep of the viscoelastic shell under the ramp-and-hold pressure p(t) = pressure min(t / ramp_time, 1).
 
-    SI units: radii (m), C, kappa, pressure (Pa), times (s); ``branches`` = [(beta_m, tau_m [s]), ...].
-    Every step solves the equilibrium r(u, t_{n+1}) = f_int(u; iso_scale, extra_S) - p(t_{n+1}) f_p(u) = 0
-    with the algorithmic Maxwell stress S = S_vol + (1 + sum beta_m g_m) S_iso + sum (e^{-h_m} Q_m^n -
-    beta_m g_m S_iso^n) (``fem.viscoelastic``), then updates Q_m. Returns a BlastulaResult with ``time``
-    and ``method="creep"`` (``parameters`` records the inputs). ``store_fields=True`` keeps the fields of
-    every converged step in ``result.fields`` (``BlastulaField`` with its time; for ``result.to_pvd``).
+    Generalized Maxwell branches on the isochoric stress (``fem.viscoelastic``: dQ_m/dt + Q_m/tau_m =
+    beta_m dS_iso/dt, exact exponential update for S_iso linear over a step). Every step solves
+    r(u, t_{n+1}) = f_int(u; iso_scale, extra_S) - p(t_{n+1}) f_p(u) = 0 with the algorithmic stress
+    S = S_vol + (1 + sum_m beta_m g_m) S_iso + sum_m (e^{-h_m} Q_m^n - beta_m g_m S_iso^n), then updates
+    the Q_m; quasi-static (``fem.timestepping``; a failed step is halved). No branches (or beta = 0) is
+    the elastic shell at every step.
+
+    Args:
+        inner_radius, outer_radius: reference radii A < B (m); C: Fung stiffness (Pa) of the relaxed
+            (long-time) shell; alpha: Fung exponent (dimensionless); kappa: bulk modulus (Pa).
+        branches: [(beta_m, tau_m), ...]: energy factors beta_m >= 0 (dimensionless) and relaxation
+            times tau_m > 0 (s).
+        pressure: the held cavity pressure (Pa, > 0); ramp_time: the ramp's duration (s, > 0);
+            end_time: the end of the hold (s, >= ramp_time).
+        mesh: as for :func:`inflate`.
+        times: extra step times (s, in (0, end_time]), merged into the schedule.
+        n_ramp: equal steps on the ramp; n_hold: geometrically growing steps through the hold, the first
+            ``first_hold`` long (s; default ramp_time / 2).
+        rtol: Newton's relative residual tolerance.
+        store_fields: keep the fields of every converged step (``BlastulaField`` with its time).
+
+    Returns:
+        ``BlastulaResult`` with ``method="creep"``: per converged step ``time`` (s), ``pressure`` (Pa),
+        ``inner_stretch``, ``outer_stretch``, ``newton_iterations``, ``wall_time`` (s); the fields at
+        ``end_time``; ``parameters`` records the inputs.
+
+    Raises:
+        ValueError: an input out of range (the message names the quantity and its unit).
+        NewtonError: no equilibrium at some step: on the ramp the shell passes its instantaneous limit
+            point, in the hold a pressure above the relaxed limit point makes it creep past it (it bursts);
+            the message names the time.
     """
     br = validate_branches(branches)
     validate_positive("pressure (the held cavity pressure)", pressure, "Pa")
@@ -335,10 +367,10 @@ def creep(
     ts = np.atleast_1d(np.asarray(times, float)) if len(np.atleast_1d(times)) else np.array([])
     if ts.size and (not np.all(np.isfinite(ts)) or np.any(ts <= 0) or np.any(ts > end_time * (1 + 1e-12))):
         raise ValueError(f"times (extra output times) must be finite and in (0, end_time = {end_time} s]")
-    prob = _setup(inner_radius, outer_radius, C, alpha, kappa, mesh)
-    C, p0, tr = float(C), float(pressure), float(ramp_time)
     beta = np.array([float(b) for b, _ in br])
     tau = np.array([float(t) for _, t in br])
+    prob = _setup(inner_radius, outer_radius, C, alpha, kappa, mesh, beta=beta, tau=tau)
+    C, p0, tr = float(C), float(pressure), float(ramp_time)
     schedule = ramp_hold_schedule(
         tr, float(end_time), n_ramp=int(n_ramp), n_hold=int(n_hold), first_hold=first_hold, breakpoints=list(ts)
     )
@@ -350,20 +382,20 @@ def creep(
     def step(t0, s: _CreepState, t1, prev):
         tried[0] = t1
         dt = t1 - t0
-        iso_scale, extra = ve.algorithmic(s.visco, beta, tau, dt)
+        iso_scale, extra = prob.maxwell_factors(s.visco, dt)
         lam = lam_at(t1)
         guess = s.x
-        if prev is not None and on_ramp(t1) == on_ramp(t0) and on_ramp(prev[0]) == on_ramp(t0):
+        if prev is not None and on_ramp(t1) == on_ramp(t0) and on_ramp(prev.time) == on_ramp(t0):
             # secant predictor in time, within one segment (ramp or hold) of the history
-            cand = s.x + (s.x - prev[1].x) * dt / (t0 - prev[0])
+            cand = secant(s.x, prev.state.x, dt, t0 - prev.time)
             if prob.admissible(cand) is None:
                 guess = cand
         load = f"t = {t1:.6g} s, p = {lam * C:.6g} Pa"
         sol = prob.solve(lam, guess, rtol, load, iso_scale, extra)
-        S_new = prob.asm.iso_S(prob.full(sol.x), prob.mat)
-        return _CreepState(sol.x, ve.update(s.visco, beta, tau, dt, S_new), lam, iso_scale, extra), sol.iterations
+        visco = prob.maxwell_update(s.visco, dt, prob.full(sol.x))
+        return _CreepState(sol.x, visco, lam, iso_scale, extra), sol.iterations
 
-    s0 = _CreepState(np.zeros(prob.free.size), ve.initial_state(beta.size, prob.asm.w.shape + (5,)), 0.0, 1.0, None)
+    s0 = _CreepState(np.zeros(prob.free.size), prob.maxwell_initial(), 0.0, 1.0, None)
     try:
         steps = march(step, s0, schedule)
     except NewtonError as err:
@@ -391,14 +423,16 @@ def creep(
     return prob.result(
         [st.state.lam for st in steps],
         [st.state.x for st in steps],
-        [st.iterations for st in steps],
-        [st.wall_s for st in steps],
+        [st.newton_iterations for st in steps],
+        [st.wall_time for st in steps],
         C,
         "creep",
         last.iso_scale,
         last.extra_S,
-        all_fields=[(float(st.t), st.state.iso_scale, st.state.extra_S) for st in steps] if store_fields else None,
-        time=np.array([st.t for st in steps]),
+        all_fields=[_StepStress(float(st.time), st.state.iso_scale, st.state.extra_S) for st in steps]
+        if store_fields
+        else None,
+        time=np.array([st.time for st in steps]),
         parameters=dict(
             inner_radius=float(inner_radius),
             outer_radius=float(outer_radius),

@@ -3,7 +3,7 @@ r"""Path following: adaptive load control and Riks arc-length (through limit poi
 ``load_control(solve, loads, x0, *, lam0=0.0, monitor=None, max_cuts=12)``
     ``solve(lam, x_guess) -> NewtonResult`` (raises ``NewtonError``). Reaches every requested
     load; a failed step is halved (up to ``max_cuts`` times), the predictor is the secant of the
-    last two converged states (``scale``/``unit`` only format messages). Returns a list of ``(lam, NewtonResult, wall_s)``, one per
+    last two converged states (``scale``/``unit`` only format messages). Returns a list of ``LoadStep(load, solution, wall_time)``, one per
     requested load. If it fails where the load-response curve flattens (monitor slope below 2 % of the
     initial one or falling), raises ``LimitPointError`` naming the last converged load.
 
@@ -11,7 +11,8 @@ r"""Path following: adaptive load control and Riks arc-length (through limit poi
     Riks: unknowns (x, lam), ``fun(x, lam) -> (r, K, r_lam)`` with r_lam = dr/dlam; hyperplane
     constraint t . (x - x_pred, lam - lam_pred) = 0 in the metric |x|^2 / c^2 + lam^2 (c from the
     first tangent), bordered sparse system solved directly (regular at limit points). Step length
-    adapted to the Newton iteration count; ``stop(x, lam)`` ends the trace. Returns lists.
+    adapted to the Newton iteration count; ``stop(x, lam)`` ends the trace. Returns a list of
+    ``ArcStep(load, x, newton_iterations, wall_time)``.
 """
 
 from __future__ import annotations
@@ -19,15 +20,33 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable, Sequence
+from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
 
 from tissuemech.fem.newton import NewtonError, NewtonResult, sparse_solve
 
-__all__ = ["LimitPointError", "load_control", "arc_length"]
+__all__ = ["LimitPointError", "LoadStep", "ArcStep", "load_control", "arc_length"]
 
 log = logging.getLogger(__name__)
+
+
+class LoadStep(NamedTuple):
+    """One requested load of :func:`load_control`, reached."""
+
+    load: float  # the requested (scaled) load
+    solution: NewtonResult  # x, Newton iterations summed over the sub-steps, (no residual history)
+    wall_time: float  # s, all sub-steps to this load
+
+
+class ArcStep(NamedTuple):
+    """One converged step of :func:`arc_length`."""
+
+    load: float  # the (scaled) load lam on the path
+    x: np.ndarray
+    newton_iterations: int
+    wall_time: float  # s
 
 
 class LimitPointError(NewtonError):
@@ -49,8 +68,11 @@ def load_control(
     max_cuts: int = 12,
     unit: str = "",
     scale: float = 1.0,
-) -> list:
-    out: list = []
+) -> list[LoadStep]:
+    """Reach every load of ``loads`` (scaled, increasing) from (lam0, x0) by Newton solves ``solve(lam, guess)``,
+    halving a failed step; see the module docstring. Returns one ``LoadStep`` per requested load.
+    Raises ``LimitPointError`` where the path flattens, ``NewtonError`` after ``max_cuts`` cuts otherwise."""
+    out: list[LoadStep] = []
     x_prev, lam_prev = np.array(x0, float), float(lam0)
     x_old: np.ndarray | None = None
     lam_old = 0.0
@@ -117,7 +139,7 @@ def load_control(
         if not out and target == lam_prev:  # a zero first load: solve it once
             res = solve(target, x_c)
             x_c, iters = res.x, res.iterations
-        out.append((float(target), NewtonResult(x_c, iters, []), time.perf_counter() - t0))
+        out.append(LoadStep(float(target), NewtonResult(x_c, iters, []), time.perf_counter() - t0))
         x_prev, lam_prev = x_c, lam_c
     return out
 
@@ -138,8 +160,8 @@ def arc_length(
     target_iter: int = 5,
     ds_max: float | None = None,
     ds_min: float | None = None,
-) -> list:
-    """Riks arc-length; returns a list of (lam, x, iterations, wall_s) from the start (excluded)."""
+) -> list[ArcStep]:
+    """Riks arc-length; returns a list of ``ArcStep(load, x, newton_iterations, wall_time)`` from the start (excluded)."""
     x, lam = np.array(x0, float), float(lam0)
     r, K, rl = fun(x, lam)
     tx = sparse_solve(K, -rl)
@@ -149,7 +171,7 @@ def arc_length(
     tx, tl = tx / n0, 1.0 / n0
     ds_max = 8 * ds if ds_max is None else ds_max
     ds_min = ds * 1e-4 if ds_min is None else ds_min
-    out = []
+    out: list[ArcStep] = []
     for _step in range(max_steps):
         t0 = time.perf_counter()
         while True:
@@ -189,7 +211,7 @@ def arc_length(
         n = nrm(dxs, dls)
         tx, tl = dxs / n, dls / n
         x, lam = xi, li
-        out.append((lam, x, it, time.perf_counter() - t0))
+        out.append(ArcStep(lam, x, it, time.perf_counter() - t0))
         ds = min(ds_max, ds * np.clip(np.sqrt(target_iter / it), 0.5, 2.0))
         if stop(x, lam):
             break

@@ -7,6 +7,8 @@ API: ``SpheroidResult`` (spheroid compression, see its docstring), ``SpheroidFie
 ``von_mises`` per element (mean over its quadrature points) [Pa]; creep runs (``fem.blastula.creep``,
 ``method="creep"``) also have ``time`` [s] per step and ``parameters`` (the inputs); with
 ``store_fields=True`` also ``fields``: one ``BlastulaField`` per converged step),
+both results give ``field_at(time=None)`` (the stored field closest to a time [s]; None: the last) and
+the final ``displacement``, ``deformed_nodes``, ``von_mises``, ``hydrostatic_pressure`` under the same names,
 ``write_vtu(path, mesh, displacement, cell_data)``, ``write_pvd(path, mesh, frames)`` and
 ``plot_von_mises(mesh, displacement, vm, ax=None)``.
 
@@ -77,20 +79,35 @@ class BlastulaResult:
     parameters: dict | None = None
     fields: list | None = None
 
+    def _stored_fields(self) -> list[BlastulaField]:
+        """``fields``, or the final state's field when only that was kept."""
+        if self.fields:
+            return self.fields
+        t_end = None if self.time is None else float(self.time[-1])
+        return [
+            BlastulaField(
+                float(self.pressure[-1]),
+                t_end,
+                self.displacement,
+                self.deformed_nodes,
+                self.von_mises,
+                self.hydrostatic_pressure,
+            )
+        ]
+
+    def field_at(self, time: float | None = None) -> BlastulaField:
+        """The stored field closest to ``time`` (s; creep runs), None: the last (as ``SpheroidResult.field_at``).
+
+        Raises ValueError for a time on a run without times (load-controlled or arc-length)."""
+        fields = self._stored_fields()
+        if time is None:
+            return fields[-1]
+        if self.time is None:
+            raise ValueError("field_at(time) needs a creep run (time in s); this run has pressures only")
+        return min(fields, key=lambda f: abs(float(f.time) - float(time)) if f.time is not None else np.inf)
+
     def _frames(self) -> list[Frame]:
-        fields = self.fields
-        if not fields:  # only the final state was kept
-            t_end = None if self.time is None else float(self.time[-1])
-            fields = [
-                BlastulaField(
-                    float(self.pressure[-1]),
-                    t_end,
-                    self.displacement,
-                    self.deformed_nodes,
-                    self.von_mises,
-                    self.hydrostatic_pressure,
-                )
-            ]
+        fields = self._stored_fields()
         frames = []
         for k, f in enumerate(fields):
             if self.method == "creep" and f.time is not None:
@@ -331,6 +348,11 @@ class SpheroidField:
     contact_nodes: np.ndarray | None = None  # dof indices of contact_nodal_force (None: outer minus midplane)
 
 
+def _final_field(name: str, doc: str) -> property:
+    """A read-only attribute that reads ``name`` of the last stored field."""
+    return property(lambda self: getattr(self.fields[-1], name), doc=doc)
+
+
 @dataclass
 class SpheroidResult:
     """FE spheroid compression (``fem.spheroid.compress``); arrays have one entry per converged step.
@@ -372,6 +394,14 @@ class SpheroidResult:
         if time is None:
             return self.fields[-1]
         return min(self.fields, key=lambda f: abs(f.time - float(time)))
+
+    # the final state's fields under the names BlastulaResult uses (read-only, from ``fields[-1]``)
+    displacement = _final_field("displacement", "Final nodal displacement (N, 2) [m].")
+    deformed_nodes = _final_field("deformed_nodes", "Final deformed dof coordinates (N, 2) [m].")
+    von_mises = _final_field("von_mises", "Final element von Mises stress [Pa].")
+    hydrostatic_pressure = _final_field(
+        "hydrostatic_pressure", "Final element hydrostatic pressure (-mean Cauchy) [Pa]."
+    )
 
     def _contact_nodes(self, f: SpheroidField) -> np.ndarray:
         if f.contact_nodes is not None:

@@ -1,49 +1,11 @@
 r"""FE spheroid: a Fung ball compressed between rigid frictionless plates, held, relaxing (seed Figs 6-10).
 
-``compress(*, radius, C, alpha, branches, displacement, ramp_time, end_time, kappa=2.2e9,
-mesh="default", static=False, field_times=(), n_ramp=None, n_hold=None, n_static=None, rtol=1e-10)
--> SpheroidResult`` (``fem.output``).
-
-Model (physics.md, scene 2): by symmetry a quarter section R >= 0, Z >= 0 of the ball of radius a0
-(u_r = 0 on the axis, u_z = 0 on the midplane Z = 0) and one rigid flat plane z = a0 - delta(t)/2 at
-the top (exact unilateral contact, no penalty: on the fitted levels the contact edge is a node placed where
-its multiplier vanishes; ``fem.contact``'s active set otherwise), mixed
-Q2/P1-discontinuous elements (``fem.forms``), generalized Maxwell branches on S_iso
-(``fem.viscoelastic``), quasi-static time stepping (``fem.timestepping``, inertia ~1e-6 of the stresses).
-Inside, lengths are scaled by a0, stresses by C, forces by C a0^2.
-
-* ``displacement``: the total approach delta (m) of the two plates reached at ``ramp_time`` by a
-  linear ramp and then held to ``end_time``; or a callable delta(t) (m, t in s, delta(0) = 0), then
-  ``ramp_time`` is the time scale of the fine initial steps and each step moves the plate by at most
-  the ramp's step (steps are halved until it does).
-* ``branches``: sequence of (beta_m, tau_m [s]); empty for elastic.
-* ``static=True``: branches and times are ignored; the steps are equilibrium states from delta = 0 to
-  ``displacement`` (``n_static`` equal steps, default 0.02 in delta/(2 a0) on a level, cut back on failure):
-  the F_eq(delta) curve; ``time`` then holds the load fraction delta/displacement. On a level every state
-  has its own mesh (same topology and numbering); the result's ``mesh`` is the last state's.
-* ``mesh``: "coarse", "default", "fine" or a level 0..4 (0 = coarse, 1 = default, 2 = fine; ``LEVELS``
-  gives (n_core, n_radial, surface grading, n_contact, n_equator) of ``fitted_mesh``; 3 x 3 Gauss points):
-  CONTACT-EDGE-FITTED meshes. Static runs solve every state on its own mesh whose surface node
-  ``n_contact`` sits on the contact edge, the edge position found by a secant iteration on the Signorini
-  condition at the edge (its nodal multiplier N_edge = 0, to ``EDGE_TOL`` of the force; the force is
-  stationary in the edge position there): the plate force is a smooth function of delta and converges
-  smoothly under refinement (no node-to-node jitter; levels 1..4 are self-similar, h ~ 1/n_core). Time
-  runs use one mesh, fitted to the edge of the static state at the held (largest) approach, with the
-  active-set contact below (the edge moves during the ramp, not in the hold). Or an ``AxiMesh`` from
-  ``fem.mesh.ball_section`` (built with length_scale = radius): a fixed mesh with node-by-node contact
-  (its force carries the edge quantisation, ~0.2 %).
-* ``field_times``: times (s) at which the deformed mesh, von Mises and pressure fields are stored
-  (they become step times; static runs: load fractions delta/displacement in (0, 1], the stored field is
-  the closest step); the last step is always stored. ``field_times="all"``: every converged step
-  (for ``SpheroidResult.to_pvd``).
-
-Outputs per converged step: plate force from the contact multipliers (sum of the nodal reactions of the
-active nodes; they include the 2 pi R of the axisymmetric volume element, so this is the force on the
-whole plate), the midplane reaction (must be equal: checked to 1e-6 relative, else RuntimeError),
-midplane radius (deformed equator), nominal stress F / (pi r_mid^2), volume-averaged von Mises stress
-(deformed volume), contact radius (static runs on a level: the edge node; else an edge estimate between
-the outermost active node and the next one, from the gaps of the first free nodes;
-``contact_radius_node``: the outermost active node itself).
+:func:`compress` (``SpheroidResult``, ``fem.output``). By symmetry a quarter section R >= 0, Z >= 0 of the
+ball of radius a0 (u_r = 0 on the axis, u_z = 0 on the midplane) under one rigid flat plane
+z = a0 - delta(t)/2 (exact unilateral contact, ``fem.contact``), mixed Q2/P1-discontinuous elements,
+generalized Maxwell branches on S_iso (``fem.viscoelastic``), quasi-static time stepping
+(``fem.timestepping``; inertia ~1e-6 of the stresses). Inside, lengths are scaled by a0, stresses by C,
+forces by C a0^2 (``fem.problem.SceneProblem``). Contact-edge-fitted meshes: :func:`fitted_mesh`, ``LEVELS``.
 """
 
 from __future__ import annotations
@@ -54,14 +16,14 @@ from typing import NamedTuple
 import numpy as np
 import skfem
 
-from tissuemech.fem import constitutive as cm
 from tissuemech.fem import viscoelastic as ve
 from tissuemech.fem.contact import ContactError, RigidPlane
-from tissuemech.fem.forms import Assembler, Material
+from tissuemech.fem.forms import Material
 from tissuemech.fem.kinematics import invariants
 from tissuemech.fem.mesh import AxiMesh, ball_section, graded_points
 from tissuemech.fem.newton import NewtonError, newton, symmetric_solve
 from tissuemech.fem.output import SpheroidField, SpheroidResult
+from tissuemech.fem.problem import SPHEROID_MARGIN, SceneProblem, check_mesh, mesh_spec, roundoff_floor, secant
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
 from tissuemech.reduced.material import validate_branches, validate_material, validate_positive
 
@@ -142,47 +104,91 @@ def _level(mesh):
     """The mesh level (int) of a ``mesh`` argument, or None for an AxiMesh (validated)."""
     if isinstance(mesh, AxiMesh):
         return None
-    if isinstance(mesh, str):
-        if mesh not in MESHES:
-            raise ValueError(
-                f"mesh must be 'coarse', 'default', 'fine', a level 0..4 or a ball_section mesh, got {mesh!r}"
-            )
-        mesh = MESHES[mesh]
+    mesh = mesh_spec(mesh, MESHES, "a level 0..4 or a ball_section mesh")
     if isinstance(mesh, (bool, np.bool_)) or not isinstance(mesh, (int, np.integer)) or int(mesh) not in LEVELS:
         raise ValueError(f"mesh level must be an integer 0..4 (0 coarse, 1 default, 2 fine), got {mesh!r}")
     return int(mesh)
 
 
 def make_mesh(mesh, radius: float) -> AxiMesh:
-    """Resolve the ``mesh`` argument to an AxiMesh of the quarter ball (see the module docstring); a level
+    """Resolve the ``mesh`` argument to an AxiMesh of the quarter ball (see :func:`compress`); a level
     gives its mesh with the contact edge node half-way along the pole block (``fitted_mesh(radius, level, 0.5)``)."""
     if isinstance(mesh, AxiMesh):
-        if abs(mesh.length_scale - radius) > 1e-12 * radius or "outer" not in mesh.nodes:
-            raise ValueError("the mesh object must come from fem.mesh.ball_section(radius, ...) with the same radius")
-        return mesh
+        msg = "the mesh object must come from fem.mesh.ball_section(radius, ...) with the same radius"
+        return check_mesh(mesh, radius, msg, tags=("outer",))
     # 3 x 3 Gauss points (exact enough for Q2: forces change < 1e-5 relative vs 4 x 4), 1.8x cheaper
     return fitted_mesh(radius, _level(mesh), 0.5)
 
 
+class _Solved(NamedTuple):
+    """A converged step of ``compress`` before its observables are taken."""
+
+    time: float  # s (static runs: the load fraction)
+    problem: _Problem  # the mesh's problem the state belongs to
+    state: _State
+    newton_iterations: int
+    contact_passes: int
+    wall_time: float  # s
+
+
+class _Row(NamedTuple):
+    """One step's entry of ``SpheroidResult`` (SI: s, m, N, Pa)."""
+
+    time: float
+    approach: float  # m, the total plate approach delta
+    force: float  # N
+    reaction_force: float  # N
+    midplane_radius: float  # m
+    contact_radius: float  # m
+    mean_von_mises: float  # Pa
+    newton_iterations: int
+    contact_passes: int
+    wall_time: float  # s
+    contact_radius_node: float  # m
+    min_gap: float  # m
+    min_contact_force: float  # N
+
+
 class _State(NamedTuple):
-    x: np.ndarray
-    active: np.ndarray
-    visco: ve.MaxwellState
+    """A converged state of the scaled ball (lengths / a0, stresses / C, forces / (C a0^2))."""
+
+    x: np.ndarray  # full unknown vector (u, q)
+    active: np.ndarray  # bool per contact candidate (``plane.nodes``): on the plate
+    visco: ve.MaxwellState  # branch stresses and S_iso after the step (None on _EdgeFit's static states)
     delta: float  # scaled plate displacement (= approach / 2 / a0)
-    residual: np.ndarray
-    iso_scale: float
+    residual: np.ndarray  # full internal residual at x: the reactions on the constrained dofs
+    iso_scale: float  # the step's algorithmic factors (for its stresses)
     extra_S: object
-    passes: int
+    passes: int  # contact active-set passes of the step
 
 
-class _Problem:
+class Observation(NamedTuple):
+    """Observables of one converged state (scaled: lengths / a0, forces / (C a0^2), stresses / C)."""
+
+    plate_force: float  # sum of the active nodes' contact multipliers N_i [C a0^2]
+    reaction_force: float  # reaction of the midplane constraint u_z = 0 [C a0^2]
+    midplane_radius: float  # deformed equator radius [a0]
+    contact_radius: float  # edge estimate between the outermost active node and the next [a0]
+    contact_radius_node: float  # the outermost active node [a0]
+    mean_von_mises: float  # von Mises averaged over the deformed volume [C]
+    von_mises: np.ndarray  # at the quadrature points (n_el, n_qp) [C]
+    pressure: np.ndarray  # the mixed field q = mean Cauchy stress at the points (n_el, n_qp) [C]; hydrostatic = -q
+    normal_force: np.ndarray  # compressive nodal contact force per candidate node, 0 off contact [C a0^2]
+    min_gap: float  # smallest plate gap of the candidates [a0]
+    min_normal_force: float  # smallest contact force of the active nodes (0 without contact) [C a0^2]
+
+
+class _Problem(SceneProblem):
+    """The scaled ball between rigid plates: f_int(x) = 0 with u_z = h - Z on the active contact nodes.
+
+    ``_Problem(m, mat, beta, tau, rtol)``: the mesh (scaled by a0), the scaled material, the Maxwell
+    branches (beta_m, tau_m [s]) and Newton's relative tolerance. ``plane`` is the rigid plate over the
+    surface nodes off the midplane, ``equator`` the node at (R, Z) = (a0, 0), ``floor`` the round-off
+    floor of the residual (``fem.problem.roundoff_floor``, unit force scale)."""
+
     def __init__(self, m: AxiMesh, mat: Material, beta, tau, rtol: float):
-        self.m, self.mat = m, mat
-        self.asm = Assembler(m, "mixed")
-        self.beta, self.tau = np.asarray(beta, float), np.asarray(tau, float)
+        super().__init__(m, mat, "mixed", beta, tau)
         self.sym = m.nodes["symmetry"]
-        fixed = np.concatenate([2 * m.nodes["axis"], 2 * self.sym + 1])
-        self.free = np.setdiff1d(np.arange(self.asm.ndof), fixed)
         cand = np.setdiff1d(m.nodes["outer"], self.sym)
         self.plane = RigidPlane(m.X, cand)
         X = m.X
@@ -191,19 +197,11 @@ class _Problem:
             raise ValueError("the ball mesh has no node at the equator (R = a0, Z = 0)")
         self.equator = int(eq[0])
         self.rtol = rtol
-        # the round-off floor of the residual grows with kappa/C (q carries kappa (J - 1))
-        self.floor = 1e2 * np.finfo(float).eps * max(mat.kappa, 1.0)
-
-    def admissible(self, x):
-        f = self.asm.f_at(x)
-        _, J = invariants(f)
-        if not np.all(J > 0):
-            return "J <= 0 (an element turned inside out)"
-        if not np.all(f[..., 4] > 0):
-            return "hoop stretch <= 0"
-        return None
+        self.floor = roundoff_floor(mat.kappa, 1.0, SPHEROID_MARGIN)
 
     def solve(self, s0: _State, d1: float, iso_scale, extra, guess, load):
+        """Equilibrium with exact contact under the plate at h = 1 - d1 (scaled), from ``guess``, with the
+        step's branch stresses; the active set starts from ``s0.active``. Returns ``ContactSolution``."""
         h = 1.0 - d1
         fun = lambda x: self.asm.internal(x, self.mat, extra_S=extra, iso_scale=iso_scale)
         ref = max(32.0 / 3.0 * max(d1, 1e-6) ** 1.5 * iso_scale, 1e-12)
@@ -227,37 +225,39 @@ class _Problem:
         return sol
 
     def step(self, s0: _State, d1: float, dt: float | None, prev, load):
-        """Equilibrium at plate displacement d1 after a time step dt (None: static)."""
-        if dt is None:
-            iso_scale, extra = 1.0, None
-        else:
-            iso_scale, extra = ve.algorithmic(s0.visco, self.beta, self.tau, dt)
+        """(state, Newton iterations): equilibrium at plate displacement d1 (scaled) after a time step
+        dt [s] (None: static), predicted by the secant through ``prev`` (a ``_State`` or None)."""
+        iso_scale, extra = self.maxwell_factors(s0.visco, dt)
         guess = s0.x
         if prev is not None and abs(s0.delta - prev.delta) > 1e-14:
-            guess = s0.x + (s0.x - prev.x) * (d1 - s0.delta) / (s0.delta - prev.delta)
+            guess = secant(s0.x, prev.x, d1 - s0.delta, s0.delta - prev.delta)
         sol = self.solve(s0, d1, iso_scale, extra, guess, load)
-        S_new = self.asm.iso_S(sol.x, self.mat)
-        visco = (
-            ve.update(s0.visco, self.beta, self.tau, dt, S_new) if dt is not None else s0.visco._replace(S_iso=S_new)
-        )
+        visco = self.maxwell_update(s0.visco, dt, sol.x)
         return _State(sol.x, sol.active, visco, d1, sol.residual, iso_scale, extra, sol.sets), sol.iterations
 
     # ---- observables (scaled) --------------------------------------------------------------
-    def observe(self, s: _State):
+    def observe(self, s: _State) -> Observation:
+        """The observables of state ``s`` (see ``Observation``)."""
         r, pl = s.residual, self.plane
         N = np.where(s.active, pl.normal_force(r), 0.0)
-        F = float(N.sum())
-        Fr = float(r[2 * self.sym + 1].sum())
         x = s.x
-        r_mid = 1.0 + x[2 * self.equator]
         rc, rc_node = _contact_radius(pl, x, s.active, 1.0 - s.delta)
-        f, P, _, q = self.asm.stress(x, self.mat, s.extra_S, s.iso_scale)
-        vm = cm.von_mises(cm.cauchy(f, P))
+        f, vm, q = self.point_stresses(x, s.extra_S, s.iso_scale)
         _, J = invariants(f)
         wJ = self.asm.w * J
-        gmin = float(np.min(pl.gap(x, 1.0 - s.delta)))
-        nmin = float(np.min(N[s.active])) if s.active.any() else 0.0
-        return F, Fr, r_mid, rc, rc_node, float(np.sum(vm * wJ) / np.sum(wJ)), vm, q, N, gmin, nmin
+        return Observation(
+            plate_force=float(N.sum()),
+            reaction_force=float(r[2 * self.sym + 1].sum()),
+            midplane_radius=1.0 + x[2 * self.equator],
+            contact_radius=rc,
+            contact_radius_node=rc_node,
+            mean_von_mises=float(np.sum(vm * wJ) / np.sum(wJ)),
+            von_mises=vm,
+            pressure=q,
+            normal_force=N,
+            min_gap=float(np.min(pl.gap(x, 1.0 - s.delta))),
+            min_normal_force=float(np.min(N[s.active])) if s.active.any() else 0.0,
+        )
 
 
 def _contact_radius(pl: RigidPlane, x: np.ndarray, active: np.ndarray, h: float):
@@ -464,7 +464,62 @@ def compress(
     n_static: int | None = None,
     rtol: float = 1e-10,
 ) -> SpheroidResult:
-    """Compress the Fung ball between frictionless plates; see the module docstring. SI units (m, Pa, s, N)."""
+    """Compress the Fung ball between rigid frictionless plates, hold, and let it relax.
+
+    Every converged step is an equilibrium with exact contact (Signorini: gap >= 0, contact force >= 0,
+    their product 0) and the Maxwell branch stresses of its time step.
+
+    Args:
+        radius: the ball's radius a0 (m).
+        C: Fung stiffness of the relaxed (long-time) material (Pa); alpha: Fung exponent
+            (dimensionless); kappa: bulk modulus (Pa).
+        branches: [(beta_m, tau_m), ...]: energy factors beta_m >= 0 (dimensionless) and relaxation
+            times tau_m > 0 (s); empty for elastic.
+        displacement: the total approach delta (m, < 1.6 a0) of the two plates, reached at ``ramp_time``
+            by a linear ramp and then held to ``end_time``; or a callable delta(t) (m, t in s, delta(0) =
+            0): ``ramp_time`` is then the time scale of the fine initial steps and each step moves the
+            plate by at most the ramp's step (steps are halved until it does).
+        ramp_time, end_time: end of the ramp and of the hold (s, 0 < ramp_time <= end_time; ignored
+            when ``static``).
+        mesh: "coarse", "default", "fine" or a level 0..4 (0 = coarse, 1 = default, 2 = fine; ``LEVELS``
+            gives (n_core, n_radial, surface grading, n_contact, n_equator) of :func:`fitted_mesh`):
+            CONTACT-EDGE-FITTED meshes. Static runs solve every state on its own mesh whose surface node
+            ``n_contact`` sits on the contact edge, found by a secant iteration on the Signorini
+            condition there (its nodal multiplier N_edge = 0 to ``EDGE_TOL`` of the force; the force is
+            stationary in the edge position): the plate force is a smooth function of delta and converges
+            smoothly under refinement (levels 1..4 are self-similar, h ~ 1/n_core). Time runs use one
+            mesh, fitted to the edge of the static state at the held (largest) approach, with the
+            active-set contact. Or an ``AxiMesh`` from ``fem.mesh.ball_section`` built with length_scale =
+            radius: a fixed mesh with node-by-node contact (its force carries the edge quantisation, ~0.2 %).
+        static: equilibrium states from delta = 0 to ``displacement`` (the F_eq(delta) curve; branches and
+            times are ignored); ``time`` then holds the load fraction delta / displacement. On a level every
+            state has its own mesh (same topology and numbering); the result's ``mesh`` is the last state's.
+        field_times: times (s; static runs: load fractions in (0, 1]) at which the fields are stored (they
+            become step times; static runs store the closest step); the last step is always stored.
+            ``"all"``: every converged step (for ``SpheroidResult.to_pvd``).
+        n_ramp, n_hold: ramp steps (default 6) and geometrically growing hold steps (default 20).
+        n_static: static steps (default: 0.04 in delta / a0 on a level, 0.02 on a mesh object, at least 8;
+            failed steps are cut back).
+        rtol: Newton's relative residual tolerance.
+
+    Returns:
+        ``SpheroidResult`` with one entry per converged step: ``time`` (s), ``approach`` (m), plate
+        ``force`` (N: the sum of the active nodes' contact multipliers, which include the 2 pi R of the
+        axisymmetric volume element, so it is the force on the whole plate), ``reaction_force`` of the
+        midplane (N), ``midplane_radius`` (m), ``midplane_area`` (m^2), ``nominal_stress`` F / (pi
+        r_mid^2) (Pa), ``mean_von_mises`` over the deformed volume (Pa), ``contact_radius`` (m: static
+        runs on a level the edge node; else an edge estimate between the outermost active node and the
+        next from the gaps of the first free nodes), ``contact_radius_node`` (the outermost active node,
+        m), ``min_gap`` (m), ``min_contact_force`` (N), ``newton_iterations``, ``contact_passes``,
+        ``wall_time`` (s); ``fields`` (``SpheroidField``), ``mesh``, ``static``, ``parameters``.
+
+    Raises:
+        ValueError: an input out of range (the message names the quantity and its unit).
+        NewtonError: a step did not converge after its cut-backs (``ContactError``: the active set or the
+            fitted contact edge did not settle); the message names the step's time or approach.
+        RuntimeError: the plate force and the midplane reaction differ by more than 1e-6 (relative): the
+            equilibrium was not reached (tighten rtol).
+    """
     validate_positive("radius (the spheroid radius a0)", radius, "m")
     validate_material(C, alpha, kappa)
     br = validate_branches(branches)
@@ -544,8 +599,8 @@ def compress(
 
     if fit is not None and static:
         done = _static_fitted(fit, dscaled, times, load_of)
-        steps = [(t, pr, st, its, n_s, w) for t, pr, st, its, n_s, w, _ in done]
-        m = done[-1][1].m
+        steps = [_Solved(t, pr, st, its, n_s, w) for t, pr, st, its, n_s, w, _ in done]
+        m = steps[-1].problem.m
     else:
         if fit is not None:  # one mesh fitted to the contact edge of the held (largest) approach
             d_hold = dscaled(end_time) if d_max is not None else max(dscaled(t) for t in np.linspace(0, end_time, 401))
@@ -563,87 +618,76 @@ def compress(
         pole = np.argmin(np.hypot(prob.plane.R, prob.plane.Z - 1.0))
         active0 = np.zeros(prob.plane.nodes.size, bool)
         active0[pole] = True
-        s0 = _State(
-            np.zeros(n0), active0, ve.initial_state(beta.size, prob.asm.w.shape + (5,)), 0.0, np.zeros(n0), 1.0, None, 0
-        )
+        s0 = _State(np.zeros(n0), active0, prob.maxwell_initial(), 0.0, np.zeros(n0), 1.0, None, 0)
 
         def step(t0, s_old, t1, prev):
             return prob.step(
-                s_old, dscaled(t1), None if static else t1 - t0, prev[1] if prev is not None else None, load_of(t1)
+                s_old, dscaled(t1), None if static else t1 - t0, prev.state if prev is not None else None, load_of(t1)
             )
 
         steps = [
-            (st.t, prob, st.state, st.iterations, st.state.passes, st.wall_s)
+            _Solved(st.time, prob, st.state, st.newton_iterations, st.state.passes, st.wall_time)
             for st in march(step, s0, times, too_large=too_large)
         ]
 
     L2 = C * a0**2
-    rows, fields = [], []
+    rows: list[_Row] = []
+    fields = []
     want = set()
     for tf in ft:
-        want.add(int(np.argmin([abs(st[0] - tf) for st in steps])))
+        want.add(int(np.argmin([abs(st.time - tf) for st in steps])))
     want.add(len(steps) - 1)
     if store_all:
         want = set(range(len(steps)))
-    for k, (t_k, prob, s, its_k, passes_k, wall_k) in enumerate(steps):
-        F, Fr, rm, rc, rcn, vmm, vm, q, N, gmin, nmin = prob.observe(s)
-        if fit is not None and static:
-            rc = rcn  # the edge node is the contact edge
+    for k, st in enumerate(steps):
+        prob, s = st.problem, st.state
+        ob = prob.observe(s)
+        F, Fr = ob.plate_force, ob.reaction_force
+        # fitted static states: the edge node is the contact edge
+        rc = ob.contact_radius_node if fit is not None and static else ob.contact_radius
         if F > 0 and abs(F - Fr) > FORCE_CHECK * abs(F) + 1e3 * prob.floor:
             raise RuntimeError(
                 f"contact force {F * L2:.6g} N and midplane reaction {Fr * L2:.6g} N differ by "
-                f"{abs(F - Fr) / F:.2e} (relative) at t = {t_k:.6g} s: equilibrium not reached. "
+                f"{abs(F - Fr) / F:.2e} (relative) at t = {st.time:.6g} s: equilibrium not reached. "
                 "Hint: tighten rtol"
             )
         rows.append(
-            (
-                t_k,
-                2 * a0 * s.delta,
-                F * L2,
-                Fr * L2,
-                rm * a0,
-                rc * a0,
-                vmm * C,
-                its_k,
-                passes_k,
-                wall_k,
-                rcn * a0,
-                gmin * a0,
-                nmin * L2,
+            _Row(
+                time=st.time,
+                approach=2 * a0 * s.delta,
+                force=F * L2,
+                reaction_force=Fr * L2,
+                midplane_radius=ob.midplane_radius * a0,
+                contact_radius=rc * a0,
+                mean_von_mises=ob.mean_von_mises * C,
+                newton_iterations=st.newton_iterations,
+                contact_passes=st.contact_passes,
+                wall_time=st.wall_time,
+                contact_radius_node=ob.contact_radius_node * a0,
+                min_gap=ob.min_gap * a0,
+                min_contact_force=ob.min_normal_force * L2,
             )
         )
         if k in want:
-            w = prob.asm.w
-            u = s.x[: prob.asm.n_u].reshape(-1, 2) * a0
+            u = prob.displacement(s.x)
+            vm_el, ph_el = prob.element_fields(ob.von_mises, ob.pressure, C)
             fields.append(
                 SpheroidField(
-                    time=t_k,
+                    time=st.time,
                     displacement=u,
-                    deformed_nodes=prob.m.X.T * a0 + u,
-                    von_mises=(vm * w).sum(1) / w.sum(1) * C,
-                    hydrostatic_pressure=-(q * w).sum(1) / w.sum(1) * C,
-                    contact_nodal_force=N * L2,
+                    deformed_nodes=prob.deformed_nodes(u),
+                    von_mises=vm_el,
+                    hydrostatic_pressure=ph_el,
+                    contact_nodal_force=ob.normal_force * L2,
                     contact_nodes=prob.plane.nodes,
                 )
             )
-    a = np.array(rows, float)
-    area = np.pi * a[:, 4] ** 2
+    col = {name: np.array(values) for name, values in zip(_Row._fields, zip(*rows))}
+    area = np.pi * col["midplane_radius"] ** 2
     return SpheroidResult(
-        time=a[:, 0],
-        approach=a[:, 1],
-        force=a[:, 2],
-        reaction_force=a[:, 3],
-        midplane_radius=a[:, 4],
+        **col,
         midplane_area=area,
-        nominal_stress=a[:, 2] / area,
-        mean_von_mises=a[:, 6],
-        contact_radius=a[:, 5],
-        contact_radius_node=a[:, 10],
-        min_gap=a[:, 11],
-        min_contact_force=a[:, 12],
-        newton_iterations=a[:, 7].astype(int),
-        contact_passes=a[:, 8].astype(int),
-        wall_time=a[:, 9],
+        nominal_stress=col["force"] / area,
         mesh=m,
         fields=fields,
         static=bool(static),

@@ -17,8 +17,8 @@ the scheduled time is reached. ``too_large(t0, t1)`` (optional) rejects a step b
 API: ``ramp_hold_schedule(ramp_time, end_time, *, n_ramp=6, n_hold=20, first_hold=None,
 breakpoints=())``, ``march(step, state0, times, *, t0=0.0, max_cuts=10, growth=1.5, too_large=None)``
 with ``step(t_old, state_old, t_new, previous) -> (state_new, newton_iterations)`` (``previous`` =
-(t, state) of the step before t_old, or None: for predictors). Returns a list of
-``Step(t, state, iterations, wall_s)``, one per converged (sub)step. Times in s.
+``TimedState(time, state)`` of the step before t_old, or None: for predictors). Returns a list of
+``Step(time, state, newton_iterations, wall_time)``, one per converged (sub)step. Times in s.
 """
 
 from __future__ import annotations
@@ -34,14 +34,36 @@ from tissuemech.fem.newton import NewtonError
 
 log = logging.getLogger(__name__)
 
-__all__ = ["Step", "ramp_hold_schedule", "march"]
+__all__ = ["Step", "TimedState", "ramp_hold_schedule", "march"]
 
 
 class Step(NamedTuple):
-    t: float
+    """One converged (sub)step of :func:`march`."""
+
+    time: float  # s, the step's end time
+    state: object  # what ``step`` returned
+    newton_iterations: int
+    wall_time: float  # s spent in ``step`` for this (sub)step
+
+    # the names of release 0.1 (read-only aliases)
+    @property
+    def t(self) -> float:
+        return self.time
+
+    @property
+    def iterations(self) -> int:
+        return self.newton_iterations
+
+    @property
+    def wall_s(self) -> float:
+        return self.wall_time
+
+
+class TimedState(NamedTuple):
+    """A converged state and its time (s): the ``previous`` argument of the step function."""
+
+    time: float
     state: object
-    iterations: int
-    wall_s: float
 
 
 def ramp_hold_schedule(
@@ -100,9 +122,15 @@ def march(
     max_cuts: int = 10,
     growth: float = 1.5,
     too_large: Callable | None = None,
-) -> list:
-    """Advance from (t0, state0) through every time in ``times`` (see the module docstring)."""
-    out: list = []
+) -> list[Step]:
+    """Advance from (t0, state0) through every time in ``times`` (s, increasing), halving a failed step.
+
+    ``step(t_old, state_old, t_new, previous) -> (state_new, newton_iterations)`` raises ``NewtonError``
+    when it fails; ``previous`` is the ``TimedState`` before t_old (None at the start). Returns one
+    ``Step(time, state, newton_iterations, wall_time)`` per converged (sub)step. Raises ``NewtonError``
+    (naming the step) after ``max_cuts`` cuts, ValueError for times that do not increase.
+    """
+    out: list[Step] = []
     t_c, s_c, prev = float(t0), state0, None
     for target in np.asarray(times, float):
         if target <= t_c:
@@ -139,9 +167,9 @@ def march(
                 )
                 continue
             out.append(Step(t_new, s_new, int(its), time.perf_counter() - w0))
-            prev = (t_c, s_c)
+            prev = TimedState(t_c, s_c)
             t_c, s_c = t_new, s_new
-            log.debug("converged t = %.6g s in %d iterations (%.3g s)", t_new, its, out[-1].wall_s)
+            log.debug("converged t = %.6g s in %d iterations (%.3g s)", t_new, its, out[-1].wall_time)
             if cuts:
                 dt *= growth
     return out

@@ -170,3 +170,19 @@ def test_contact_pressure_follows_hertz_at_small_compression():
     hertz = p0 * np.sqrt(1 - (rr[inside] / a) ** 2)
     assert np.max(np.abs(pc[inside] - hertz)) < 0.05 * p0
     assert np.all(pc[rr > 1.3 * a] < 0.1 * p0)
+
+
+def test_both_scenes_store_fields_the_same_way(relax_all):
+    """field_at(time) and the final fields under the same names in BlastulaResult and SpheroidResult."""
+    s = relax_all
+    assert s.field_at() is s.fields[-1] and s.field_at(0.2).time == pytest.approx(0.2)
+    for name in ("displacement", "deformed_nodes", "von_mises", "hydrostatic_pressure"):
+        assert getattr(s, name) is getattr(s.fields[-1], name)
+    kw = dict(inner_radius=A, outer_radius=B, C=C, alpha=0.2, mesh=(2, 4))
+    b = creep(**kw, branches=[(0.5, 10.0)], pressure=100.0, ramp_time=1.0, end_time=20.0, n_ramp=2, n_hold=4)
+    assert b.fields is None and b.field_at().time == pytest.approx(20.0)  # only the final state was kept
+    assert np.array_equal(b.field_at(5.0).von_mises, b.von_mises)
+    bl = inflate(**kw, pressures=[100.0, 200.0], store_fields=True)
+    assert bl.field_at() is bl.fields[-1] and bl.field_at().pressure == pytest.approx(200.0)
+    with pytest.raises(ValueError, match="creep run"):
+        bl.field_at(1.0)
