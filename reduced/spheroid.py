@@ -52,6 +52,7 @@ from __future__ import annotations
 
 import functools
 import json
+import math
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, NamedTuple, Union, cast
@@ -475,16 +476,15 @@ def as_equilibrium_law(spec: Any) -> EquilibriumLaw:
     if isinstance(spec, EquilibriumLaw):
         return spec
     if isinstance(spec, str):
-        if spec == "hertz":
-            return Hertz()
-        if spec == "fem":
-            return FEMTable()
-    elif isinstance(spec, MasterCurve):
-        return FEMTable(spec)
+        if spec in ("hertz", "fem"):
+            return _law_of(spec)
     elif isinstance(spec, tuple) and len(spec) == 2:
-        return Tabulated(*spec)
-    elif callable(spec) and not isinstance(spec, (MidplaneLaw, Spline1D)):
-        return UserLaw(spec)
+        return _law_of(Tabulated, _content_key(spec))
+    elif isinstance(spec, MasterCurve) or (callable(spec) and not isinstance(spec, (MidplaneLaw, Spline1D))):
+        try:
+            return _law_of(spec)
+        except TypeError:  # an unhashable callable: a fresh object (compiled per call)
+            return FEMTable(spec) if isinstance(spec, MasterCurve) else UserLaw(spec)
     raise ValueError(f"equilibrium must be 'hertz', 'fem', an (x, f) table or a callable; got {spec!r}")
 
 
@@ -504,19 +504,49 @@ def as_midplane_law(spec: Any, equilibrium: Any = None) -> MidplaneLaw:
     if isinstance(spec, MidplaneLaw):
         return spec
     if isinstance(spec, str):
-        if spec == "incompressible":
-            return Incompressible()
-        if spec == "fem":
-            return FEMMidplane()
-    elif isinstance(spec, MasterCurve):
-        return FEMMidplane(spec)
-    elif isinstance(spec, Spline1D):
-        return TabulatedMidplane(spline=spec)
+        if spec in ("incompressible", "fem"):
+            return _midplane_of(spec)
     elif isinstance(spec, tuple) and len(spec) == 2:
-        return TabulatedMidplane(*spec)
-    elif callable(spec) and not isinstance(spec, EquilibriumLaw):
-        return UserMidplane(spec)
+        return _midplane_of(TabulatedMidplane, _content_key(spec))
+    elif isinstance(spec, (MasterCurve, Spline1D)) or (callable(spec) and not isinstance(spec, EquilibriumLaw)):
+        try:
+            return _midplane_of(spec)
+        except TypeError:  # an unhashable callable: a fresh object (compiled per call)
+            return UserMidplane(spec)
     raise ValueError(f"midplane must be 'incompressible', 'fem', an (x, g) table or a callable; got {spec!r}")
+
+
+@functools.lru_cache(maxsize=64)
+def _law_of(spec: Any, key: tuple | None = None) -> EquilibriumLaw:
+    """One law object per public spelling (constructing and comparing equinox modules costs ~10 us: an
+    eager call should find its law, and the compiled code keyed on it, by identity)."""
+    if spec == "hertz":
+        return Hertz()
+    if spec == "fem":
+        return FEMTable()
+    if spec is Tabulated:
+        x, f = (np.frombuffer(b, dtype=float).reshape(shape) for shape, b in cast(tuple, key))
+        return Tabulated(x, f)
+    if isinstance(spec, MasterCurve):
+        return FEMTable(spec)
+    return UserLaw(spec)
+
+
+@functools.lru_cache(maxsize=64)
+def _midplane_of(spec: Any, key: tuple | None = None) -> MidplaneLaw:
+    """One midplane object per public spelling (see :func:`_law_of`)."""
+    if spec == "incompressible":
+        return Incompressible()
+    if spec == "fem":
+        return FEMMidplane()
+    if spec is TabulatedMidplane:
+        x, g = (np.frombuffer(b, dtype=float).reshape(shape) for shape, b in cast(tuple, key))
+        return TabulatedMidplane(x, g)
+    if isinstance(spec, MasterCurve):
+        return FEMMidplane(spec)
+    if isinstance(spec, Spline1D):
+        return TabulatedMidplane(spline=spec)
+    return UserMidplane(spec)
 
 
 class _Midplane1D(Spline1D):
@@ -980,14 +1010,30 @@ def equilibrium_force(
     Raises ValueError (eager calls) for a bad value (naming it and its unit), an unknown law, or an
     approach beyond the law's table. Eager calls validate here and run one compiled kernel.
     """
+    fast = _plain_numbers(displacement, radius, C, alpha)
+    if fast is not None:  # one point given as plain numbers: the checks in scalar arithmetic (~1 us)
+        d, r, c, a = fast
+        if r > 0 and c > 0 and a >= 0 and 0 <= d < 2.0 * r:
+            law = as_equilibrium_law(equilibrium)
+            type(law).check(law, d / (2.0 * r), a)
+            return _equilibrium_core(law, d, r, c, a)
+    elif fast_params := _plain_numbers(radius, C, alpha) if _float_array(displacement) else None:
+        # an array of approaches: its range found inside the compiled kernel (no NumPy pass over it)
+        r, c, a = fast_params
+        if r > 0 and c > 0 and a >= 0:
+            law = as_equilibrium_law(equilibrium)
+            F = _equilibrium_core(law, displacement, r, c, a)
+            lo, hi = _array_range(displacement)
+            if 0 <= lo and hi < 2.0 * r:
+                type(law).check(law, hi / (2.0 * r), a)
+                return F
     if not is_traced(displacement, radius, C, alpha):
         r = validate_positive("radius (of the ball)", radius, "m")
         validate_material(C, alpha)
         d = validate_finite("displacement (the total approach of the plates)", displacement, "m")
-        x = d / (2.0 * r)
-        _check_approach("displacement", x)
+        x_hi = _approach_max("displacement", d, r)
         law = as_equilibrium_law(equilibrium)
-        law.check(x, alpha)
+        type(law).check(law, x_hi, alpha)
         return _equilibrium_core(law, d, r, np.asarray(C, dtype=float), np.asarray(alpha, dtype=float))
     return _equilibrium_core(as_equilibrium_law(equilibrium), displacement, radius, C, alpha)
 
@@ -1011,14 +1057,30 @@ def midplane_radius(
     Raises ValueError (eager calls) for a bad value (naming it and its unit), an unknown law, or an
     approach beyond the law's table. Eager calls validate here and run one compiled kernel.
     """
+    fast = _plain_numbers(displacement, radius, alpha)
+    if fast is not None:  # one point given as plain numbers: the checks in scalar arithmetic (~1 us)
+        d, r, a = fast
+        if r > 0 and a >= 0 and 0 <= d < 2.0 * r:
+            law = as_midplane_law(midplane)
+            type(law).check(law, d / (2.0 * r), a)
+            return _midplane_core(law, d, r, a)
+    elif fast_params := _plain_numbers(radius, alpha) if _float_array(displacement) else None:
+        # an array of approaches: its range found inside the compiled kernel (no NumPy pass over it)
+        r, a = fast_params
+        if r > 0 and a >= 0:
+            law = as_midplane_law(midplane)
+            out = _midplane_core(law, displacement, r, a)
+            lo, hi = _array_range(displacement)
+            if 0 <= lo and hi < 2.0 * r:
+                type(law).check(law, hi / (2.0 * r), a)
+                return out
     if not is_traced(displacement, radius, alpha):
         r = validate_positive("radius (of the ball)", radius, "m")
         validate_nonnegative("alpha (the Fung stiffening exponent)", alpha, "dimensionless")
         d = validate_finite("displacement (the total approach of the plates)", displacement, "m")
-        x = d / (2.0 * r)
-        _check_approach("displacement", x)
+        x_hi = _approach_max("displacement", d, r)
         law = as_midplane_law(midplane)
-        law.check(x, alpha)
+        type(law).check(law, x_hi, alpha)
         return _midplane_core(law, d, r, np.asarray(alpha, dtype=float))
     return _midplane_core(as_midplane_law(midplane), displacement, radius, alpha)
 
@@ -1032,10 +1094,56 @@ def _midplane_core(law: MidplaneLaw, displacement, radius, alpha):
 # ---------------------------------------------------------------- input checks of the public entry points
 
 
+_NUMBER_TYPES = (float, int, np.floating, np.integer)
+
+
+def _float_array(v: Any) -> bool:
+    """A concrete (not traced) NumPy or JAX array of floats."""
+    return isinstance(v, (np.ndarray, jax.Array)) and not is_traced(v) and v.dtype.kind == "f"
+
+
+def _array_range(d: Any) -> tuple[float, float]:
+    """(min, max) of a concrete array (NaN if any entry is NaN; +-inf when empty), by NumPy: two passes
+    that run while the compiled kernel (dispatched first, asynchronously) computes."""
+    v = np.asarray(d)
+    if v.size == 0:
+        return math.inf, -math.inf
+    return float(np.min(v)), float(np.max(v))
+
+
+def _plain_numbers(*values: Any) -> tuple[float, ...] | None:
+    """The values as Python floats when every one is a single finite real number (Python or NumPy
+    scalar, not a bool), else None: the eager entry points then take the full validators (the same
+    checks, a one-line error naming the quantity; ~50 us more). A validator of this module, not of
+    ``reduced.validation``: it only decides which path checks, never what is accepted."""
+    out = []
+    for v in values:
+        if not isinstance(v, _NUMBER_TYPES) or isinstance(v, (bool, np.bool_)):
+            return None
+        fv = float(v)
+        if not math.isfinite(fv):
+            return None
+        out.append(fv)
+    return tuple(out)
+
+
 def _check_solver_options(rtol: Any, atol: Any, max_steps: Any) -> None:
     validate_positive("rtol (relative tolerance of the ODE solver)", rtol, "dimensionless")
     validate_positive("atol (absolute tolerance of the ODE solver)", atol, "dimensionless")
     validate_int("max_steps (of the ODE solver)", max_steps, minimum=1)
+
+
+def _approach_max(name: str, d: Any, r: Any) -> float:
+    """max of x = d / (2 r) after :func:`_check_approach` (two passes over d when r is one number; the
+    full check, with its message, only when something is wrong)."""
+    d, r = np.asarray(d), np.asarray(r)
+    if r.size == 1:
+        lo, hi = float(np.min(d)) / (2.0 * float(r.reshape(-1)[0])), float(np.max(d)) / (2.0 * float(r.reshape(-1)[0]))
+        if math.isfinite(lo) and math.isfinite(hi) and lo >= 0 and hi < 1:
+            return hi
+    x = d / (2.0 * r)
+    _check_approach(name, x)
+    return float(np.max(x))
 
 
 def _check_approach(name: str, x_over_diameter: np.ndarray, where: str = "") -> None:
@@ -1090,7 +1198,7 @@ def _check_inputs(
                 "(delta(0) = 0 m, branches at rest); start the history at 0"
             )
         for law in laws():
-            law.check(np.max(x), alpha)
+            type(law).check(law, np.max(x), alpha)
         return
     validate_positive("displacement (the total approach of the plates)", displacement, "m")
     if ramp_time is None:
@@ -1100,4 +1208,4 @@ def _check_inputs(
         raise ValueError("displacement (total approach) must be smaller than the ball's diameter 2 * radius")
     x_max = np.asarray(displacement, dtype=float) / (2 * np.asarray(radius, dtype=float))
     for law in laws():
-        law.check(x_max, alpha)
+        type(law).check(law, x_max, alpha)
