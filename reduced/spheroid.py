@@ -1103,11 +1103,11 @@ def _float_array(v: Any) -> bool:
 
 
 def _array_range(d: Any) -> tuple[float, float]:
-    """(min, max) of a concrete array (NaN if any entry is NaN; +-inf when empty), by NumPy: two passes
+    """(min, max) of a concrete array (NaN if any entry is NaN or the array is empty), by NumPy: two passes
     that run while the compiled kernel (dispatched first, asynchronously) computes."""
     v = np.asarray(d)
-    if v.size == 0:
-        return math.inf, -math.inf
+    if v.size == 0:  # the full validators name the empty array
+        return math.nan, math.nan
     return float(np.min(v)), float(np.max(v))
 
 
