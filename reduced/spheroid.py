@@ -25,6 +25,14 @@ r_mid = a0 / sqrt(1 - x): a spheroid keeping its volume when its height shrinks 
 ``r_mid(delta, *, radius, alpha) -> m``. ``midplane=None`` picks ``"fem"`` with ``equilibrium="fem"``,
 else ``"incompressible"``.
 
+Each spelling names a small law object (an ``equinox.Module``, immutable, compared by value), which may
+also be passed directly: equilibrium :class:`Hertz`, :class:`FEMTable` (``FEMTable()`` is ``"fem"``;
+``FEMTable(curve)`` a MasterCurve), :class:`Tabulated` ``(x, f)``, :class:`UserLaw` ``(fn)``; midplane
+:class:`Incompressible`, :class:`FEMMidplane`, :class:`TabulatedMidplane` ``(x, g)``, :class:`UserMidplane`
+``(fn)``. :func:`as_equilibrium_law` / :func:`as_midplane_law` map the spellings to them. A law's
+``curve(alpha=, radius=, ...)`` gives x -> f(x) (or g(x)), calling it evaluates the law, ``check`` its x
+range. Equal laws (equal table arrays included) reuse the compiled code.
+
 Loading
 -------
 ``displacement`` a number (m) and ``ramp_time`` (s): the approach grows linearly to ``displacement``
@@ -207,6 +215,10 @@ class MasterCurve:
 
     def check_range(self, x_max: Any, alpha: Any) -> None:
         """Raise ValueError (eager values only) outside the tabulated x and alpha."""
+        if type(x_max) is float and type(alpha) is float:  # one point (the eager fast paths): no NumPy
+            lo, hi = self.alpha_range if self.alpha is not None else (-math.inf, math.inf)
+            if x_max <= self.x_max * (1 + 1e-12) and lo - 1e-12 <= alpha <= hi + 1e-12:
+                return
         xv, av = _concrete(x_max), _concrete(alpha)
         if xv is not None and np.max(xv) > self.x_max * (1 + 1e-12):
             raise ValueError(
@@ -512,7 +524,7 @@ def as_midplane_law(spec: Any, equilibrium: Any = None) -> MidplaneLaw:
         try:
             return _midplane_of(spec)
         except TypeError:  # an unhashable callable: a fresh object (compiled per call)
-            return UserMidplane(spec)
+            return UserMidplane(cast(Callable, spec))
     raise ValueError(f"midplane must be 'incompressible', 'fem', an (x, g) table or a callable; got {spec!r}")
 
 
@@ -1198,7 +1210,7 @@ def _check_inputs(
                 "(delta(0) = 0 m, branches at rest); start the history at 0"
             )
         for law in laws():
-            type(law).check(law, np.max(x), alpha)
+            cast(Any, type(law)).check(law, np.max(x), alpha)
         return
     validate_positive("displacement (the total approach of the plates)", displacement, "m")
     if ramp_time is None:
@@ -1208,4 +1220,4 @@ def _check_inputs(
         raise ValueError("displacement (total approach) must be smaller than the ball's diameter 2 * radius")
     x_max = np.asarray(displacement, dtype=float) / (2 * np.asarray(radius, dtype=float))
     for law in laws():
-        type(law).check(law, x_max, alpha)
+        cast(Any, type(law)).check(law, x_max, alpha)
