@@ -392,9 +392,8 @@ def _check_spheroid_design(pts: pd.DataFrame, equilibrium: Any) -> None:
         raise ValueError(f"equilibrium must be 'hertz', 'fem', an (x, f) table or a callable; got {equilibrium!r}")
     from tissuemech.reduced import spheroid as red
 
-    table = red._table_of_safe(equilibrium)
-    if table is not None:
-        table.check_range(float(np.max(x)), pts["alpha"].to_numpy())
+    law = red.as_equilibrium_law(equilibrium)
+    type(law).check(law, float(np.max(x)), pts["alpha"].to_numpy())
 
 
 @functools.lru_cache(maxsize=8)

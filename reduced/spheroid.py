@@ -25,6 +25,14 @@ r_mid = a0 / sqrt(1 - x): a spheroid keeping its volume when its height shrinks 
 ``r_mid(delta, *, radius, alpha) -> m``. ``midplane=None`` picks ``"fem"`` with ``equilibrium="fem"``,
 else ``"incompressible"``.
 
+Each spelling names a small law object (an ``equinox.Module``, immutable, compared by value), which may
+also be passed directly: equilibrium :class:`Hertz`, :class:`FEMTable` (``FEMTable()`` is ``"fem"``;
+``FEMTable(curve)`` a MasterCurve), :class:`Tabulated` ``(x, f)``, :class:`UserLaw` ``(fn)``; midplane
+:class:`Incompressible`, :class:`FEMMidplane`, :class:`TabulatedMidplane` ``(x, g)``, :class:`UserMidplane`
+``(fn)``. :func:`as_equilibrium_law` / :func:`as_midplane_law` map the spellings to them. A law's
+``curve(alpha=, radius=, ...)`` gives x -> f(x) (or g(x)), calling it evaluates the law, ``check`` its x
+range. Equal laws (equal table arrays included) reuse the compiled code.
+
 Loading
 -------
 ``displacement`` a number (m) and ``ramp_time`` (s): the approach grows linearly to ``displacement``
@@ -52,11 +60,13 @@ from __future__ import annotations
 
 import functools
 import json
+import math
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, NamedTuple, Union, cast
 
 import diffrax
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -82,10 +92,23 @@ __all__ = [
     "MasterCurve",
     "master_curve",
     "DATA_FILE",
+    "EquilibriumLaw",
+    "Hertz",
+    "FEMTable",
+    "Tabulated",
+    "UserLaw",
+    "MidplaneLaw",
+    "Incompressible",
+    "FEMMidplane",
+    "TabulatedMidplane",
+    "UserMidplane",
+    "as_equilibrium_law",
+    "as_midplane_law",
 ]
 
 DATA_FILE = Path(__file__).resolve().parent / "data" / "spheroid_master.npz"
-Equilibrium = Union[str, Callable, tuple, "MasterCurve"]
+Equilibrium = Union[str, Callable, tuple, "MasterCurve", "EquilibriumLaw"]
+Midplane = Union[str, Callable, tuple, "MasterCurve", "MidplaneLaw", None]
 
 
 def hertz_f(x: Any) -> jnp.ndarray:
@@ -192,6 +215,10 @@ class MasterCurve:
 
     def check_range(self, x_max: Any, alpha: Any) -> None:
         """Raise ValueError (eager values only) outside the tabulated x and alpha."""
+        if type(x_max) is float and type(alpha) is float:  # one point (the eager fast paths): no NumPy
+            lo, hi = self.alpha_range if self.alpha is not None else (-math.inf, math.inf)
+            if x_max <= self.x_max * (1 + 1e-12) and lo - 1e-12 <= alpha <= hi + 1e-12:
+                return
         xv, av = _concrete(x_max), _concrete(alpha)
         if xv is not None and np.max(xv) > self.x_max * (1 + 1e-12):
             raise ValueError(
@@ -234,49 +261,321 @@ def master_curve(path: str | None = None) -> MasterCurve:
         return MasterCurve(z["x"], z["f"], z["g"] if "g" in z.files else None, alpha=z["alpha"], metadata=meta, h=h)
 
 
-# ---------------------------------------------------------------- equilibrium laws (dimensionless)
+# ---------------------------------------------------------------- equilibrium and midplane laws (dimensionless)
+#
+# A law is a small immutable object (an ``equinox.Module``): hashable and compared by value, so it is a
+# static argument of the compiled cores (equal laws -> the compiled code is reused). Tables built from a
+# user's arrays are cached by content (``_cached_table``): passing equal arrays again gives an equal law.
 
 
-def _equilibrium_law(equilibrium: Any, radius, C, alpha) -> tuple[Callable, Any]:
-    """(f(x) dimensionless F_eq/(C a0^2), table-or-None) for a spec; x = delta/(2 a0)."""
-    if isinstance(equilibrium, str):
-        if equilibrium == "hertz":
-            return hertz_f, None
-        if equilibrium == "fem":
-            mc = master_curve()
-            return mc.f_curve(alpha), mc
-        raise ValueError(f"equilibrium must be 'hertz', 'fem', an (x, f) table or a callable; got {equilibrium!r}")
-    if isinstance(equilibrium, MasterCurve):
-        return equilibrium.f_curve(alpha), equilibrium
-    if isinstance(equilibrium, tuple) and len(equilibrium) == 2:
-        mc = _table_object(equilibrium, "f")
-        return (lambda x: mc.f(x)), mc
-    if callable(equilibrium):
-        return (lambda x: equilibrium(2.0 * radius * x, radius=radius, C=C, alpha=alpha) / (C * radius**2)), None
-    raise ValueError(f"equilibrium must be 'hertz', 'fem', an (x, f) table or a callable; got {equilibrium!r}")
+class EquilibriumLaw(eqx.Module):
+    """An equilibrium law: the dimensionless master curve f(x) = F_eq / (C a0^2) at x = delta / (2 a0).
+
+    Subclasses implement :meth:`curve`; :meth:`check` raises in eager calls outside the law's x range
+    (every law: 0 <= x < 1, checked by the public functions; tables: x <= their last knot, alpha inside
+    their alpha grid). ``knots`` are the x where the law is only piecewise smooth (the quadrature puts
+    interval ends there)."""
+
+    def curve(self, *, alpha: Any, radius: Any, C: Any) -> Callable[[Any], jnp.ndarray]:
+        """x -> f(x) = F_eq / (C a0^2) for one parameter set (any work in alpha done once)."""
+        raise NotImplementedError
+
+    def __call__(self, x: Any, *, alpha: Any = 0.0, radius: Any = 1.0, C: Any = 1.0) -> jnp.ndarray:
+        """f(x) = F_eq / (C a0^2) at x = delta / (2 a0) (dimensionless), for ``alpha``, ``radius`` (m),
+        ``C`` (Pa) (only a user callable depends on radius and C)."""
+        return self.curve(alpha=alpha, radius=radius, C=C)(jnp.asarray(x, dtype=jnp.float64))
+
+    def knots(self, displacement: Any, radius: Any) -> Any:
+        """x-values (dimensionless) of the law's kinks in smoothness over [0, X] (None: smooth)."""
+        return None
+
+    def check(self, x_max: Any, alpha: Any) -> None:
+        """Raise ValueError (eager values only) where x up to ``x_max`` or ``alpha`` is outside the law."""
+
+    @property
+    def table(self) -> MasterCurve | None:
+        """The master-curve table behind the law (None for closed forms and callables)."""
+        return None
 
 
-def _midplane_law(midplane: Any, equilibrium: Any, radius, alpha) -> tuple[Callable, Any]:
-    """(g(x) = r_mid / a0, table-or-None)."""
-    if midplane is None:
-        midplane = "fem" if (isinstance(equilibrium, str) and equilibrium == "fem") else "incompressible"
-    if isinstance(midplane, str):
-        if midplane == "incompressible":
-            return (lambda x: 1.0 / jnp.sqrt(1.0 - jnp.minimum(x, 0.999))), None
-        if midplane == "fem":
-            mc = master_curve()
-            return mc.g_curve(alpha), mc
-        raise ValueError(f"midplane must be 'incompressible', 'fem', an (x, g) table or a callable; got {midplane!r}")
-    if isinstance(midplane, MasterCurve):
-        return midplane.g_curve(alpha), midplane
-    if isinstance(midplane, Spline1D):
-        return midplane, None
-    if isinstance(midplane, tuple) and len(midplane) == 2:
-        s = _table_object(midplane, "g")
-        return s, None
-    if callable(midplane):
-        return (lambda x: midplane(2.0 * radius * x, radius=radius, alpha=alpha) / radius), None
-    raise ValueError(f"midplane must be 'incompressible', 'fem', an (x, g) table or a callable; got {midplane!r}")
+class Hertz(EquilibriumLaw):
+    """Small-strain Hertz contact between two rigid plates: F = (4/3) E* sqrt(a0) (delta/2)^(3/2) with
+    E* = 8 C (incompressible), i.e. f(x) = F_eq / (C a0^2) = (32/3) x^(3/2), x = delta / (2 a0).
+
+    Independent of alpha; valid for any 0 <= x < 1 (no table range; 4 % soft against the FE at x = 0.05,
+    30 % at x = 0.3)."""
+
+    def curve(self, *, alpha: Any, radius: Any, C: Any) -> Callable[[Any], jnp.ndarray]:
+        """x -> (32/3) x^(3/2) (its derivative 16 sqrt(x) is finite, 0, at first contact)."""
+        return hertz_f
+
+
+class FEMTable(EquilibriumLaw):
+    """A tabulated master curve f(x; alpha) = F_eq / (C a0^2) (:class:`MasterCurve`): the FE-calibrated
+    table shipped with the package (``FEMTable()``, the ``"fem"`` law) or any other MasterCurve.
+
+    f = f_Hertz(x) h(sqrt(x), alpha), h a C^2 spline in sqrt(x) and alpha (h -> 1 at x = 0). Valid for
+    0 <= x <= ``table.x_max`` and alpha in ``table.alpha_range`` (eager calls raise outside)."""
+
+    master: MasterCurve
+
+    def __init__(self, master: MasterCurve | None = None):
+        self.master = master_curve() if master is None else master
+        if not isinstance(self.master, MasterCurve):
+            raise ValueError(f"FEMTable needs a MasterCurve table; got {type(self.master).__name__}")
+
+    def curve(self, *, alpha: Any, radius: Any, C: Any) -> Callable[[Any], jnp.ndarray]:
+        """x -> f_Hertz(x) h(sqrt(x), alpha) (the alpha interpolation done once)."""
+        return self.master.f_curve(alpha)
+
+    def knots(self, displacement: Any, radius: Any) -> Any:
+        """The table's x knots (x = 0 excluded): the spline is C^2 but piecewise cubic."""
+        return self.master.x[1:]
+
+    def check(self, x_max: Any, alpha: Any) -> None:
+        """x <= the table's last knot and alpha inside its grid (eager values only)."""
+        self.master.check_range(x_max, alpha)
+
+    @property
+    def table(self) -> MasterCurve:
+        """The MasterCurve."""
+        return self.master
+
+
+class Tabulated(FEMTable):
+    """A user's single equilibrium curve: arrays ``x`` (from 0, increasing, >= 3 values; x = delta / (2 a0))
+    and ``f`` = F_eq / (C a0^2) at those x (independent of alpha), interpolated as f_Hertz(x) h(sqrt(x))
+    like the FE table. Valid for 0 <= x <= x[-1] (eager calls raise beyond). Equal arrays give an equal
+    law (the table is cached by content), so compiled code is reused."""
+
+    def __init__(self, x: Any, f: Any):
+        self.master = cast(MasterCurve, _cached_table("f", _content_key((x, f))))
+
+    def curve(self, *, alpha: Any, radius: Any, C: Any) -> Callable[[Any], jnp.ndarray]:
+        """x -> f_Hertz(x) h(sqrt(x)) of the single tabulated curve."""
+        return self.master.f_curve(alpha)
+
+
+class UserLaw(EquilibriumLaw):
+    """A user callable ``fn(delta, *, radius, C, alpha) -> F_eq`` (N; delta the total approach in m, radius
+    in m, C in Pa), JAX-traceable; f(x) = fn(2 a0 x, ...) / (C a0^2). Its delta-derivative is taken by
+    ``jax.jvp``. Valid wherever ``fn`` is, within 0 <= x < 1 (no table range); its smoothness is unknown,
+    so the quadrature splits the ramp into 16 even intervals."""
+
+    fn: Callable
+
+    def curve(self, *, alpha: Any, radius: Any, C: Any) -> Callable[[Any], jnp.ndarray]:
+        """x -> fn(2 a0 x, radius=a0, C=C, alpha=alpha) / (C a0^2)."""
+        fn = self.fn
+        return lambda x: fn(2.0 * radius * x, radius=radius, C=C, alpha=alpha) / (C * radius**2)
+
+    def knots(self, displacement: Any, radius: Any) -> Any:
+        """15 even interior points of [0, X]."""
+        return np.linspace(0.0, 1.0, 17)[1:-1] * displacement / (2.0 * radius)
+
+
+class MidplaneLaw(eqx.Module):
+    """A midplane law: the deformed equator radius g(x) = r_mid / a0 at x = delta / (2 a0).
+
+    Subclasses implement :meth:`curve`; :meth:`check` raises in eager calls outside the law's x range."""
+
+    def curve(self, *, alpha: Any, radius: Any) -> Callable[[Any], jnp.ndarray]:
+        """x -> g(x) = r_mid / a0 for one parameter set."""
+        raise NotImplementedError
+
+    def __call__(self, x: Any, *, alpha: Any = 0.0, radius: Any = 1.0) -> jnp.ndarray:
+        """g(x) = r_mid / a0 at x = delta / (2 a0) (dimensionless), for ``alpha`` and ``radius`` (m)."""
+        return self.curve(alpha=alpha, radius=radius)(jnp.asarray(x, dtype=jnp.float64))
+
+    def check(self, x_max: Any, alpha: Any) -> None:
+        """Raise ValueError (eager values only) where x up to ``x_max`` or ``alpha`` is outside the law."""
+
+    @property
+    def table(self) -> MasterCurve | None:
+        """The master-curve table behind the law (None otherwise)."""
+        return None
+
+
+class Incompressible(MidplaneLaw):
+    """The volume-preserving oblate estimate: a spheroid keeping the ball's volume when its height
+    2 a0 shrinks by delta has g(x) = r_mid / a0 = 1 / sqrt(1 - x) (= 1 + x/2 + ... at small x).
+
+    Valid for 0 <= x < 1 (x is capped at 0.999 inside, so traced calls stay finite)."""
+
+    def curve(self, *, alpha: Any, radius: Any) -> Callable[[Any], jnp.ndarray]:
+        """x -> 1 / sqrt(1 - min(x, 0.999))."""
+        return lambda x: 1.0 / jnp.sqrt(1.0 - jnp.minimum(x, 0.999))
+
+
+class FEMMidplane(MidplaneLaw):
+    """The calibrated midplane radius g(x; alpha) = r_mid / a0 of a :class:`MasterCurve` (``FEMMidplane()``:
+    the shipped FE table, the ``"fem"`` midplane), a C^2 spline in x and alpha (g = 1 at x = 0).
+
+    Valid for 0 <= x <= ``table.x_max`` and alpha in ``table.alpha_range``; the table must carry g."""
+
+    master: MasterCurve
+
+    def __init__(self, master: MasterCurve | None = None):
+        self.master = master_curve() if master is None else master
+        if not isinstance(self.master, MasterCurve):
+            raise ValueError(f"FEMMidplane needs a MasterCurve table; got {type(self.master).__name__}")
+
+    def curve(self, *, alpha: Any, radius: Any) -> Callable[[Any], jnp.ndarray]:
+        """x -> g(x; alpha) (the alpha interpolation done once)."""
+        return self.master.g_curve(alpha)
+
+    def check(self, x_max: Any, alpha: Any) -> None:
+        """x <= the table's last knot and alpha inside its grid (eager values only)."""
+        self.master.check_range(x_max, alpha)
+
+    @property
+    def table(self) -> MasterCurve:
+        """The MasterCurve."""
+        return self.master
+
+
+class TabulatedMidplane(MidplaneLaw):
+    """A user's midplane table: arrays ``x`` (increasing; x = delta / (2 a0)) and ``g`` = r_mid / a0 at
+    those x, a natural cubic spline in x (or an existing :class:`~tissuemech.reduced.interp.Spline1D` as
+    ``TabulatedMidplane(spline=...)``). Valid for x <= x[-1] (eager calls raise beyond; not checked for a
+    given spline). Equal arrays give an equal law (cached by content)."""
+
+    spline: Spline1D
+    x_max: float | None
+
+    def __init__(self, x: Any = None, g: Any = None, *, spline: Spline1D | None = None):
+        if spline is not None:
+            self.spline, self.x_max = spline, None
+            return
+        if x is None or g is None:
+            raise ValueError("TabulatedMidplane needs the arrays x (= delta/(2 a0)) and g (= r_mid/a0), or a spline")
+        self.spline = cast(Spline1D, _cached_table("g", _content_key((x, g))))
+        self.x_max = float(self.spline.knots[-1])
+
+    def curve(self, *, alpha: Any, radius: Any) -> Callable[[Any], jnp.ndarray]:
+        """x -> the spline through (x, g)."""
+        return self.spline
+
+    def check(self, x_max: Any, alpha: Any) -> None:
+        """x <= the table's last knot (eager values only)."""
+        xv = _concrete(x_max)
+        if self.x_max is not None and xv is not None and np.max(xv) > self.x_max * (1 + 1e-12):
+            raise ValueError(
+                f"compression delta/(2 a0) = {np.max(xv):.4g} is beyond the midplane table (up to {self.x_max:.4g}, "
+                f"i.e. {100 * self.x_max:.3g} % of the diameter); extend the table or use midplane='incompressible'."
+            )
+
+
+class UserMidplane(MidplaneLaw):
+    """A user callable ``fn(delta, *, radius, alpha) -> r_mid`` (m; delta the total approach in m, radius in
+    m), JAX-traceable; g(x) = fn(2 a0 x, ...) / a0. Valid wherever ``fn`` is, within 0 <= x < 1."""
+
+    fn: Callable
+
+    def curve(self, *, alpha: Any, radius: Any) -> Callable[[Any], jnp.ndarray]:
+        """x -> fn(2 a0 x, radius=a0, alpha=alpha) / a0."""
+        fn = self.fn
+        return lambda x: fn(2.0 * radius * x, radius=radius, alpha=alpha) / radius
+
+
+def as_equilibrium_law(spec: Any) -> EquilibriumLaw:
+    """The law object for an ``equilibrium=`` value: ``"hertz"`` -> :class:`Hertz`, ``"fem"`` ->
+    :class:`FEMTable` (the shipped table), a :class:`MasterCurve` -> ``FEMTable(curve)``, an ``(x, f)``
+    tuple -> :class:`Tabulated`, a callable ``F_eq(delta, *, radius, C, alpha)`` -> :class:`UserLaw`;
+    a law object is returned as it is.
+
+    Raises ValueError for anything else (FileNotFoundError for ``"fem"`` without the shipped table)."""
+    if isinstance(spec, EquilibriumLaw):
+        return spec
+    if isinstance(spec, str):
+        if spec in ("hertz", "fem"):
+            return _law_of(spec)
+    elif isinstance(spec, tuple) and len(spec) == 2:
+        return _law_of(Tabulated, _content_key(spec))
+    elif isinstance(spec, MasterCurve) or (callable(spec) and not isinstance(spec, (MidplaneLaw, Spline1D))):
+        try:
+            return _law_of(spec)
+        except TypeError:  # an unhashable callable: a fresh object (compiled per call)
+            return FEMTable(spec) if isinstance(spec, MasterCurve) else UserLaw(spec)
+    raise ValueError(f"equilibrium must be 'hertz', 'fem', an (x, f) table or a callable; got {spec!r}")
+
+
+def as_midplane_law(spec: Any, equilibrium: Any = None) -> MidplaneLaw:
+    """The law object for a ``midplane=`` value: ``"incompressible"`` -> :class:`Incompressible`, ``"fem"`` ->
+    :class:`FEMMidplane` (the shipped table), a :class:`MasterCurve` -> ``FEMMidplane(curve)``, an
+    ``(x, g)`` tuple or a Spline1D -> :class:`TabulatedMidplane`, a callable ``r_mid(delta, *, radius,
+    alpha)`` -> :class:`UserMidplane`; a law object is returned as it is. ``None`` picks ``"fem"`` when
+    ``equilibrium`` is the shipped table (``"fem"`` or ``FEMTable()``), else ``"incompressible"``.
+
+    Raises ValueError for anything else."""
+    if spec is None:
+        shipped = isinstance(equilibrium, str) and equilibrium == "fem"
+        if type(equilibrium) is FEMTable and DATA_FILE.exists():
+            shipped = equilibrium.master is master_curve()
+        spec = "fem" if shipped else "incompressible"
+    if isinstance(spec, MidplaneLaw):
+        return spec
+    if isinstance(spec, str):
+        if spec in ("incompressible", "fem"):
+            return _midplane_of(spec)
+    elif isinstance(spec, tuple) and len(spec) == 2:
+        return _midplane_of(TabulatedMidplane, _content_key(spec))
+    elif isinstance(spec, (MasterCurve, Spline1D)) or (callable(spec) and not isinstance(spec, EquilibriumLaw)):
+        try:
+            return _midplane_of(spec)
+        except TypeError:  # an unhashable callable: a fresh object (compiled per call)
+            return UserMidplane(cast(Callable, spec))
+    raise ValueError(f"midplane must be 'incompressible', 'fem', an (x, g) table or a callable; got {spec!r}")
+
+
+@functools.lru_cache(maxsize=64)
+def _law_of(spec: Any, key: tuple | None = None) -> EquilibriumLaw:
+    """One law object per public spelling (constructing and comparing equinox modules costs ~10 us: an
+    eager call should find its law, and the compiled code keyed on it, by identity)."""
+    if spec == "hertz":
+        return Hertz()
+    if spec == "fem":
+        return FEMTable()
+    if spec is Tabulated:
+        x, f = (np.frombuffer(b, dtype=float).reshape(shape) for shape, b in cast(tuple, key))
+        return Tabulated(x, f)
+    if isinstance(spec, MasterCurve):
+        return FEMTable(spec)
+    return UserLaw(spec)
+
+
+@functools.lru_cache(maxsize=64)
+def _midplane_of(spec: Any, key: tuple | None = None) -> MidplaneLaw:
+    """One midplane object per public spelling (see :func:`_law_of`)."""
+    if spec == "incompressible":
+        return Incompressible()
+    if spec == "fem":
+        return FEMMidplane()
+    if spec is TabulatedMidplane:
+        x, g = (np.frombuffer(b, dtype=float).reshape(shape) for shape, b in cast(tuple, key))
+        return TabulatedMidplane(x, g)
+    if isinstance(spec, MasterCurve):
+        return FEMMidplane(spec)
+    if isinstance(spec, Spline1D):
+        return TabulatedMidplane(spline=spec)
+    return UserMidplane(spec)
+
+
+class _Midplane1D(Spline1D):
+    """A user (x, g) midplane table (a hashable spline object, so compiled code is reused)."""
+
+
+def _content_key(table: tuple) -> tuple:
+    arrs = [np.ascontiguousarray(np.asarray(a, dtype=float)) for a in table]
+    return tuple((a.shape, a.tobytes()) for a in arrs)
+
+
+@functools.lru_cache(maxsize=32)
+def _cached_table(kind: str, key: tuple):
+    """One table object per content: a user's (x, f) or (x, g) arrays passed again in a later call give
+    the same object, hence an equal law and reused compiled code (laws are static arguments)."""
+    arrays = [np.frombuffer(b, dtype=float).reshape(shape) for shape, b in key]
+    return MasterCurve(*cast(list[Any], arrays)) if kind == "f" else _Midplane1D(*arrays)
 
 
 # ---------------------------------------------------------------- the lumped ODE
@@ -289,7 +588,6 @@ class _Opts(NamedTuple):
     solver: Any
     adjoint: Any
     method: str = "quadrature"
-    n_ramp: int | None = None  # output times inside the ramp, when known at trace time
 
 
 def _adjoint(kind: Any):
@@ -304,33 +602,12 @@ def _adjoint(kind: Any):
     )
 
 
-class _Midplane1D(Spline1D):
-    """A user (x, g) midplane table (a hashable spline object, so compiled code is reused)."""
-
-
-def _content_key(table: tuple) -> tuple:
-    arrs = [np.ascontiguousarray(np.asarray(a, dtype=float)) for a in table]
-    return tuple((a.shape, a.tobytes()) for a in arrs)
-
-
-@functools.lru_cache(maxsize=32)
-def _cached_table(kind: str, key: tuple):
-    arrays = [np.frombuffer(b, dtype=float).reshape(shape) for shape, b in key]
-    return MasterCurve(*cast(list[Any], arrays)) if kind == "f" else _Midplane1D(*arrays)
-
-
-def _table_object(table: tuple, kind: str):
-    """One spline object per table content: a user's (x, f) or (x, g) arrays passed again in a later call
-    reuse the compiled code instead of re-tracing (the object is a static argument of the jitted core)."""
-    return _cached_table(kind, _content_key(table))
-
-
 @functools.partial(jax.jit, static_argnums=(4,))
 def _run(flat_t, params, betas, taus, static):
     law, mid, history, jumps, o, stress, shape = static
     disp = history if history is not None else None
 
-    def one(p, bs, ts):
+    def one(p, bs, ts, batch_axis=None):
         b = jnp.stack(bs) if bs else jnp.zeros(0)
         tau = jnp.stack(ts) if ts else jnp.ones(0)
         return _curve(
@@ -347,13 +624,14 @@ def _run(flat_t, params, betas, taus, static):
             jumps,
             o,
             stress,
+            batch_axis,
         )
 
     if shape == ():
         out, ok = one(params, betas, taus)
     else:
         bc = lambda v: jnp.broadcast_to(v, shape).reshape(-1)
-        out, ok = jax.vmap(one)(
+        out, ok = jax.vmap(lambda p, bs, ts: one(p, bs, ts, "params"), axis_name="params")(
             {k: bc(v) for k, v in params.items()}, tuple(bc(b) for b in betas), tuple(bc(tau) for tau in taus)
         )
     return out.reshape(shape + flat_t.shape[:0] + (-1,)) if shape else out, ok
@@ -362,9 +640,10 @@ def _run(flat_t, params, betas, taus, static):
 _GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(16)
 _ETA = (_GL_NODES + 1.0) / 2.0  # Gauss-Legendre on [0, 1]
 _W_ETA = _GL_WEIGHTS / 2.0
+_CHUNK = 8  # ramp intervals integrated per step of the chunk loop (the rest of a chunk loop is skipped)
 
 
-def _ramp_hold_quadrature(t, f, X, tr, betas, taus, n_ramp=None, knots=None):
+def _ramp_hold_quadrature(t, f, X, tr, betas, taus, knots=None, batch_axis=None):
     """Dimensionless F/(C a0^2) at times t for x(t) = X min(t/tr, 1), by exact-kernel quadrature.
 
     In ramp units s = t/tr (k_m = tr/tau_m), q_m(s) = beta_m int_0^s e^{-k_m (s-u)} phi(u) du with
@@ -374,8 +653,13 @@ def _ramp_hold_quadrature(t, f, X, tr, betas, taus, n_ramp=None, knots=None):
     stiffness k D) and z = z0 + (1 - z0) eta^2 (which removes the sqrt(u) of first contact), is
         (1 - z0)/k int_0^1 phi(s_j + log(z)/k) 2 eta d eta,   1 - z0 = -expm1(-k D),
     evaluated with 16-point Gauss-Legendre. No time stepping: every output point at once.
-    ``n_ramp`` (static, when the times and ramp time are known at trace time): how many of the
-    sorted output times lie in the ramp; the others need no integral (closed-form hold).
+
+    The sorted points (output times clipped to the ramp, and ``knots``) are walked in chunks of
+    ``_CHUNK`` intervals; a chunk that starts at the end of the ramp (s = 1: hold outputs and knots
+    beyond X, whose intervals are empty) is skipped by ``lax.cond``. The cost follows the number of
+    ramp points at run time, also under jit with traced times (their count is not known when
+    tracing). ``batch_axis``: the vmap axis over parameter sets, whose largest count is used, so the
+    skip stays a branch (not a select) under vmap.
     ``knots``: x-values where the equilibrium law is only piecewise smooth (a spline table's knots);
     they become interval ends too, so every Gauss rule sees a smooth integrand (callables: 16 even
     points; Hertz: none needed)."""
@@ -384,37 +668,56 @@ def _ramp_hold_quadrature(t, f, X, tr, betas, taus, n_ramp=None, knots=None):
     feq = f(X * s)
     if n == 0:
         return feq, jnp.asarray(True)
-    order = jnp.argsort(s)
-    if n_ramp is None:
-        n_ramp = t.shape[0]
-    order = order[:n_ramp]
     extra = jnp.zeros(0) if knots is None else jnp.clip(jnp.asarray(knots, dtype=jnp.float64) / X, 0.0, 1.0)
-    pts = jnp.concatenate([s[order], extra])
+    pts = jnp.concatenate([s, extra])
     order2 = jnp.argsort(pts)
     inv = jnp.argsort(order2)
-    grid = jnp.concatenate([jnp.zeros(1), pts[order2], jnp.ones(1)])  # 0, sorted ramp outputs and knots, 1
-    s1, s0 = grid[1:], grid[:-1]
-    D = s1 - s0  # (m,)
+    n_int = pts.shape[0] + 1  # intervals 0 -> sorted points -> 1
+    n_chunks = -(-n_int // _CHUNK)
+    pad = n_chunks * _CHUNK - n_int
+    # 0, sorted ramp outputs and knots, 1 (and empty intervals at 1 up to a whole number of chunks)
+    grid = jnp.concatenate([jnp.zeros(1), pts[order2], jnp.ones(1 + pad)])
+    active = jnp.sum(pts < 1.0) + 1  # intervals that start inside the ramp
+    if batch_axis is not None:
+        active = jax.lax.pmax(active, batch_axis)
     k = (tr / taus)[:, None]  # (n, 1)
-    one_minus_z0 = -jnp.expm1(-k * D)  # (n, m)
     eta = jnp.asarray(_ETA)
-    # u at the nodes: (n, m, G); log z = log1p(-(1 - z0)(1 - eta^2))
-    u = s1[None, :, None] + jnp.log1p(-one_minus_z0[..., None] * (1.0 - eta**2)) / k[..., None]
-    u = jnp.clip(u, s0[None, :, None], s1[None, :, None])
-    _, dfx = jax.jvp(f, (X * u,), (jnp.full(u.shape, X),))  # phi(u) = X f'(X u)
-    # weight (1 - z0)/k, safe as k D -> 0 (then -> D)
-    wk = jnp.where(k * D > 1e-300, one_minus_z0 / k, D)
-    I = wk * jnp.sum(dfx * (2.0 * eta * jnp.asarray(_W_ETA)), axis=-1)  # (n, m)
-    decay = jnp.exp(-k * D)  # (n, m)
+    w_eta = 2.0 * eta * jnp.asarray(_W_ETA)
+    bcol = betas[:, None]
 
-    def step(q, inputs):
-        dec, inc = inputs
-        q = dec * q + inc
-        return q, q
+    def integrate(q, s0, s1):
+        D = s1 - s0  # (K,)
+        one_minus_z0 = -jnp.expm1(-k * D)  # (n, K)
+        # u at the nodes: (n, K, G); log z = log1p(-(1 - z0)(1 - eta^2))
+        u = s1[None, :, None] + jnp.log1p(-one_minus_z0[..., None] * (1.0 - eta**2)) / k[..., None]
+        u = jnp.clip(u, s0[None, :, None], s1[None, :, None])
+        _, dfx = jax.jvp(f, (X * u,), (jnp.full(u.shape, X),))  # phi(u) = X f'(X u)
+        # weight (1 - z0)/k, safe as k D -> 0 (then -> D)
+        wk = jnp.where(k * D > 1e-300, one_minus_z0 / k, D)
+        I = wk * jnp.sum(dfx * w_eta, axis=-1)  # (n, K)
+        decay = jnp.exp(-k * D)  # (n, K)
 
-    _, qs = jax.lax.scan(step, jnp.zeros(n), (decay.T, (betas[:, None] * I).T))  # (m, n)
-    q_sorted, q_end = qs[inv[:n_ramp]], qs[-1]
-    q_ramp = jnp.zeros((t.shape[0], n)).at[order].set(q_sorted)
+        def step(q, inputs):
+            dec, inc = inputs
+            q = dec * q + inc
+            return q, q
+
+        return jax.lax.scan(step, q, (decay.T, (bcol * I).T))  # (n,), (K, n)
+
+    def chunk(q, inputs):
+        c, s0, s1 = inputs
+        return jax.lax.cond(
+            c * _CHUNK < active,
+            integrate,
+            lambda q, s0, s1: (q, jnp.broadcast_to(q, (_CHUNK, n))),  # the ramp is over: q stays q(1)
+            q,
+            s0,
+            s1,
+        )
+
+    chunks = (jnp.arange(n_chunks), grid[:-1].reshape(n_chunks, _CHUNK), grid[1:].reshape(n_chunks, _CHUNK))
+    q_end, qs = jax.lax.scan(chunk, jnp.zeros(n), chunks)
+    q_ramp = qs.reshape(-1, n)[inv[: t.shape[0]]]  # q at each output's point (interval j ends at point j)
     hold = q_end * jnp.exp(-jnp.maximum(t - tr, 0.0)[:, None] / taus)
     q = jnp.where((t <= tr)[:, None], q_ramp, hold)
     ok = jnp.all(jnp.isfinite(q))
@@ -499,15 +802,11 @@ def _history(t, f, x_of_t, betas, taus, jumps, o: _Opts):
     return feq + jnp.sum(q, axis=-1), sol.result == diffrax.RESULTS.successful
 
 
-def _curve(t, radius, C, alpha, betas, taus, displacement, ramp_time, equilibrium, midplane, jumps, o, stress: bool):
-    """Force (N) or nominal stress (Pa) at flat times t for scalar parameters."""
-    f, table = _equilibrium_law(equilibrium, radius, C, alpha)
-    if table is not None:
-        knots = table.x[1:]  # x = 0 is the grid start already
-    elif isinstance(equilibrium, str) and equilibrium == "hertz":
-        knots = None
-    else:  # a user callable: smoothness unknown, 16 even sub-intervals of the ramp
-        knots = None if callable(displacement) else np.linspace(0.0, 1.0, 17)[1:-1] * displacement / (2.0 * radius)
+def _curve(
+    t, radius, C, alpha, betas, taus, displacement, ramp_time, law, mid, jumps, o, stress: bool, batch_axis=None
+):
+    """Force (N) or nominal stress (Pa) at flat times t for scalar parameters (``law``/``mid``: law objects)."""
+    f = law.curve(alpha=alpha, radius=radius, C=C)
     if callable(displacement):
 
         def x_of_t(tt):
@@ -518,13 +817,14 @@ def _curve(t, radius, C, alpha, betas, taus, displacement, ramp_time, equilibriu
     else:
         X = displacement / (2.0 * radius)
         if o.method == "quadrature":
-            fhat, ok = _ramp_hold_quadrature(t, f, X, ramp_time, betas, taus, o.n_ramp, knots)
+            knots = law.knots(displacement, radius)
+            fhat, ok = _ramp_hold_quadrature(t, f, X, ramp_time, betas, taus, knots, batch_axis)
         else:
             fhat, ok = _ramp_hold(t, f, X, ramp_time, betas, taus, o)
         x_t = X * jnp.clip(t / ramp_time, 0.0, 1.0)
     out = fhat * C * radius**2
     if stress:
-        g, _ = _midplane_law(midplane, equilibrium, radius, alpha)
+        g = mid.curve(alpha=alpha, radius=radius)
         out = out / (jnp.pi * (radius * g(x_t)) ** 2)
     return jnp.where(ok, out, jnp.nan), ok
 
@@ -561,7 +861,7 @@ def _evaluate(
         *(() if callable(displacement) else (displacement,)),
     )
     if eager:
-        _check_inputs(t, radius, C, alpha, displacement, ramp_time, equilibrium, midplane, jump_times)
+        _check_inputs(t, radius, C, alpha, displacement, ramp_time, equilibrium, midplane, jump_times, stress)
     _check_solver_options(rtol, atol, max_steps)
     betas = tuple(jnp.asarray(b, dtype=jnp.float64) for b, _ in br)
     taus = tuple(jnp.asarray(tau, dtype=jnp.float64) for _, tau in br)
@@ -584,14 +884,9 @@ def _evaluate(
         raise ValueError(
             f"method must be 'quadrature' (fast default for a ramp-and-hold) or 'ode' (diffrax); got {method!r}"
         )
-    n_ramp = None
-    if not callable(displacement):
-        tv, rv = _concrete(t), _concrete(ramp_time)
-        if tv is not None and rv is not None:
-            n_ramp = int(np.sum(tv.ravel() <= np.max(rv)))
-    o = _Opts(float(rtol), float(atol), int(max_steps), solver, _adjoint(adjoint), method, n_ramp)
-    law = _table_object(equilibrium, "f") if isinstance(equilibrium, tuple) else equilibrium
-    mid = _table_object(midplane, "g") if isinstance(midplane, tuple) else midplane
+    o = _Opts(float(rtol), float(atol), int(max_steps), solver, _adjoint(adjoint), method)
+    law = as_equilibrium_law(equilibrium)
+    mid = as_midplane_law(midplane, equilibrium) if stress else None
     static = (
         law,
         mid,
@@ -616,16 +911,6 @@ def _evaluate(
             "plates push (force >= 0 N). Shorten the history or unload more slowly"
         )
     return out
-
-
-def _table_of(law):
-    if isinstance(law, MasterCurve):
-        return law
-    if isinstance(law, str) and law == "fem":
-        return master_curve()
-    if isinstance(law, tuple) and len(law) == 2:
-        return _table_object(law, "f")
-    return None
 
 
 def force(
@@ -689,7 +974,7 @@ def nominal_stress(
     displacement: Any,
     ramp_time: Any = None,
     equilibrium: Equilibrium = "fem",
-    midplane: Any = None,
+    midplane: Midplane = None,
     jump_times: Sequence[float] | None = None,
     rtol: float = 1e-10,
     atol: float = 1e-10,
@@ -727,44 +1012,150 @@ def nominal_stress(
 def equilibrium_force(
     displacement: Any, *, radius: Any, C: Any, alpha: Any, equilibrium: Equilibrium = "fem"
 ) -> jnp.ndarray:
-    """Elastic equilibrium force F_eq(delta) in N for the total approach ``displacement`` (m)."""
+    """Elastic equilibrium force F_eq(delta) = C a0^2 f(delta / (2 a0)) in N.
+
+    displacement  total approach delta of the plates (m), any shape, 0 <= delta < 2 radius.
+    radius        ball radius a0 (m).       C, alpha   Fung parameters (Pa, -).
+    equilibrium   "hertz", "fem" (FE-calibrated table), a MasterCurve, an (x, f) table, a callable
+                  F_eq(delta, *, radius, C, alpha) (N), or a law object (:class:`Hertz`, :class:`FEMTable`...).
+    Returns F_eq (N), shape broadcast(displacement, radius, C).
+    Raises ValueError (eager calls) for a bad value (naming it and its unit), an unknown law, or an
+    approach beyond the law's table. Eager calls validate here and run one compiled kernel.
+    """
+    fast = _plain_numbers(displacement, radius, C, alpha)
+    if fast is not None:  # one point given as plain numbers: the checks in scalar arithmetic (~1 us)
+        d, r, c, a = fast
+        if r > 0 and c > 0 and a >= 0 and 0 <= d < 2.0 * r:
+            law = as_equilibrium_law(equilibrium)
+            type(law).check(law, d / (2.0 * r), a)
+            return _equilibrium_core(law, d, r, c, a)
+    elif fast_params := _plain_numbers(radius, C, alpha) if _float_array(displacement) else None:
+        # an array of approaches: its range found inside the compiled kernel (no NumPy pass over it)
+        r, c, a = fast_params
+        if r > 0 and c > 0 and a >= 0:
+            law = as_equilibrium_law(equilibrium)
+            F = _equilibrium_core(law, displacement, r, c, a)
+            lo, hi = _array_range(displacement)
+            if 0 <= lo and hi < 2.0 * r:
+                type(law).check(law, hi / (2.0 * r), a)
+                return F
     if not is_traced(displacement, radius, C, alpha):
         r = validate_positive("radius (of the ball)", radius, "m")
         validate_material(C, alpha)
         d = validate_finite("displacement (the total approach of the plates)", displacement, "m")
-        _check_approach("displacement", d / (2.0 * r))
-        mc = _table_of(equilibrium)
-        if mc is not None:
-            mc.check_range(np.asarray(displacement, dtype=float) / (2 * np.asarray(radius, dtype=float)), alpha)
-    f, _ = _equilibrium_law(equilibrium, radius, C, alpha)
+        x_hi = _approach_max("displacement", d, r)
+        law = as_equilibrium_law(equilibrium)
+        type(law).check(law, x_hi, alpha)
+        return _equilibrium_core(law, d, r, np.asarray(C, dtype=float), np.asarray(alpha, dtype=float))
+    return _equilibrium_core(as_equilibrium_law(equilibrium), displacement, radius, C, alpha)
+
+
+@functools.partial(jax.jit, static_argnums=(0,))
+def _equilibrium_core(law: EquilibriumLaw, displacement, radius, C, alpha):
     x = jnp.asarray(displacement, dtype=jnp.float64) / (2.0 * jnp.asarray(radius, dtype=jnp.float64))
-    return f(x) * C * jnp.asarray(radius) ** 2
+    return law.curve(alpha=alpha, radius=radius, C=C)(x) * C * jnp.asarray(radius) ** 2
 
 
 def midplane_radius(
-    displacement: Any, *, radius: Any, alpha: Any = 0.0, midplane: Any = "incompressible"
+    displacement: Any, *, radius: Any, alpha: Any = 0.0, midplane: Midplane = "incompressible"
 ) -> jnp.ndarray:
-    """Deformed equator radius r_mid (m) at total approach ``displacement`` (m)."""
+    """Deformed equator radius r_mid = a0 g(delta / (2 a0)) in m at total approach ``displacement`` (m).
+
+    displacement  total approach delta of the plates (m), any shape, 0 <= delta < 2 radius.
+    radius        ball radius a0 (m).       alpha   Fung exponent (-), used by the "fem" table.
+    midplane      "incompressible" (a0 / sqrt(1 - x)), "fem" (calibrated), a MasterCurve, an (x, g) table,
+                  a callable r_mid(delta, *, radius, alpha) (m), or a law object (:class:`Incompressible`...).
+    Returns r_mid (m), shape broadcast(displacement, radius).
+    Raises ValueError (eager calls) for a bad value (naming it and its unit), an unknown law, or an
+    approach beyond the law's table. Eager calls validate here and run one compiled kernel.
+    """
+    fast = _plain_numbers(displacement, radius, alpha)
+    if fast is not None:  # one point given as plain numbers: the checks in scalar arithmetic (~1 us)
+        d, r, a = fast
+        if r > 0 and a >= 0 and 0 <= d < 2.0 * r:
+            law = as_midplane_law(midplane)
+            type(law).check(law, d / (2.0 * r), a)
+            return _midplane_core(law, d, r, a)
+    elif fast_params := _plain_numbers(radius, alpha) if _float_array(displacement) else None:
+        # an array of approaches: its range found inside the compiled kernel (no NumPy pass over it)
+        r, a = fast_params
+        if r > 0 and a >= 0:
+            law = as_midplane_law(midplane)
+            out = _midplane_core(law, displacement, r, a)
+            lo, hi = _array_range(displacement)
+            if 0 <= lo and hi < 2.0 * r:
+                type(law).check(law, hi / (2.0 * r), a)
+                return out
     if not is_traced(displacement, radius, alpha):
         r = validate_positive("radius (of the ball)", radius, "m")
         validate_nonnegative("alpha (the Fung stiffening exponent)", alpha, "dimensionless")
         d = validate_finite("displacement (the total approach of the plates)", displacement, "m")
-        _check_approach("displacement", d / (2.0 * r))
-        mc = _table_of_safe(midplane)
-        if mc is not None:
-            mc.check_range(d / (2.0 * r), alpha)
-    g, _ = _midplane_law(midplane, None, radius, alpha)
+        x_hi = _approach_max("displacement", d, r)
+        law = as_midplane_law(midplane)
+        type(law).check(law, x_hi, alpha)
+        return _midplane_core(law, d, r, np.asarray(alpha, dtype=float))
+    return _midplane_core(as_midplane_law(midplane), displacement, radius, alpha)
+
+
+@functools.partial(jax.jit, static_argnums=(0,))
+def _midplane_core(law: MidplaneLaw, displacement, radius, alpha):
     x = jnp.asarray(displacement, dtype=jnp.float64) / (2.0 * jnp.asarray(radius, dtype=jnp.float64))
-    return jnp.asarray(radius) * g(x)
+    return jnp.asarray(radius) * law.curve(alpha=alpha, radius=radius)(x)
 
 
 # ---------------------------------------------------------------- input checks of the public entry points
+
+
+_NUMBER_TYPES = (float, int, np.floating, np.integer)
+
+
+def _float_array(v: Any) -> bool:
+    """A concrete (not traced) NumPy or JAX array of floats."""
+    return isinstance(v, (np.ndarray, jax.Array)) and not is_traced(v) and v.dtype.kind == "f"
+
+
+def _array_range(d: Any) -> tuple[float, float]:
+    """(min, max) of a concrete array (NaN if any entry is NaN or the array is empty), by NumPy: two passes
+    that run while the compiled kernel (dispatched first, asynchronously) computes."""
+    v = np.asarray(d)
+    if v.size == 0:  # the full validators name the empty array
+        return math.nan, math.nan
+    return float(np.min(v)), float(np.max(v))
+
+
+def _plain_numbers(*values: Any) -> tuple[float, ...] | None:
+    """The values as Python floats when every one is a single finite real number (Python or NumPy
+    scalar, not a bool), else None: the eager entry points then take the full validators (the same
+    checks, a one-line error naming the quantity; ~50 us more). A validator of this module, not of
+    ``reduced.validation``: it only decides which path checks, never what is accepted."""
+    out = []
+    for v in values:
+        if not isinstance(v, _NUMBER_TYPES) or isinstance(v, (bool, np.bool_)):
+            return None
+        fv = float(v)
+        if not math.isfinite(fv):
+            return None
+        out.append(fv)
+    return tuple(out)
 
 
 def _check_solver_options(rtol: Any, atol: Any, max_steps: Any) -> None:
     validate_positive("rtol (relative tolerance of the ODE solver)", rtol, "dimensionless")
     validate_positive("atol (absolute tolerance of the ODE solver)", atol, "dimensionless")
     validate_int("max_steps (of the ODE solver)", max_steps, minimum=1)
+
+
+def _approach_max(name: str, d: Any, r: Any) -> float:
+    """max of x = d / (2 r) after :func:`_check_approach` (two passes over d when r is one number; the
+    full check, with its message, only when something is wrong)."""
+    d, r = np.asarray(d), np.asarray(r)
+    if r.size == 1:
+        lo, hi = float(np.min(d)) / (2.0 * float(r.reshape(-1)[0])), float(np.max(d)) / (2.0 * float(r.reshape(-1)[0]))
+        if math.isfinite(lo) and math.isfinite(hi) and lo >= 0 and hi < 1:
+            return hi
+    x = d / (2.0 * r)
+    _check_approach(name, x)
+    return float(np.max(x))
 
 
 def _check_approach(name: str, x_over_diameter: np.ndarray, where: str = "") -> None:
@@ -783,14 +1174,21 @@ def _check_approach(name: str, x_over_diameter: np.ndarray, where: str = "") -> 
         )
 
 
-def _check_inputs(t, radius, C, alpha, displacement, ramp_time, equilibrium, midplane, jump_times) -> None:
-    """Eager checks of force / nominal_stress (every message names the quantity and its unit)."""
+def _check_inputs(
+    t, radius, C, alpha, displacement, ramp_time, equilibrium, midplane, jump_times, stress: bool = False
+) -> None:
+    """Eager checks of force / nominal_stress (every message names the quantity and its unit); the laws
+    (converted last, so a bad value is named before a bad law) check their own ranges."""
     validate_times("t (output times, t = 0 is first contact)", t, unit="s")
     r = validate_positive("radius (of the ball)", radius, "m")
     validate_material(C, alpha)
     if jump_times is not None:
         validate_times("jump_times (kinks of the displacement history)", jump_times, unit="s")
-    laws = [law for law in (equilibrium, midplane) if _table_of_safe(law) is not None]
+
+    def laws() -> list[EquilibriumLaw | MidplaneLaw]:
+        eq = as_equilibrium_law(equilibrium)
+        return [eq, as_midplane_law(midplane, equilibrium)] if stress else [eq]
+
     if callable(displacement):
         tn = np.asarray(t, dtype=float).ravel()
         probe = np.union1d(tn, np.linspace(0.0, float(np.max(tn)), 257))
@@ -811,8 +1209,8 @@ def _check_inputs(t, radius, C, alpha, displacement, ramp_time, equilibrium, mid
                 f"displacement history: delta(0) = {d[0]:g} m, but the model starts at first contact "
                 "(delta(0) = 0 m, branches at rest); start the history at 0"
             )
-        for law in laws:
-            _table_of_safe(law).check_range(np.max(x), alpha)
+        for law in laws():
+            cast(Any, type(law)).check(law, np.max(x), alpha)
         return
     validate_positive("displacement (the total approach of the plates)", displacement, "m")
     if ramp_time is None:
@@ -821,13 +1219,5 @@ def _check_inputs(t, radius, C, alpha, displacement, ramp_time, equilibrium, mid
     if np.any(np.asarray(displacement, dtype=float) >= 2 * np.asarray(radius, dtype=float)):
         raise ValueError("displacement (total approach) must be smaller than the ball's diameter 2 * radius")
     x_max = np.asarray(displacement, dtype=float) / (2 * np.asarray(radius, dtype=float))
-    for law in laws:
-        _table_of_safe(law).check_range(x_max, alpha)
-
-
-def _table_of_safe(law):
-    """The table behind an equilibrium/midplane spec, or None (also for specs rejected later)."""
-    try:
-        return _table_of(law)
-    except (TypeError, ValueError):
-        return None
+    for law in laws():
+        cast(Any, type(law)).check(law, x_max, alpha)

@@ -1,5 +1,7 @@
 """reduced.spheroid: the lumped generalized-Maxwell plate force against closed forms and quadrature."""
 
+from pathlib import Path
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -301,3 +303,161 @@ def test_master_curve_matches_fresh_fe_at_random_points():
     for x, alpha in zip(rng.uniform(0.015, 0.3, 2), rng.uniform(0.05, 1.45, 2)):
         fe = static_force(float(x), float(alpha), level)
         assert float(mc.f(x, alpha)) / fe == pytest.approx(1.0, abs=1e-4)
+
+
+# ---------------------------------------------------------------- the laws as objects (issue 9 item 5)
+
+X_TAB = np.linspace(0.0, 0.1, 41)
+F_TAB = (32 / 3) * X_TAB**1.5 * (1 + X_TAB)
+G_TAB = 1.0 + X_TAB / 2
+
+
+def _user_law(d, *, radius, C, alpha):
+    return (32 / 3) * C * radius**2 * (d / (2 * radius)) ** 1.5 * (1 + 5 * d / (2 * radius))
+
+
+def _user_midplane(d, *, radius, alpha):
+    return radius * (1 + 0.4 * d / (2 * radius))
+
+
+def _equilibria():
+    out = [("hertz", sp.Hertz()), ((X_TAB, F_TAB), sp.Tabulated(X_TAB, F_TAB)), (_user_law, sp.UserLaw(_user_law))]
+    if sp.DATA_FILE.exists():
+        out += [("fem", sp.FEMTable()), (sp.master_curve(), sp.FEMTable(sp.master_curve()))]
+    return out
+
+
+def _midplanes():
+    out = [
+        ("incompressible", sp.Incompressible()),
+        ((X_TAB, G_TAB), sp.TabulatedMidplane(X_TAB, G_TAB)),
+        (_user_midplane, sp.UserMidplane(_user_midplane)),
+    ]
+    if sp.DATA_FILE.exists():
+        out += [("fem", sp.FEMMidplane()), (sp.master_curve(), sp.FEMMidplane(sp.master_curve()))]
+    return out
+
+
+def test_law_objects_give_the_numbers_of_the_public_spellings_bit_for_bit():
+    d = np.linspace(0.0, 90e-6, 7)
+    t = np.array([0.0, 0.05, 0.2, 30.0])
+    kw = dict(radius=A0, C=150.0, alpha=0.2, branches=[(0.4, 20.0)], displacement=90e-6, ramp_time=TR)
+    for spec, law in _equilibria():
+        assert sp.as_equilibrium_law(spec) == law
+        a = np.asarray(sp.equilibrium_force(d, radius=A0, C=150.0, alpha=0.2, equilibrium=spec))
+        b = np.asarray(sp.equilibrium_force(d, radius=A0, C=150.0, alpha=0.2, equilibrium=law))
+        assert np.array_equal(a, b)
+        assert np.array_equal(
+            np.asarray(sp.force(t, **kw, equilibrium=spec)), np.asarray(sp.force(t, **kw, equilibrium=law))
+        )
+    for spec, law in _midplanes():
+        assert sp.as_midplane_law(spec) == law
+        a = np.asarray(sp.midplane_radius(d, radius=A0, alpha=0.2, midplane=spec))
+        assert np.array_equal(a, np.asarray(sp.midplane_radius(d, radius=A0, alpha=0.2, midplane=law)))
+    s1 = sp.nominal_stress(t, **kw, equilibrium="hertz", midplane=(X_TAB, G_TAB))
+    s2 = sp.nominal_stress(t, **kw, equilibrium=sp.Hertz(), midplane=sp.TabulatedMidplane(X_TAB, G_TAB))
+    assert np.array_equal(np.asarray(s1), np.asarray(s2))
+    # midplane=None: the FE midplane with the shipped FE law (by name or as its object), else incompressible
+    assert sp.as_midplane_law(None, "hertz") == sp.Incompressible()
+    if sp.DATA_FILE.exists():
+        assert sp.as_midplane_law(None, "fem") == sp.as_midplane_law(None, sp.FEMTable()) == sp.FEMMidplane()
+
+
+def test_each_law_at_small_compression():
+    x = np.array([1e-6, 1e-4, 1e-2])
+    # Hertz between two plates: F = (4/3) E* sqrt(a0) (delta/2)^(3/2), E* = 8 C  <=>  f = (32/3) x^(3/2)
+    assert np.allclose(np.asarray(sp.Hertz()(x)), (32 / 3) * x**1.5, rtol=1e-14, atol=0)
+    assert float(sp.Hertz()(0.0)) == 0.0 and float(jax.grad(lambda v: sp.Hertz()(v))(0.0)) == 0.0
+    # a table of f = Hertz (1 + x) is splined in sqrt(x) as f / f_Hertz: exact for this correction
+    assert np.allclose(np.asarray(sp.Tabulated(X_TAB, F_TAB)(x)) / ((32 / 3) * x**1.5), 1 + x, rtol=1e-9)
+    # a callable: f = F_eq / (C a0^2) at delta = 2 a0 x, for any radius and C
+    u = np.asarray(sp.UserLaw(_user_law)(x, radius=A0, C=150.0))
+    assert np.allclose(u, (32 / 3) * x**1.5 * (1 + 5 * x), rtol=1e-13)
+    # the volume-preserving oblate estimate: g = 1 / sqrt(1 - x) = 1 + x/2 + 3 x^2 / 8 + ...
+    g = np.asarray(sp.Incompressible()(x))
+    assert np.allclose(g, 1 + x / 2 + 3 * x**2 / 8, rtol=0, atol=3e-6)
+    assert np.allclose(np.asarray(sp.TabulatedMidplane(X_TAB, G_TAB)(x)), 1 + x / 2, rtol=1e-12)
+    assert np.allclose(np.asarray(sp.UserMidplane(_user_midplane)(x, radius=A0)), 1 + 0.4 * x, rtol=1e-13)
+    if sp.DATA_FILE.exists():  # the FE table tends to Hertz, its midplane to the undeformed radius
+        assert float(sp.FEMTable()(1e-4, alpha=0.2)) / float(sp.hertz_f(1e-4)) == pytest.approx(1.0, abs=0.01)
+        assert float(sp.FEMMidplane()(0.0, alpha=0.2)) == pytest.approx(1.0, abs=1e-3)
+    # the x range each law needs is checked by the law (eager)
+    with pytest.raises(ValueError, match="beyond the calibrated table"):
+        sp.Tabulated(X_TAB, F_TAB).check(0.2, 0.0)
+    with pytest.raises(ValueError, match="beyond the midplane table"):
+        sp.TabulatedMidplane(X_TAB, G_TAB).check(0.2, 0.0)
+    sp.Hertz().check(0.9, 0.0)
+    with pytest.raises(ValueError, match="equilibrium"):
+        sp.as_equilibrium_law(sp.Incompressible())
+    with pytest.raises(ValueError, match="midplane"):
+        sp.as_midplane_law("hertz")
+
+
+def _reference_cases():
+    call = lambda d, *, radius, C, alpha: (
+        (32 / 3) * C * radius**2 * (d / (2 * radius)) ** 1.5 * (1 + 5 * d / (2 * radius))
+    )
+    cases = {
+        "hertz": dict(equilibrium="hertz"),
+        "table": dict(equilibrium=(X_TAB, F_TAB)),
+        "callable": dict(equilibrium=call),
+        "stiff": dict(equilibrium="hertz", branches=[(0.8, 2e-3), (0.3, 5.0)]),
+    }
+    if sp.DATA_FILE.exists():
+        cases["fem"] = dict(equilibrium="fem", displacement=150e-6)
+        cases["grid"] = dict(equilibrium="fem", C=np.array([100.0, 200.0]), branches=[(np.array([[0.1], [1.0]]), 20.0)])
+    return cases
+
+
+def test_quadrature_eager_and_jit_equal_the_results_before_issue_14():
+    """The chunked quadrature (cost set by the ramp points at run time, also under jit) against the eager
+    results of the former one (static count of ramp points), saved in tests/data: 1e-12 relative."""
+    ref = np.load(Path(__file__).parent / "data" / "spheroid_quadrature_ref.npz")
+    times = ref["times"]
+    for name, case in _reference_cases().items():
+        kw = dict(radius=A0, C=150.0, alpha=0.2, branches=[(0.4, 200.0)], displacement=D, ramp_time=TR)
+        kw.update(case)
+        for fn, suffix in ((sp.force, "_force"), (sp.nominal_stress, "_stress")):
+            r = ref[name + suffix]
+            eager = np.asarray(fn(times, **kw))
+            jitted = np.asarray(jax.jit(lambda t: fn(t, **kw))(jnp.asarray(times)))
+            scale = np.max(np.abs(r), axis=-1, keepdims=True)
+            assert np.max(np.abs(eager - r) / scale) < 1e-12, name + suffix
+            assert np.max(np.abs(jitted - r) / scale) < 1e-12, name + suffix
+
+
+def test_no_recompile_for_equal_tables_or_other_ramp_counts():
+    t1 = np.array([0.0, 0.1, 0.2, 50.0])
+    t2 = np.array([0.0, 0.05, 30.0, 50.0])  # same shape, another number of ramp points
+    kw = dict(radius=A0, C=150.0, alpha=0.2, branches=[(0.4, 20.0)], displacement=90e-6, ramp_time=TR)
+    sp.force(t1, **kw, equilibrium=(X_TAB, F_TAB))
+    n = sp._run._cache_size()
+    sp.force(t2, **kw, equilibrium=(X_TAB.copy(), F_TAB.copy()))  # equal arrays, new objects
+    sp.force(t1, **kw, equilibrium=sp.Tabulated(X_TAB.copy(), F_TAB.copy()))
+    assert sp._run._cache_size() == n
+    d = np.linspace(0.0, 90e-6, 5)
+    sp.equilibrium_force(d, radius=A0, C=150.0, alpha=0.2, equilibrium=(X_TAB, F_TAB))
+    m = sp._equilibrium_core._cache_size()
+    sp.equilibrium_force(d * 0.5, radius=A0, C=150.0, alpha=0.2, equilibrium=(X_TAB.copy(), F_TAB.copy()))
+    assert sp._equilibrium_core._cache_size() == m
+    sp.midplane_radius(d, radius=A0, midplane=(X_TAB, G_TAB))
+    k = sp._midplane_core._cache_size()
+    sp.midplane_radius(d, radius=A0, midplane=(X_TAB.copy(), G_TAB.copy()))
+    assert sp._midplane_core._cache_size() == k
+
+
+def test_eager_fast_paths_agree_with_jit_and_still_refuse_bad_input():
+    kw = dict(radius=A0, C=150.0, alpha=0.2)
+    for d in (60e-6, np.linspace(0.0, 90e-6, 9), jnp.linspace(0.0, 90e-6, 9)):
+        e = np.asarray(sp.equilibrium_force(d, **kw, equilibrium="hertz"))
+        j = np.asarray(jax.jit(lambda v: sp.equilibrium_force(v, **kw, equilibrium="hertz"))(jnp.asarray(d)))
+        assert np.allclose(e, j, rtol=1e-14, atol=0)
+        r = np.asarray(sp.midplane_radius(d, radius=A0))
+        assert np.allclose(r, A0 / np.sqrt(1 - np.asarray(d) / (2 * A0)), rtol=1e-14)
+    for bad, match in ((-1e-6, "negative"), (np.array([1e-6, np.nan]), "finite"), (np.array([1.2e-3]), "diameter")):
+        with pytest.raises(ValueError, match=match):
+            sp.equilibrium_force(bad, **kw, equilibrium="hertz")
+        with pytest.raises(ValueError, match=match):
+            sp.midplane_radius(bad, radius=A0)
+    with pytest.raises(ValueError, match="empty"):
+        sp.equilibrium_force(np.zeros(0), **kw, equilibrium="hertz")

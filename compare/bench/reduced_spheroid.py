@@ -7,6 +7,12 @@ Rows: compile time, curves per second after compile (best of a few calls, ``bloc
 the max error relative to the curve's peak force (Hertz law: the convolution quadrature is exact for
 it; the calibrated law: against its own rtol 1e-12 solution), the baseline (``scipy.integrate.solve_ivp``,
 LSODA at rtol 1e-10, one curve at a time, the same lumped ODE) and the speed-up.
+
+Then the public API as a user calls it (issue 14), each figure a ratio of medians of interleaved calls
+in the same run: ``force`` / ``nominal_stress`` under ``jax.jit`` with a traced time array against the
+eager call (``jit/eager``, target <= 1), and eager ``equilibrium_force`` / ``midplane_radius`` against
+the same call under ``jax.jit`` at 1e6 points (``eager/jit``, target <= 1.5), with the eager per-call
+cost at N = 1 (target <= 100 us). NumPy inputs in both, the calibrated FE law (the default).
 """
 
 from __future__ import annotations
@@ -150,6 +156,77 @@ def rows(n: int = 10_000, n_ref: int = 20, seed: int = 0) -> list[dict]:
             speedup=n / dt / base_rate,
         )
     )
+    return out + api_rows()
+
+
+def _interleaved(fns: Sequence, repeats: int) -> list[float]:
+    """Median seconds per call of each function, called in turn (warm-up first), block_until_ready."""
+    import jax
+
+    for fn in fns:
+        jax.block_until_ready(fn())
+    times: list[list[float]] = [[] for _ in fns]
+    for _ in range(repeats):
+        for i, fn in enumerate(fns):
+            t0 = time.perf_counter()
+            jax.block_until_ready(fn())
+            times[i].append(time.perf_counter() - t0)
+    return [float(np.median(t)) for t in times]
+
+
+def api_rows(n_curves: int = 1000, n_points: int = 1_000_000, repeats: int = 7, seed: int = 0) -> list[dict]:
+    """Eager vs jit of the public functions (issue 14 targets), ratios from interleaved medians."""
+    import jax
+
+    from tissuemech.reduced import spheroid as sp
+
+    rng = np.random.default_rng(seed)
+    out = []
+    kw = dict(radius=A0, alpha=0.2, displacement=D, ramp_time=TR, branches=[(0.4, 200.0)])
+    for fn in (sp.force, sp.nominal_stress):
+        for label, C in (("1 curve", 150.0), (f"{n_curves} curves", rng.uniform(100.0, 300.0, n_curves))):
+            jitted = jax.jit(lambda t, c, fn=fn: fn(t, C=c, **kw))
+            te, tj = _interleaved(
+                [lambda fn=fn, C=C: fn(TIMES, C=C, **kw), lambda jitted=jitted, C=C: jitted(TIMES, C)],
+                repeats if label == "1 curve" else 3,
+            )
+            out.append(
+                dict(
+                    path=f"spheroid.{fn.__name__} jit(traced t) vs eager, {label} x {TIMES.size} times",
+                    eager_s=te,
+                    jit_s=tj,
+                    ratio=tj / te,
+                    target="jit/eager <= 1",
+                )
+            )
+    d = rng.uniform(0.0, 150e-6, n_points)
+    one = 100e-6
+    cases = (
+        ("equilibrium_force", lambda v: sp.equilibrium_force(v, radius=A0, C=150.0, alpha=0.2), "fem"),
+        (
+            "equilibrium_force",
+            lambda v: sp.equilibrium_force(v, radius=A0, C=150.0, alpha=0.2, equilibrium="hertz"),
+            "hertz",
+        ),
+        ("midplane_radius", lambda v: sp.midplane_radius(v, radius=A0, alpha=0.2, midplane="fem"), "fem"),
+        ("midplane_radius", lambda v: sp.midplane_radius(v, radius=A0, alpha=0.2), "incompressible"),
+    )
+    for name, fn, law in cases:
+        jitted = jax.jit(fn)
+        te, tj = _interleaved([lambda fn=fn: fn(d), lambda jitted=jitted: jitted(d)], repeats)
+        te1, tj1 = _interleaved([lambda fn=fn: fn(one), lambda jitted=jitted: jitted(one)], 200)
+        out.append(
+            dict(
+                path=f"spheroid.{name} ({law}) eager vs jit",
+                points=n_points,
+                eager_s=te,
+                jit_s=tj,
+                ratio=te / tj,
+                target="eager/jit <= 1.5; N=1 <= 100 us",
+                eager_us_at_1=te1 * 1e6,
+                jit_us_at_1=tj1 * 1e6,
+            )
+        )
     return out
 
 
