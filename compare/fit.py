@@ -392,13 +392,15 @@ def _builder(records, radius, ramp_time, n_branches, equilibrium, model):
 
 
 def _table(equilibrium: Any):
-    """The master-curve object behind an equilibrium spec ("fem" or a MasterCurve), else None."""
+    """The master-curve object behind an equilibrium spec ("fem", a MasterCurve or a FEMTable), else None."""
     from tissuemech.reduced import spheroid
 
     if isinstance(equilibrium, str) and equilibrium == "fem":
         return spheroid.master_curve()
     if isinstance(equilibrium, spheroid.MasterCurve):
         return equilibrium
+    if isinstance(equilibrium, spheroid.FEMTable):
+        return equilibrium.master
     return None
 
 
