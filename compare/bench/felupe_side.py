@@ -1,0 +1,228 @@
+"""FElupe side by side (issue 14): the two scenes in FElupe and in tissuemech, wall time and error, same run.
+
+``python -m tissuemech.compare.bench felupe [--quick] [--repeats N]`` needs FElupe (``pip install felupe``;
+it is not a dependency of tissuemech: the comparison runs only where it imports). Every figure is
+measured in the same run, the two codes interleaved (median of the repeats; the machine is shared, so
+only the ratios mean much). Scaled units in both codes (lengths / A or a0, stresses / C).
+
+Blastula: hollow sphere A = 50 um, B = 60 um, Fung C = 200 Pa, alpha = 0.2, kappa = 2.2 GPa, follower
+pressure on the deformed inner surface, 50 equal load steps to 1 kPa; error = max over the steps of
+|lambda_a - lambda_a exact| (``tissuemech.reduced.blastula.inner_stretch``, the incompressible shell),
+lambda_a = the area-weighted mean |x|/|X| over the inner surface (as ``fem.blastula`` measures it).
+FElupe: axisymmetric ``FieldAxisymmetric`` on 9-node biquadratic quads (3 x 3 Gauss points) mapped from
+(rho, theta), ``SolidBodyNearlyIncompressible`` (FElupe's recommended nearly incompressible solid:
+Hu-Washizu with a cell-constant pressure and volume ratio, condensed per cell), the isochoric Fung law
+W = C/alpha (exp(alpha (Ibar1 - 3)) - 1) as a ``Hyperelastic`` user material (tensortrax automatic
+differentiation), ``SolidBodyPressure`` (follower) on the inner surface, ``Job`` with its Newton
+(relative force tolerance 1e-10) and its default sparse solver.
+
+Spheroid: ball a0 = 500 um, C = 200 Pa, alpha = 0.2, static compression between frictionless rigid plates
+to delta/(2 a0) = 0.3; error = max over x in (0.1, 0.2, 0.3) of |F / F_ref - 1|, F_ref from tissuemech on
+``--ref-level`` (default 3). FElupe: the same quarter section (the project's ``ball_section`` O-grid,
+its 9-node quads converted), ``SolidBodyNearlyIncompressible``, the plate as ``ContactRigidPlane``
+(frictionless, penalty; multiplier from the mean stiffness of the solid, scale ``--penalty``) driven by
+its centre point in equal steps.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+import numpy as np
+
+A, B, C, ALPHA, KAPPA = 50e-6, 60e-6, 200.0, 0.2, 2.2e9
+A0 = 500e-6
+VERBOSE = 0
+PRESSURES = np.linspace(20.0, 1000.0, 50)
+
+
+def _felupe():
+    try:
+        import felupe
+
+        return felupe
+    except ImportError:
+        return None
+
+
+def _fung_iso(Cg, C10, alpha):
+    """Isochoric Fung energy of the right Cauchy-Green tensor (tensortrax math)."""
+    import tensortrax.math as tm
+
+    I1 = tm.linalg.det(Cg) ** (-1 / 3) * tm.trace(Cg)
+    return C10 / alpha * (tm.exp(alpha * (I1 - 3)) - 1)
+
+
+def _inner_stretch_quad(points, disp, edges):
+    """Area-weighted mean |x|/|X| over a curve given by 3-node edges (rows: end, mid, end) in (z, r)."""
+    from tissuemech.fem.forms import line_shape
+
+    xi, wq = np.polynomial.legendre.leggauss(4)
+    N, dN = line_shape(3, xi)
+    X = points[edges]  # (ne, 3, 2)
+    x = X + disp[edges]
+    Xq, xq = np.einsum("aq,eai->eqi", N, X), np.einsum("aq,eai->eqi", N, x)
+    ds = np.linalg.norm(np.einsum("aq,eai->eqi", dN, X), axis=-1)
+    w = Xq[..., 1] * ds * wq  # radius (component 2 in FElupe) x arc length
+    lam = np.linalg.norm(xq, axis=-1) / np.linalg.norm(Xq, axis=-1)
+    return float(np.sum(lam * w) / np.sum(w))
+
+
+def _fung_total(Cg, C10, alpha, bulk):
+    """Fung isochoric energy + bulk/2 (J - 1)^2 (tensortrax math), for ``ThreeFieldVariation``."""
+    import tensortrax.math as tm
+
+    J = tm.sqrt(tm.linalg.det(Cg))
+    I1 = J ** (-2 / 3) * tm.trace(Cg)
+    return C10 / alpha * (tm.exp(alpha * (I1 - 3)) - 1) + bulk / 2 * (J - 1) ** 2
+
+
+def blastula_felupe(fem, n_r: int, n_t: int, pressures=PRESSURES, tol: float = 1e-6, formulation: str = "upJ"):
+    """(dofs, wall [s], inner stretch per pressure) of the FElupe blastula on n_r x n_t cells.
+
+    formulation "upJ": ``FieldsMixed`` (Q2 displacement, bilinear discontinuous pressure and volume ratio) +
+    ``ThreeFieldVariation`` of the total energy (FElupe's mixed u-p-J); "ni": ``SolidBodyNearlyIncompressible``
+    (cell-constant p and J condensed, the isochoric energy as the user material). ``tol``: FElupe's relative
+    force norm (1e-6 stops one iteration after |dx| ~ 1e-11: the round-off floor at kappa/C = 1.1e7 is ~6e-8)."""
+    t0 = time.perf_counter()
+    rect = fem.Rectangle(a=(1.0, 0.0), b=(B / A, 0.5 * np.pi), n=(n_r + 1, n_t + 1))
+    mesh = rect.add_midpoints_edges().add_midpoints_faces()  # quad9
+    rho, th = mesh.points[:, 0].copy(), mesh.points[:, 1].copy()
+    mesh.update(points=np.stack([rho * np.cos(th), rho * np.sin(th)], axis=1))  # (z axial, r radial)
+    region = fem.RegionBiQuadraticQuad(mesh)
+    if formulation == "upJ":
+        field = fem.FieldsMixed(region, n=3, axisymmetric=True)
+        umat = fem.ThreeFieldVariation(fem.Hyperelastic(_fung_total, C10=1.0, alpha=ALPHA, bulk=KAPPA / C))
+        solid = fem.SolidBody(umat, field)
+    else:
+        field = fem.FieldContainer([fem.FieldAxisymmetric(region, dim=2)])
+        umat = fem.Hyperelastic(_fung_iso, C10=1.0, alpha=ALPHA)
+        solid = fem.SolidBodyNearlyIncompressible(umat, field, bulk=KAPPA / C)
+    inner = np.isclose(rho, 1.0)
+    bnd = fem.RegionBiQuadraticQuadBoundary(mesh, mask=inner, ensure_3d=True)
+    field_p = fem.FieldContainer([fem.FieldAxisymmetric(bnd, dim=2)])
+    field_p.link(field)
+    boundaries = {
+        "axis": fem.Boundary(field[0], mask=np.isclose(th, 0.0), skip=(1, 0)),  # u_r = 0 on r = 0 (skip: free comp.)
+        "symmetry": fem.Boundary(field[0], mask=np.isclose(th, 0.5 * np.pi), skip=(0, 1)),  # u_z = 0 on z = 0
+    }
+    pressure = fem.SolidBodyPressure(field_p)
+    # inner-surface edges in theta order (end, mid, end) for the stretch measure
+    on = np.where(inner)[0]
+    on = on[np.argsort(th[on])]
+    edges = np.stack([on[0:-2:2], on[1:-1:2], on[2::2]], axis=1)
+    lam: list[float] = []
+    step = fem.Step(items=[solid, pressure], ramp={pressure: np.asarray(pressures) / C}, boundaries=boundaries)
+    job = fem.Job(
+        steps=[step],
+        plugins=[lambda context, state: lam.append(_inner_stretch_quad(mesh.points, field[0].values, edges))],
+    )
+    job.evaluate(tol=tol, verbose=VERBOSE)
+    wall = time.perf_counter() - t0
+    dofs = int(fem.dof.partition(field, boundaries)[1].size)  # unknowns of the linear system
+    return dofs, wall, np.array(lam)
+
+
+def blastula_ours(mesh, pressures=PRESSURES):
+    """(dofs, wall [s], inner stretch per pressure) of tissuemech.fem.blastula.inflate."""
+    from tissuemech.fem import blastula as fb
+
+    t0 = time.perf_counter()
+    r = fb.inflate(inner_radius=A, outer_radius=B, C=C, alpha=ALPHA, kappa=KAPPA, pressures=pressures, mesh=mesh)
+    wall = time.perf_counter() - t0
+    dofs = fb._setup(A, B, C, ALPHA, KAPPA, mesh).free.size
+    return dofs, wall, np.asarray(r.inner_stretch)
+
+
+def exact_inner_stretch(pressures=PRESSURES) -> np.ndarray:
+    from tissuemech.reduced.blastula import inner_stretch
+
+    return np.asarray(inner_stretch(np.asarray(pressures), inner_radius=A, outer_radius=B, C=C, alpha=ALPHA))
+
+
+def _row(code, mesh, dofs, wall, err, err2):
+    print(f"{code:16s} {mesh:10s} {dofs:7d} {wall:9.3f} {err:12.2e} {err2:12.2e}", flush=True)
+
+
+def _table(res: dict, head2: str) -> None:
+    """Print the rows, then the speed-up at the same or better error (column ``err_ref``)."""
+    print(f"{'code':16s} {'mesh':10s} {'dofs':>7s} {'wall [s]':>9s} {'err exact':>12s} {head2:>12s}")
+    for (code, m), v in res.items():
+        _row(code, m, v["dofs"], float(np.median(v["wall"])), v["err"], v["err_ref"])
+    ours = {k: v for k, v in res.items() if k[0] == "tissuemech"}
+    for (code, m), v in res.items():
+        if code == "tissuemech":
+            continue
+        w_f = float(np.median(v["wall"]))
+        ok = [
+            (float(np.median(o["wall"])), k[1], o["err_ref"]) for k, o in ours.items() if o["err_ref"] <= v["err_ref"]
+        ]
+        if ok:
+            w, mm, e = min(ok)
+            print(f"{code} {m} ({head2} {v['err_ref']:.2e}): tissuemech {mm} ({e:.2e}) is {w_f / w:.2f}x faster")
+        else:
+            print(f"{code} {m} ({head2} {v['err_ref']:.2e}): no tissuemech mesh of this run reaches that error")
+
+
+def blastula(fem, repeats: int, quick: bool) -> None:
+    print(
+        "\n## Blastula: 50-step sweep to 1 kPa (A 50 um, B 60 um, C 200 Pa, alpha 0.2, kappa 2.2 GPa); "
+        "error = max over the 50 pressures of |lambda_a - ref|"
+    )
+    print(
+        "err exact: vs the incompressible exact inner stretch (its floor at kappa = 2.2 GPa is ~4.4e-5 at 1 kPa: "
+        "the compressibility, lambda_a ~ 3.2); err conv: vs tissuemech on 16x32 (converged to 2e-7)"
+    )
+    exact = exact_inner_stretch()
+    ref = blastula_ours((16, 32))[2]
+    ours = [(2, 4), (4, 8), (8, 16)]
+    theirs = [("felupe u-p-J", (2, 4)), ("felupe u-p-J", (4, 8))] + ([] if quick else [("felupe u-p-J", (8, 16))])
+    theirs += [("felupe NI", (4, 8))] + ([] if quick else [("felupe NI", (8, 16))])
+    blastula_felupe(fem, 1, 2, pressures=PRESSURES[:2])  # warm-up (imports)
+    res: dict = {}
+
+    def put(code, m, d, w, lam):
+        key = (code, f"{m[0]}x{m[1]}")
+        v = res.setdefault(key, dict(dofs=d, wall=[]))
+        v["wall"].append(w)
+        v["err"], v["err_ref"] = float(np.max(np.abs(lam - exact))), float(np.max(np.abs(lam - ref)))
+
+    for _ in range(repeats):
+        for m in ours:
+            put("tissuemech", m, *blastula_ours(m))
+        for code, m in theirs:
+            put(code, m, *blastula_felupe(fem, *m, formulation="upJ" if "u-p-J" in code else "ni"))
+    _table(res, "err conv")
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(prog="python -m tissuemech.compare.bench felupe")
+    ap.add_argument("--quick", action="store_true", help="fewer meshes and repeats")
+    ap.add_argument("--repeats", type=int, default=None, help="interleaved repeats (default 3, quick 1)")
+    ap.add_argument("--only", choices=("blastula", "spheroid"), default=None)
+    a = ap.parse_args(argv)
+    fem = _felupe()
+    if fem is None:
+        print("felupe not installed: pip install felupe (the side-by-side comparison needs it)")
+        return
+    repeats = a.repeats or (1 if a.quick else 3)
+    print(f"# FElupe {fem.__version__} side by side (issue 14)")
+    print(f"load average (1, 5, 15 min): {', '.join(f'{v:.2f}' for v in os.getloadavg())} on {os.cpu_count()} CPUs")
+    try:
+        from threadpoolctl import threadpool_limits
+
+        limiter = threadpool_limits(limits=1, user_api="blas")
+    except ImportError:
+        limiter = None
+    try:
+        if a.only in (None, "blastula"):
+            blastula(fem, repeats, a.quick)
+    finally:
+        if limiter is not None:
+            limiter.restore_original_limits()
+
+
+if __name__ == "__main__":
+    main()
