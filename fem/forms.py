@@ -88,8 +88,8 @@ class _Pattern:
 
     def restricted(self, free: np.ndarray):
         """(src, template): K[free][:, free] (CSR, canonical) has the values ``data[src]`` of the full
-        pattern; built once per free set (``free`` sorted, unique), the template's arrays are the same
-        objects at every call (the solvers' plan caches hit by identity)."""
+        pattern; built once per free set (``free`` sorted, unique): the same pattern at every call (one
+        solver plan, no dropped zeros)."""
         key = free.tobytes()
         if key not in self._sub:
             new = np.full(self.n, -1, dtype=np.int64)
@@ -266,7 +266,7 @@ class Assembler:
         Returns:
             (r_int (ndof,), f_p (ndof,) at unit pressure, K): K = d(r_int - p f_p)/dx, CSR on the element
             pattern (the follower edges lie inside it; their values are added at their positions, explicit
-            zeros kept): the same indptr/indices objects at every call. Equals ``internal`` and
+            zeros kept): the same pattern at every call. Equals ``internal`` and
             ``follower_pressure`` combined as ``(K_int - p K_p)[free][:, free]`` to round-off.
         Raises:
             ValueError: ``tangent`` not True, False or "lazy"; edges whose dofs are outside the element pattern.
