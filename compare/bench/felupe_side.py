@@ -197,11 +197,104 @@ def blastula(fem, repeats: int, quick: bool) -> None:
     _table(res, "err conv")
 
 
+XS = (0.1, 0.2, 0.3)  # delta / (2 a0) where the spheroid forces are compared
+
+
+def spheroid_felupe(fem, n_core: int, n_radial: int, n_steps: int = 30, penalty: float = 100.0, tol: float = 1e-6):
+    """(dofs, wall [s], F / (C a0^2) at XS) of the FElupe spheroid static curve to 30 % on the project's O-grid
+    ``ball_section(a0, n_core, n_radial, grading=2, pole_grading=3)`` (its 9-node quads, 3 x 3 Gauss points)."""
+    from tissuemech.fem.mesh import ball_section
+
+    t0 = time.perf_counter()
+    am = ball_section(A0, n_core, n_radial, grading=2.0, pole_grading=3.0)
+    X = am.X.T  # (N, 2) in (R, Z)
+    ed = am.basis.element_dofs.T  # skfem quad9 order in (R, Z): corners ccw, edges 01 12 23 30, centre
+    cells = ed[:, [0, 3, 2, 1, 7, 6, 5, 4, 8]]  # (z, r) swaps the orientation: VTK quad9, ccw in (z, r)
+    pts = np.vstack([X[:, ::-1], [[1.0, 0.0]]])  # + the plate's centre point (z = 1, r = 0), in no cell
+    mesh = fem.Mesh(pts, cells, "quad9")
+    region = fem.RegionBiQuadraticQuad(mesh)
+    field = fem.FieldsMixed(region, n=3, axisymmetric=True)
+    umat = fem.ThreeFieldVariation(fem.Hyperelastic(_fung_total, C10=1.0, alpha=ALPHA, bulk=KAPPA / C))
+    solid = fem.SolidBody(umat, field)
+    cp = pts.shape[0] - 1
+    z, r = pts[:, 0], pts[:, 1]
+    top = np.where((np.abs(np.hypot(z, r) - 1.0) < 1e-9) & (z > 0.5))[0]
+    contact = fem.ContactRigidPlane(
+        field, points=top, centerpoint=cp, normal=[-1.0, 0.0], multiplier=penalty, items=[solid]
+    )
+    is_cp = np.arange(pts.shape[0]) == cp
+    boundaries = {
+        "axis": fem.Boundary(field[0], mask=(r == 0) & ~is_cp, skip=(1, 0)),  # u_r = 0 on the axis
+        "symmetry": fem.Boundary(field[0], mask=z == 0, skip=(0, 1)),  # u_z = 0 on the midplane
+        "plate_r": fem.Boundary(field[0], mask=is_cp, skip=(1, 0)),
+        "plate": fem.Boundary(field[0], mask=is_cp, skip=(0, 1)),
+    }
+    xs = np.linspace(0.0, 0.3, n_steps + 1)[1:]
+    force: list[float] = []
+
+    def record(context, state):
+        fz = np.asarray(contact.assemble.vector().todense()).ravel()[2 * cp]
+        force.append(abs(float(fz)))
+
+    step = fem.Step(items=[solid, contact], ramp={boundaries["plate"]: -xs}, boundaries=boundaries)
+    fem.Job(steps=[step], plugins=[record]).evaluate(tol=tol, verbose=VERBOSE)
+    wall = time.perf_counter() - t0
+    dofs = int(fem.dof.partition(field, boundaries)[1].size)
+    F = np.interp(XS, xs, np.array(force))
+    return dofs, wall, F
+
+
+def spheroid_ours(level):
+    """(dofs, wall [s], F / (C a0^2) at XS) of tissuemech.fem.spheroid.compress, static, 6 steps to 30 %."""
+    from tissuemech.fem.spheroid import compress
+
+    t0 = time.perf_counter()
+    r = compress(
+        radius=A0, C=C, alpha=ALPHA, branches=(), displacement=2 * A0 * 0.3, ramp_time=1.0, end_time=1.0,
+        static=True, mesh=level, n_static=6,
+    )  # fmt: skip
+    wall = time.perf_counter() - t0
+    dofs = 2 * r.mesh.basis.N + 3 * r.mesh.mesh.nelements
+    x = np.asarray(r.approach) / (2 * A0)
+    return dofs, wall, np.interp(XS, x, np.asarray(r.force) / (C * A0**2))
+
+
+def spheroid(fem, repeats: int, quick: bool, ref_level: int, penalty: float) -> None:
+    print(
+        "\n## Spheroid: static compression to delta/(2 a0) = 0.3 (a0 500 um, C 200 Pa, alpha 0.2, kappa 2.2 GPa); "
+        f"error = max over x in {XS} of |F / F_ref - 1|, F_ref: tissuemech level {ref_level}"
+    )
+    print(
+        f"FElupe: u-p-J, ContactRigidPlane (penalty, multiplier {penalty:g} x the mean stiffness), 30 equal steps; "
+        "tissuemech: exact contact on the edge-fitted levels, 6 steps"
+    )
+    ref = spheroid_ours(ref_level)[2]
+    ours = [0, 1, 2]
+    theirs = [(8, 6), (12, 8)] + ([] if quick else [(16, 12)])
+    res: dict = {}
+    for _ in range(repeats):
+        for lev in ours:
+            d, w, F = spheroid_ours(lev)
+            v = res.setdefault(("tissuemech", f"level {lev}"), dict(dofs=d, wall=[]))
+            v["wall"].append(w)
+            v["err"] = v["err_ref"] = float(np.max(np.abs(F / ref - 1)))
+        for m in theirs:
+            d, w, F = spheroid_felupe(fem, *m, penalty=penalty)
+            v = res.setdefault(("felupe u-p-J", f"{m[0]}x{m[1]}"), dict(dofs=d, wall=[]))
+            v["wall"].append(w)
+            v["err"] = v["err_ref"] = float(np.max(np.abs(F / ref - 1)))
+    _table(res, "err F")
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(prog="python -m tissuemech.compare.bench felupe")
     ap.add_argument("--quick", action="store_true", help="fewer meshes and repeats")
     ap.add_argument("--repeats", type=int, default=None, help="interleaved repeats (default 3, quick 1)")
     ap.add_argument("--only", choices=("blastula", "spheroid"), default=None)
+    ap.add_argument(
+        "--ref-level", type=int, default=None, help="tissuemech level of the spheroid reference (3; quick 2)"
+    )
+    ap.add_argument("--penalty", type=float, default=100.0, help="FElupe contact multiplier scale")
     a = ap.parse_args(argv)
     fem = _felupe()
     if fem is None:
@@ -219,6 +312,10 @@ def main(argv: list[str] | None = None) -> None:
     try:
         if a.only in (None, "blastula"):
             blastula(fem, repeats, a.quick)
+        if a.only in (None, "spheroid"):
+            spheroid(
+                fem, repeats, a.quick, a.ref_level if a.ref_level is not None else (2 if a.quick else 3), a.penalty
+            )
     finally:
         if limiter is not None:
             limiter.restore_original_limits()
