@@ -57,6 +57,11 @@ def line_shape(nn: int, xi: np.ndarray):
     return (np.array([xi * (xi - 1) / 2, 1 - xi**2, xi * (xi + 1) / 2]), np.array([xi - 0.5, -2 * xi, xi + 0.5]))
 
 
+def _eager(tangent) -> bool:
+    """True when the tangent is wanted now (True-like, not "lazy")."""
+    return not isinstance(tangent, str) and bool(tangent)
+
+
 class _Pattern:
     """COO -> CSR map built once: K.data = bincount(perm, values) is the whole global assembly."""
 
@@ -176,13 +181,14 @@ class Assembler:
             A = A + dfirst_from_second(extra_S)
         return f, P, A, q
 
-    def internal(self, u: np.ndarray, mat: Material, extra_S=None, iso_scale: float = 1.0, tangent: bool = True):
+    def internal(self, u: np.ndarray, mat: Material, extra_S=None, iso_scale: float = 1.0, tangent: bool | str = True):
         """Internal residual (ndof,) and tangent (CSR) of the elastic (+ extra) stress at x = (u, q).
 
         Args:
             u: the full unknown vector x = (u, q) (scaled).
             mat: scaled material; extra_S: fixed 2nd Piola stress (n_el, n_qp, 5) or None;
-            iso_scale: factor on the isochoric stress; tangent: False returns (r, None).
+            iso_scale: factor on the isochoric stress; tangent: False returns (r, None); "lazy" returns
+            (r, a zero-argument callable assembling K) for ``fem.newton`` (it calls it only when it needs K).
         Returns:
             (r, K): r (ndof,), K CSR (ndof, ndof) with the same canonical pattern at every call (the sparsity
             pattern is built once; only the values are assembled).
@@ -190,18 +196,13 @@ class Assembler:
         written in place, global values by one ``bincount`` over a precomputed COO -> CSR map.
         """
         f, q = self._fields(u)
-        P, A, J = cm.total_stress(
-            f,
-            mat.C,
-            mat.alpha,
-            q=q,
-            kappa=None if q is not None else mat.kappa,
-            iso_scale=iso_scale,
-            extra_S=extra_S,
-            weight=self.w,
-            tangent=tangent,
-        )
+        kw = dict(q=q, kappa=None if q is not None else mat.kappa, iso_scale=iso_scale, extra_S=extra_S, weight=self.w)
+        P, A, J = cm.total_stress(f, mat.C, mat.alpha, tangent=_eager(tangent), **kw)  # type: ignore[arg-type]
         r = self._residual(u, P, J, mat)
+        if tangent == "lazy":
+            return r, lambda: self._pattern.matrix(
+                self._tangent_values(f, cm.total_stress(f, mat.C, mat.alpha, tangent=True, **kw)[1], mat)  # type: ignore[arg-type]
+            )
         if not tangent:
             return r, None
         return r, self._pattern.matrix(self._tangent_values(f, A, mat))
@@ -271,14 +272,14 @@ class Assembler:
         Raises:
             ValueError: ``tangent`` not True, False or "lazy"; edges whose dofs are outside the element pattern.
         """
-        if tangent not in (True, False, "lazy"):
+        if not (tangent == "lazy" or isinstance(tangent, (bool, np.bool_))):
             raise ValueError(f"tangent must be True, False or 'lazy', got {tangent!r}")
         f, q = self._fields(u)
         kw = dict(q=q, kappa=None if q is not None else mat.kappa, iso_scale=iso_scale, extra_S=extra_S, weight=self.w)
-        P, A, J = cm.total_stress(f, mat.C, mat.alpha, tangent=tangent is True, **kw)  # type: ignore[arg-type]
+        P, A, J = cm.total_stress(f, mat.C, mat.alpha, tangent=_eager(tangent), **kw)  # type: ignore[arg-type]
         r = self._residual(u, P, J, mat)
         fp, _ = self._follower_values(u, 1.0, edges, tangent=False)
-        if tangent is False:
+        if not tangent:
             return r, fp, None
 
         def assemble(A=A):

@@ -273,6 +273,8 @@ def test_internal_follower_one_pattern_equals_separate_assembly():
         full = a.internal_follower(x, mat, p, inner, **kw)[2]
         assert abs(full - (Ki - p * Kp)).max() <= 1e-14 * abs(K0).max()
         assert a.internal_follower(x, mat, p, inner, tangent=False)[2] is None
+        r2, lazy_int = a.internal(x, mat, tangent="lazy", **kw)
+        assert np.array_equal(r2, ri) and np.array_equal(lazy_int().data, Ki.data)
         pats.append((K.indptr, K.indices))
     assert all(np.array_equal(ptr, pats[0][0]) and np.array_equal(ind, pats[0][1]) for ptr, ind in pats)  # one plan
     with pytest.raises(ValueError, match="tangent"):
