@@ -146,9 +146,9 @@ def _row(code, mesh, dofs, wall, err, err2):
     print(f"{code:16s} {mesh:10s} {dofs:7d} {wall:9.3f} {err:12.2e} {err2:12.2e}", flush=True)
 
 
-def _table(res: dict, head2: str) -> None:
+def _table(res: dict, head2: str, head1: str = "err exact") -> None:
     """Print the rows, then the speed-up at the same or better error (column ``err_ref``)."""
-    print(f"{'code':16s} {'mesh':10s} {'dofs':>7s} {'wall [s]':>9s} {'err exact':>12s} {head2:>12s}")
+    print(f"{'code':16s} {'mesh':10s} {'dofs':>7s} {'wall [s]':>9s} {head1:>12s} {head2:>12s}")
     for (code, m), v in res.items():
         _row(code, m, v["dofs"], float(np.median(v["wall"])), v["err"], v["err_ref"])
     ours = {k: v for k, v in res.items() if k[0] == "tissuemech"}
@@ -283,7 +283,7 @@ def spheroid(fem, repeats: int, quick: bool, ref_level: int, penalty: float) -> 
             v = res.setdefault(("felupe u-p-J", f"{m[0]}x{m[1]}"), dict(dofs=d, wall=[]))
             v["wall"].append(w)
             v["err"] = v["err_ref"] = float(np.max(np.abs(F / ref - 1)))
-    _table(res, "err F")
+    _table(res, "err F", "err F")  # (the reference level itself shows 0)
 
 
 def main(argv: list[str] | None = None) -> None:
