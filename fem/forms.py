@@ -57,12 +57,18 @@ def line_shape(nn: int, xi: np.ndarray):
     return (np.array([xi * (xi - 1) / 2, 1 - xi**2, xi * (xi + 1) / 2]), np.array([xi - 0.5, -2 * xi, xi + 0.5]))
 
 
+def _eager(tangent) -> bool:
+    """True when the tangent is wanted now (True-like, not "lazy")."""
+    return not isinstance(tangent, str) and bool(tangent)
+
+
 class _Pattern:
     """COO -> CSR map built once: K.data = bincount(perm, values) is the whole global assembly."""
 
     def __init__(self, rows: np.ndarray, cols: np.ndarray, n: int):
         key = rows.ravel().astype(np.int64) * n + cols.ravel()
         uniq, self.inv = np.unique(key, return_inverse=True)
+        self.keys = uniq
         self.indptr = np.searchsorted(uniq // n, np.arange(n + 1)).astype(np.int32)
         self.indices = (uniq % n).astype(np.int32)
         self.n, self.nnz = n, uniq.size
@@ -70,10 +76,37 @@ class _Pattern:
         self._tpl.has_sorted_indices = True
         self.indices, self.indptr = self._tpl.indices, self._tpl.indptr
 
+        self._sub: dict = {}
+
     def matrix(self, values: np.ndarray) -> sp.csr_matrix:
         """CSR matrix with the summed values on the precomputed (canonical) pattern."""
         data = np.bincount(self.inv, weights=values.ravel(), minlength=self.nnz)
         return self._tpl._with_data(data, copy=False)
+
+    def positions(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """Positions in the stored values of the entries (rows, cols) (ValueError if one is not in the pattern)."""
+        key = rows.ravel().astype(np.int64) * self.n + cols.ravel()
+        pos = np.searchsorted(self.keys, key)
+        if pos.size and (pos.max() >= self.nnz or not np.array_equal(self.keys[pos], key)):
+            raise ValueError("entries outside the assembled sparsity pattern (a boundary curve off the mesh?)")
+        return pos
+
+    def restricted(self, free: np.ndarray):
+        """(src, template): K[free][:, free] (CSR, canonical) has the values ``data[src]`` of the full
+        pattern; built once per free set (``free`` sorted, unique): the same pattern at every call (one
+        solver plan, no dropped zeros)."""
+        key = free.tobytes()
+        if key not in self._sub:
+            new = np.full(self.n, -1, dtype=np.int64)
+            new[free] = np.arange(free.size)
+            r, c = new[self.keys // self.n], new[self.keys % self.n]
+            src = np.nonzero((r >= 0) & (c >= 0))[0]  # row-major order is kept (free is sorted)
+            m = free.size
+            indptr = np.searchsorted(r[src], np.arange(m + 1)).astype(np.int32)
+            tpl = sp.csr_matrix((np.zeros(src.size), c[src].astype(np.int32), indptr), shape=(m, m))
+            tpl.has_sorted_indices = True
+            self._sub[key] = (src, tpl)
+        return self._sub[key]
 
 
 class Assembler:
@@ -148,47 +181,56 @@ class Assembler:
             A = A + dfirst_from_second(extra_S)
         return f, P, A, q
 
-    def internal(self, u: np.ndarray, mat: Material, extra_S=None, iso_scale: float = 1.0, tangent: bool = True):
+    def internal(self, u: np.ndarray, mat: Material, extra_S=None, iso_scale: float = 1.0, tangent: bool | str = True):
         """Internal residual (ndof,) and tangent (CSR) of the elastic (+ extra) stress at x = (u, q).
 
         Args:
             u: the full unknown vector x = (u, q) (scaled).
             mat: scaled material; extra_S: fixed 2nd Piola stress (n_el, n_qp, 5) or None;
-            iso_scale: factor on the isochoric stress; tangent: False returns (r, None).
+            iso_scale: factor on the isochoric stress; tangent: False returns (r, None); "lazy" returns
+            (r, a zero-argument callable assembling K) for ``fem.newton`` (it calls it only when it needs K).
         Returns:
             (r, K): r (ndof,), K CSR (ndof, ndof) with the same canonical pattern at every call (the sparsity
             pattern is built once; only the values are assembled).
         One fused constitutive pass (``constitutive.total_stress``), weights folded in, element blocks
         written in place, global values by one ``bincount`` over a precomputed COO -> CSR map.
         """
-        ne, nq, _, nd = self.B.shape
-        ue = u[self.edofs]
-        f = np.matmul(self._B2, ue[:, :, None]).reshape(ne, nq, 5)
+        f, q = self._fields(u)
+        kw = dict(q=q, kappa=None if q is not None else mat.kappa, iso_scale=iso_scale, extra_S=extra_S, weight=self.w)
+        P, A, J = cm.total_stress(f, mat.C, mat.alpha, tangent=_eager(tangent), **kw)  # type: ignore[arg-type]
+        r = self._residual(u, P, J, mat)
+        if tangent == "lazy":
+            return r, lambda: self._pattern.matrix(
+                self._tangent_values(f, cm.total_stress(f, mat.C, mat.alpha, tangent=True, **kw)[1], mat)  # type: ignore[arg-type]
+            )
+        if not tangent:
+            return r, None
+        return r, self._pattern.matrix(self._tangent_values(f, A, mat))
+
+    def _fields(self, u: np.ndarray):
+        """(f, q) at the points: 5-comp F (ne, nq, 5) and the mixed field (ne, nq) or None."""
+        ne, nq = self.w.shape
+        f = np.matmul(self._B2, u[self.edofs][:, :, None]).reshape(ne, nq, 5)
         f += IDENTITY5
-        mixed = self.formulation == "mixed"
-        q = np.matmul(self.psi, u[self.qdofs][:, :, None])[..., 0] if mixed else None
-        P, A, J = cm.total_stress(
-            f,
-            mat.C,
-            mat.alpha,
-            q=q,
-            kappa=None if mixed else mat.kappa,
-            iso_scale=iso_scale,
-            extra_S=extra_S,
-            weight=self.w,
-            tangent=tangent,
-        )
+        q = np.matmul(self.psi, u[self.qdofs][:, :, None])[..., 0] if self.formulation == "mixed" else None
+        return f, q
+
+    def _residual(self, u: np.ndarray, P: np.ndarray, J: np.ndarray, mat: Material) -> np.ndarray:
+        """Global internal residual (ndof,) from the weighted stress P and J at the points."""
+        ne, nq = self.w.shape
         re = np.matmul(P.reshape(ne, 1, nq * 5), self._B2)[:, 0]
-        if mixed:
+        if self.formulation == "mixed":
             rq = np.matmul(self._psiT, ((J - 1.0) * self.w)[:, :, None])[..., 0]
             rq -= np.matmul(self.M, u[self.qdofs][:, :, None])[..., 0] / mat.kappa
             re = np.concatenate([re, rq], axis=1)
-        r = np.bincount(self._alld_flat, weights=re.ravel(), minlength=self.ndof)
-        if not tangent:
-            return r, None
+        return np.bincount(self._alld_flat, weights=re.ravel(), minlength=self.ndof)
+
+    def _tangent_values(self, f: np.ndarray, A: np.ndarray, mat: Material) -> np.ndarray:
+        """Element tangent blocks (ne, nd', nd') in ``alldofs`` order from the weighted A at the points."""
+        ne, nq, _, nd = self.B.shape
         AB = np.matmul(A, self.B).reshape(ne, nq * 5, nd)
-        if not mixed:
-            return r, self._pattern.matrix(np.matmul(self.Bt, AB))
+        if self.formulation != "mixed":
+            return np.matmul(self.Bt, AB)
         Ke = np.empty((ne, nd + 3, nd + 3))
         np.matmul(self.Bt, AB, out=Ke[:, :nd, :nd])
         a_, b_, c_, d_, e_ = (f[..., i] for i in range(5))
@@ -198,7 +240,71 @@ class Assembler:
         Ke[:, nd:, :nd] = G
         Ke[:, :nd, nd:] = G.transpose(0, 2, 1)
         np.multiply(self.M, -1.0 / mat.kappa, out=Ke[:, nd:, nd:])
-        return r, self._pattern.matrix(Ke)
+        return Ke
+
+    def internal_follower(
+        self,
+        u: np.ndarray,
+        mat: Material,
+        p: float,
+        edges: np.ndarray,
+        *,
+        free: np.ndarray | None = None,
+        extra_S: np.ndarray | None = None,
+        iso_scale: float = 1.0,
+        tangent: bool | str = True,
+    ):
+        """Internal forces, the follower force at unit pressure and the tangent of r_int - p f_p on ONE pattern.
+
+        Args:
+            u: the full unknown vector x = (u, q) (scaled); mat: scaled material.
+            p: follower pressure (scaled by C) in the tangent; edges: the loaded boundary curve (``mesh.edges``).
+            free: sorted unique dof indices: the tangent is restricted to K[free][:, free] by a gather cached per
+                free set (None: the full matrix).
+            extra_S, iso_scale: as in :meth:`internal`.
+            tangent: True (a CSR matrix), False (None) or "lazy": a zero-argument callable that assembles the
+                tangent when called (``fem.newton`` calls it only for states whose tangent it needs).
+        Returns:
+            (r_int (ndof,), f_p (ndof,) at unit pressure, K): K = d(r_int - p f_p)/dx, CSR on the element
+            pattern (the follower edges lie inside it; their values are added at their positions, explicit
+            zeros kept): the same pattern at every call. Equals ``internal`` and
+            ``follower_pressure`` combined as ``(K_int - p K_p)[free][:, free]`` to round-off.
+        Raises:
+            ValueError: ``tangent`` not True, False or "lazy"; edges whose dofs are outside the element pattern.
+        """
+        if not (tangent == "lazy" or isinstance(tangent, (bool, np.bool_))):
+            raise ValueError(f"tangent must be True, False or 'lazy', got {tangent!r}")
+        f, q = self._fields(u)
+        kw = dict(q=q, kappa=None if q is not None else mat.kappa, iso_scale=iso_scale, extra_S=extra_S, weight=self.w)
+        P, A, J = cm.total_stress(f, mat.C, mat.alpha, tangent=_eager(tangent), **kw)  # type: ignore[arg-type]
+        r = self._residual(u, P, J, mat)
+        fp, _ = self._follower_values(u, 1.0, edges, tangent=False)
+        if not tangent:
+            return r, fp, None
+
+        def assemble(A=A):
+            if A is None:  # lazy: the same kernel with the tangent (P is recomputed, identical)
+                A = cm.total_stress(f, mat.C, mat.alpha, tangent=True, **kw)[1]  # type: ignore[arg-type]
+            Ke = self._tangent_values(f, A, mat)
+            _, Kp = self._follower_values(u, 1.0, edges, tangent=True)
+            inv = self._follower_inv(edges)
+            data = np.bincount(inv, weights=np.concatenate([Ke.ravel(), -p * Kp.ravel()]), minlength=self._pattern.nnz)
+            if free is None:
+                return self._pattern._tpl._with_data(data, copy=False)
+            src, tpl = self._pattern.restricted(np.asarray(free))
+            return tpl._with_data(data[src], copy=False)
+
+        return r, fp, (assemble if tangent == "lazy" else assemble())
+
+    def _follower_inv(self, edges: np.ndarray) -> np.ndarray:
+        """COO -> internal-pattern map of the element entries followed by the edge entries (cached)."""
+        key = ("inv", edges.tobytes(), edges.shape)
+        if key not in self._edge_cache:
+            d = np.stack([2 * edges, 2 * edges + 1], -1).reshape(edges.shape[0], -1)
+            rows = np.repeat(d[:, :, None], d.shape[1], 2)
+            cols = np.repeat(d[:, None, :], d.shape[1], 1)
+            self._edge_cache[key] = np.concatenate([self._pattern.inv, self._pattern.positions(rows, cols)])
+        return self._edge_cache[key]
 
     def _internal_reference(
         self, u: np.ndarray, mat: Material, extra_S=None, iso_scale: float = 1.0, tangent: bool = True
@@ -243,7 +349,14 @@ class Assembler:
 
     def follower_pressure(self, u: np.ndarray, p: float, edges: np.ndarray, tangent: bool = True):
         """Equivalent nodal force of pressure p on the deformed curve and d(force)/du (CSR)."""
-        Nl, dNl, wq, dofs, pattern = self._edge(edges)
+        F, K = self._follower_values(u, p, edges, tangent)
+        if K is None:
+            return F, None
+        return F, self._edge(edges)[4].matrix(K)
+
+    def _follower_values(self, u: np.ndarray, p: float, edges: np.ndarray, tangent: bool = True):
+        """(F (ndof,), edge blocks (ned, nn, 2, nn, 2) of dF/du or None) of the follower pressure p."""
+        Nl, dNl, wq, dofs, _ = self._edge(edges)
         X = self.mesh.X
         x = X[:, edges] + np.stack([u[dofs[..., 0]], u[dofs[..., 1]]])  # (2, ned, nn)
         r = np.einsum("aq,ea->eq", Nl, x[0])
@@ -260,7 +373,7 @@ class Assembler:
         K[:, :, 0, :, 0] = np.einsum("aq,bq,eq->eab", Nl, Nl, c * zp)
         K[:, :, 0, :, 1] = np.einsum("aq,bq,eq->eab", Nl, dNl, c * r)
         K[:, :, 1, :, 0] = -np.einsum("aq,bq,eq->eab", Nl, Nl, c * rp) - np.einsum("aq,bq,eq->eab", Nl, dNl, c * r)
-        return F, pattern.matrix(K)
+        return F, K
 
     def surface_mean_stretch(self, u: np.ndarray, edges: np.ndarray) -> float:
         """Mean of |x|/|X| over a reference surface (area weights 2 pi R ds): a spherical stretch."""

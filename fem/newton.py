@@ -7,6 +7,8 @@ sparse). Hooks:
 * ``free``: indices of the unknowns (condensation of Dirichlet dofs: the others keep x0's values).
   Contact with Lagrange multipliers or any constraint is added by the caller by returning an
   augmented (r, K) from ``fun`` (x then holds the multipliers too).
+* Lazy tangent: ``fun`` may return K as a zero-argument callable; it is called only when a solve needs
+  that state's tangent (an accepted trial state that converges never assembles its tangent).
 * ``admissible(x) -> None | str``: a reason string rejects the state (J <= 0, inside-out...);
   the step is cut back (halved) like a step whose residual is not finite or grows > ``growth``-fold.
 * Convergence needs BOTH |r_free| <= rtol * ref_norm + atol AND |dx| <= xtol * (1 + |x|)
@@ -163,6 +165,11 @@ def _submatrix(K, free: np.ndarray | None):
     plan = _sub_cache().get(K, free.tobytes(), lambda: _gather_plan(K, free, free, "csr"))
     src, ind, ptr = plan
     return sp.csr_matrix((K.data[src], ind, ptr), shape=(n, n))
+
+
+def _tangent(K):
+    """K itself, or the matrix of a lazy tangent (a zero-argument callable returned by ``fun``)."""
+    return K() if callable(K) and not sp.issparse(K) else K
 
 
 class NewtonError(RuntimeError):
@@ -386,7 +393,7 @@ def newton(
         )
     for it in range(1, max_iter + 1):
         try:
-            dx = (solver or sparse_solve)(_submatrix(K, sub), -r[free])
+            dx = (solver or sparse_solve)(_submatrix(_tangent(K), sub), -r[free])
         except np.linalg.LinAlgError:
             raise NewtonError(
                 "singular tangent matrix",

@@ -245,3 +245,71 @@ def test_solver_backends_and_submatrix_cache():
             nw.set_backend("umfpack")
     finally:
         nw.set_backend("auto" if old == "auto" else old)
+
+
+def test_internal_follower_one_pattern_equals_separate_assembly():
+    """K_int - p K_p assembled on the element pattern and gathered to the free dofs equals the sparse sum and
+    fancy slice it replaces (to round-off); the lazy tangent is the eager one; the pattern never changes (explicit zeros kept)."""
+    m = shell_section(50e-6, 75e-6, 3, 6)
+    a = Assembler(m)
+    mat = Material(1.0, 0.2, 1e7)
+    x = np.zeros(a.ndof)
+    x[: a.n_u] = 2e-3 * np.sin(np.arange(a.n_u))
+    x[a.n_u :] = 0.1 * np.cos(np.arange(a.ndof - a.n_u))
+    inner = m.edges["inner"]
+    free = np.setdiff1d(np.arange(a.ndof), np.concatenate([2 * m.nodes["axis"], 2 * m.nodes["symmetry"] + 1]))
+    S0 = 0.05 * np.ones(a.w.shape + (5,))
+    pats = []
+    for p, kw in ((0.0, {}), (0.7, {}), (1.3, dict(extra_S=S0, iso_scale=1.2))):
+        ri, Ki = a.internal(x, mat, **kw)
+        fp, Kp = a.follower_pressure(x, 1.0, inner)
+        K0 = (Ki - p * Kp).tocsr()[free][:, free]
+        r, f1, K = a.internal_follower(x, mat, p, inner, free=free, **kw)
+        assert np.array_equal(r, ri) and np.array_equal(f1, fp)
+        assert sp.isspmatrix_csr(K) and K.has_canonical_format and K.shape == (free.size, free.size)
+        assert abs(K - K0).max() <= 1e-14 * abs(K0).max()
+        _, _, lazy = a.internal_follower(x, mat, p, inner, free=free, tangent="lazy", **kw)
+        assert callable(lazy) and np.array_equal(lazy().data, K.data)
+        full = a.internal_follower(x, mat, p, inner, **kw)[2]
+        assert abs(full - (Ki - p * Kp)).max() <= 1e-14 * abs(K0).max()
+        assert a.internal_follower(x, mat, p, inner, tangent=False)[2] is None
+        r2, lazy_int = a.internal(x, mat, tangent="lazy", **kw)
+        assert np.array_equal(r2, ri) and np.array_equal(lazy_int().data, Ki.data)
+        pats.append((K.indptr, K.indices))
+    assert all(np.array_equal(ptr, pats[0][0]) and np.array_equal(ind, pats[0][1]) for ptr, ind in pats)  # one plan
+    with pytest.raises(ValueError, match="tangent"):
+        a.internal_follower(x, mat, 1.0, inner, tangent="yes")
+
+
+def test_newton_lazy_tangent_same_answer_fewer_assemblies():
+    """A lazy tangent gives the same Newton iterates as the eager one, and the converged state's tangent is
+    never assembled."""
+    from tissuemech.fem import blastula as fb
+    from tissuemech.fem.newton import symmetric_solve
+
+    prob = fb._setup(50e-6, 75e-6, 200.0, 0.2, 2.2e9, (3, 6))
+    calls = {"eager": 0, "lazy": 0}
+
+    def eager(x, lam):
+        calls["eager"] += 1
+        return prob.rk(x, lam)[:2]
+
+    def lazy(x, lam):
+        r, K, _ = prob.rk(x, lam, tangent="lazy")
+
+        def K1():
+            calls["lazy"] += 1
+            return K()
+
+        return r, K1
+
+    x0 = np.zeros(prob.free.size)
+    xe, xl = x0, x0
+    opts = dict(ref_norm=prob.ref, rtol=1e-10, xtol=1e-9, atol=prob.floor * 2, admissible=prob.admissible)
+    for lam in (0.5, 1.0, 2.0):
+        se = newton(lambda x: eager(x, lam), xe, solver=symmetric_solve, **opts)
+        sl = newton(lambda x: lazy(x, lam), xl, solver=symmetric_solve, **opts)
+        assert se.iterations == sl.iterations and np.allclose(se.residuals, sl.residuals, rtol=1e-12, atol=0)
+        assert np.abs(sl.x - se.x).max() <= 1e-12 * np.abs(se.x).max()
+        xe, xl = se.x, sl.x
+    assert calls["lazy"] == calls["eager"] - 3  # one unused tangent per solve (the converged state's)

@@ -11,6 +11,7 @@ SUITES = {
     "fem-spheroid": "tissuemech.compare.bench.fem_spheroid",
     "hybrid": "tissuemech.compare.bench.hybrid",
     "fem-perf": "tissuemech.compare.bench.fem_perf",
+    "felupe": "tissuemech.compare.bench.felupe_side",
 }
 
 

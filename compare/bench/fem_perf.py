@@ -10,10 +10,15 @@ in the same run (interleaved repeats, medians; the machine is shared, so only th
    best ordering among the installed factorisations (SuperLU COLAMD, SuperLU symmetric mode with MMD on
    K + K^T, qdldl if installed) + the element matmuls B^T A B at the rate numpy reaches. The ratio is
    what issue 14 targets (<= 1.5);
+2b. the blastula 4x8 sweep with the one-pattern tangent (K_int - p K_p on the element pattern, cached
+   free-dof gather, lazy tangent in ``newton``) against the separate assembly it replaced, interleaved: the
+   speed-up and the largest difference of the answers;
 3. the sparse direct solvers side by side on the default and fine tangents (bare factorisation and the
    ``symmetric_solve`` path, which reuses its ordering / symbolic analysis), pypardiso if installed;
 4. wall time vs dofs (blastula meshes to ~2e4 dofs, 10-step sweep; spheroid levels, static 10 % curve)
    and the fitted exponent above 1.5e3 dofs (issue 14 target <= 1.2).
+
+FElupe side by side is the separate suite ``felupe`` (``compare/bench/felupe_side.py``).
 """
 
 from __future__ import annotations
@@ -138,6 +143,44 @@ def per_iteration(repeats: int) -> None:
     print(f"symmetric_solve backend in use: {nw.backend()} (available: {', '.join(nw.available_backends())})")
 
 
+def _rk_separate(self, uf, p, tangent=True, iso_scale: float = 1.0, extra_S=None):
+    """The blastula residual/tangent as it was before issue 14's one-pattern path: internal + follower
+    assembled separately, a scipy sparse sum and a fancy slice K[free][:, free], the tangent always eager."""
+    u = self.full(uf)
+    ri, Ki = self.asm.internal(u, self.mat, extra_S=extra_S, iso_scale=iso_scale, tangent=bool(tangent))
+    fp, Kp = self.asm.follower_pressure(u, 1.0, self.inner, tangent=bool(tangent))
+    r = (ri - p * fp)[self.free]
+    if not tangent:
+        return r, None, -fp[self.free]
+    return r, (Ki - p * Kp).tocsr()[self.free][:, self.free], -fp[self.free]
+
+
+def one_pattern(repeats: int) -> None:
+    """Blastula 4x8 sweep: the one-pattern + lazy-tangent path vs the separate assembly, same run."""
+    print("\n## Blastula 4x8 sweep: one pattern + cached free-dof gather + lazy tangent vs separate (same run)")
+    ps = np.linspace(20.0, 1000.0, 50)
+    kw = dict(inner_radius=A, outer_radius=B, C=C, alpha=0.2, pressures=ps)
+    new_rk = fb._Problem.rk
+    walls: dict = {"separate": [], "one pattern": []}
+    out = {}
+    for _ in range(repeats + 2):
+        for name, rk in (("separate", _rk_separate), ("one pattern", new_rk)):
+            fb._Problem.rk = rk  # type: ignore[method-assign]
+            try:
+                t = time.perf_counter()
+                res = fb.inflate(**kw)
+                walls[name].append(time.perf_counter() - t)
+            finally:
+                fb._Problem.rk = new_rk  # type: ignore[method-assign]
+            out[name] = (int(np.sum(res.newton_iterations)), np.asarray(res.inner_stretch))
+    w0, w1 = float(np.median(walls["separate"])), float(np.median(walls["one pattern"]))
+    (i0, s0), (i1, s1) = out["separate"], out["one pattern"]
+    print(
+        f"separate {1e3 * w0 / i0:.2f} ms/iter, one pattern {1e3 * w1 / i1:.2f} ms/iter ({i0} / {i1} iterations): "
+        f"{w0 / w1:.2f}x; max |inner stretch difference| {np.max(np.abs(s1 - s0)):.1e}"
+    )
+
+
 def solvers(repeats: int, quick: bool) -> None:
     print("\n## Sparse direct solvers on the reduced tangents (ms, median; solve paths include refinement)")
     mats = {"blastula 4x8": _blastula_state((4, 8))[2], "spheroid L1": _spheroid_state(1)[2]}
@@ -225,12 +268,16 @@ def main(argv: list[str] | None = None) -> None:
         print("BLAS threads: threadpoolctl not installed; set OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 yourself")
     try:
         per_iteration(repeats)
+        one_pattern(repeats)
         solvers(repeats, a.quick)
         scaling(a.quick)
     finally:
         if limiter is not None:
             limiter.restore_original_limits()
-    print("\nFElupe side by side: not part of this benchmark yet (see notes/issue14.md).")
+    print(
+        "\nFElupe side by side: python -m tissuemech.compare.bench felupe [--quick] (needs pip install felupe; "
+        "same-run ratios at the same or better error)"
+    )
 
 
 if __name__ == "__main__":
