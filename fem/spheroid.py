@@ -305,12 +305,13 @@ class _EdgeFit:
             self._cache[key] = _Problem(fitted_mesh(self.a0, self.level, key), self.mat, [], [], self.rtol)
         return self._cache[key]
 
-    def _state(self, prob: _Problem, d: float, guesses, load):
+    def _state(self, prob: _Problem, d: float, guesses, load, visc=None):
         pl, n_act = prob.plane, 2 * self.k + 1
         act = np.zeros(pl.nodes.size, bool)
         act[:n_act] = True
         fr = np.setdiff1d(prob.free, pl.dofs[act], assume_unique=True)
-        fun = lambda x: prob.asm.internal(x, prob.mat)
+        iso_scale, extra = (1.0, None) if visc is None else visc(prob)
+        fun = lambda x: prob.asm.internal(x, prob.mat, extra_S=extra, iso_scale=iso_scale)
         X = prob.m.X
         affine = np.zeros(prob.asm.ndof)  # a uniform squeeze: always admissible
         affine[0 : prob.asm.n_u : 2], affine[1 : prob.asm.n_u : 2] = 0.5 * d * X[0], -d * X[1]
@@ -327,7 +328,7 @@ class _EdgeFit:
                     xg,
                     free=fr,
                     load=load,
-                    ref_norm=max(32.0 / 3.0 * d**1.5, 1e-12),
+                    ref_norm=max(32.0 / 3.0 * d**1.5 * iso_scale, 1e-12),
                     rtol=self.rtol,
                     xtol=1e-9,
                     atol=prob.floor,
@@ -338,10 +339,10 @@ class _EdgeFit:
             except NewtonError as e:
                 err = e
                 continue
-            r = prob.asm.internal(res.x, prob.mat, tangent=False)[0]
+            r = prob.asm.internal(res.x, prob.mat, extra_S=extra, iso_scale=iso_scale, tangent=False)[0]
             N = pl.normal_force(r)
             F = float(N[act].sum())
-            st = _State(res.x, act, None, d, r, 1.0, None, 1)
+            st = _State(res.x, act, None, d, r, iso_scale, extra, 1)
             phi = float(N[n_act - 1]) / max(F, 1e-300)
             # a tensile node inside the last contact element: the zone is too large (a spurious root of
             # N_edge = 0 with the element lifting off in its middle): report it as negative
@@ -355,15 +356,17 @@ class _EdgeFit:
             return st, res.iterations, phi
         raise err if err is not None else NewtonError("no admissible initial guess", load=load, hint="reduce the step")
 
-    def solve(self, d: float, edge0: float, x0, load, tol: float = EDGE_TOL):
+    def solve(self, d: float, edge0: float, x0, load, tol: float = EDGE_TOL, visc=None):
         """(problem, state, edge, Newton iterations, solves) at plate displacement d (scaled).
 
         Safeguarded secant on phi(edge): phi > 0 (edge node pressed) means the zone is too small, phi < 0
         (edge node or its element pulled) too large; the root is kept inside that bracket (bisection when a
-        secant step leaves it)."""
+        secant step leaves it). ``visc(problem) -> (iso_scale, extra_S)``: the algorithmic viscoelastic stress of a
+        time step on that problem's mesh (``fem.viscoelastic.algorithmic`` of the history mapped onto its Gauss
+        points); None: elastic."""
         lo, hi = 1e-4, EDGE_MAX  # phi(lo) > 0 > phi(hi) (bounds until evaluated)
         e_a = float(np.clip(edge0, lo, hi))
-        st_a, its, phi_a = self._state(self.problem(e_a), d, [x0], load)
+        st_a, its, phi_a = self._state(self.problem(e_a), d, [x0], load, visc)
         n = 1
         if abs(phi_a) < tol:
             return self.problem(e_a), st_a, e_a, its, n
@@ -372,7 +375,7 @@ class _EdgeFit:
         step = float(np.clip(-phi_a / self.slope, -0.1, 0.1)) if self.slope < 0 else 0.03 * np.sign(phi_a)
         e_b = float(np.clip(e_a * (1.0 + step), lo, hi))
         for _ in range(30):
-            st_b, it, phi_b = self._state(self.problem(e_b), d, [st_a.x, x0], load)
+            st_b, it, phi_b = self._state(self.problem(e_b), d, [st_a.x, x0], load, visc)
             its, n = its + it, n + 1
             if abs(phi_b) < tol:
                 if phi_b != phi_a and e_b != e_a:
@@ -444,6 +447,147 @@ def _static_fitted(fit: _EdgeFit, d_of_t, times, load_of_t, max_cuts: int = 6):
             if not targets:
                 out.append((tt, prob, st, its, n, _time.perf_counter() - w0, e))
     return out
+
+
+def _lagrange2(t: np.ndarray, node: np.ndarray):
+    """1D quadratic Lagrange basis on the nodes 0, 1/2, 1 of [0, 1]: values and derivatives at t (n,) for
+    each node position ``node`` (9,) in {0, 1/2, 1}: (9, n) arrays."""
+    t, c = t[None, :], node[:, None]
+    v = np.where(c == 0.0, 2 * (t - 0.5) * (t - 1), np.where(c == 1.0, 2 * t * (t - 0.5), -4 * t * (t - 1)))
+    d = np.where(c == 0.0, 4 * t - 3, np.where(c == 1.0, 4 * t - 1, -8 * t + 4))
+    return v, d
+
+
+def _local_coordinates(xe: np.ndarray, ref: np.ndarray, x: np.ndarray, iters: int = 30) -> np.ndarray:
+    """Reference coordinates (2, n) in [0, 1]^2 (outside it for points outside; Newton, bounded to [-1, 2]) of
+    the points x (2, n) in Q2 elements with node coordinates xe (2, 9, n), reference nodes ref (2, 9)."""
+    X = np.full(x.shape, 0.5)
+    for _ in range(iters):
+        va, da = _lagrange2(X[0], ref[0])
+        vb, db = _lagrange2(X[1], ref[1])
+        F = np.einsum("ikn,kn->in", xe, va * vb)
+        J0 = np.einsum("ikn,kn->in", xe, da * vb)  # dx/dxi
+        J1 = np.einsum("ikn,kn->in", xe, va * db)  # dx/deta
+        det = J0[0] * J1[1] - J1[0] * J0[1]
+        r = x - F
+        dX = np.stack([J1[1] * r[0] - J1[0] * r[1], -J0[1] * r[0] + J0[0] * r[1]]) / det
+        X = np.clip(X + dX, -1.0, 2.0)
+        if np.max(np.abs(dX)) < 1e-13:
+            break
+    return X
+
+
+def _gauss_transfer(old: AxiMesh, new: AxiMesh) -> Callable[[np.ndarray], np.ndarray]:
+    """Map Gauss-point fields (..., n_el, n_qp, c) of ``old`` to the Gauss points of ``new`` (same quadrature)
+    by interpolation in the reference configuration: each new Gauss point is located in the old mesh (the
+    element of the same index first, else the nearest elements), and the old element's field is evaluated
+    there from its tensor-product quadratic through the element's 3 x 3 Gauss values (exact for fields
+    quadratic in the element's reference coordinates; slightly extrapolated for a point just outside the old
+    discretised boundary)."""
+    from scipy.spatial import cKDTree
+
+    bo, bn = old.basis, new.basis
+    xq = np.asarray(bn.mapping.F(bn.X))  # (2, n_el, n_qp)
+    ne, nq = xq.shape[1:]
+    pts = xq.reshape(2, -1)
+    n = pts.shape[1]
+    ref = np.asarray(bo.elem.doflocs, float).T  # (2, 9): the Q2 nodes in [0, 1]^2 (isoparametric geometry)
+    xe = bo.doflocs[:, bo.element_dofs]  # (2, 9, n_el)
+    own = np.repeat(np.arange(ne), nq)
+    loc = _local_coordinates(xe[:, :, own], ref, pts)
+    excess = np.max(np.maximum(np.maximum(-loc, loc - 1.0), 0.0), axis=0)
+    elem = own.copy()
+    out = np.flatnonzero(excess > 1e-10)
+    if out.size:
+        _, cand = cKDTree(xe.mean(axis=1).T).query(pts[:, out].T, k=min(12, ne))
+        best = excess[out].copy()
+        for j in range(cand.shape[1]):
+            todo = np.flatnonzero(best > 1e-10)  # points not yet inside an element
+            if not todo.size:
+                break
+            c = cand[todo, j]
+            lc = _local_coordinates(xe[:, :, c], ref, pts[:, out[todo]], iters=12)
+            ex = np.max(np.maximum(np.maximum(-lc, lc - 1.0), 0.0), axis=0)
+            better = ex < best[todo] - 1e-14
+            k = todo[better]
+            best[k], elem[out[k]], loc[:, out[k]] = ex[better], c[better], lc[:, better]
+    G = np.asarray(bo.X)  # (2, n_qp) in [0, 1]^2
+    powers = [(i, j) for i in range(3) for j in range(3)]
+    V = np.stack([G[0] ** i * G[1] ** j for i, j in powers], axis=1)  # (n_qp, 9)
+    P = np.stack([loc[0] ** i * loc[1] ** j for i, j in powers], axis=1)  # (n, 9)
+    L = P @ np.linalg.inv(V)  # (n, n_qp): weights of the old element's Gauss values
+    assert L.shape == (n, nq)
+
+    def transfer(f: np.ndarray) -> np.ndarray:
+        g = f[..., elem, :, :]  # (..., n, n_qp, c)
+        return np.einsum("np,...npc->...nc", L, g).reshape(f.shape[:-3] + (ne, nq, f.shape[-1]))
+
+    return transfer
+
+
+class _Fitted(NamedTuple):
+    """A converged time step on its own fitted mesh."""
+
+    state: _State
+    problem: _Problem
+    edge: float
+
+
+def _timed_fitted(fit: _EdgeFit, beta, tau, d_of_t, times, load_of_t, too_large=None):
+    """Time steps on fitted meshes (one per step): [(t, problem, state, its, passes, wall)].
+
+    Every step is an equilibrium state whose contact edge is a node of its own fitted mesh (``_EdgeFit``,
+    with the step's algorithmic viscoelastic stress). The meshes of one level share topology and numbering,
+    so the Maxwell variables (Q_m, S_iso^n per element and Gauss point) and the displacement guess are
+    carried from step to step by index: a material point's history is taken to the Gauss point of the same
+    index, which moves by a fraction of an element in the reference configuration when the edge moves (ramp
+    steps only; while the plate is held the edge stays where it is, the mesh with it). Only the combination
+    Q^n - beta g S_iso^n enters the next step's stress, and for dt << tau it is O(dt / tau) of the stress,
+    so the index carry-over error is that small fraction of the Gauss-point shift times the stress gradient.
+    """
+    p0 = fit.problem(0.5)
+    n0 = p0.asm.ndof
+    visco0 = ve.initial_state(beta.size, p0.asm.w.shape + (5,))
+    s0 = _Fitted(
+        _State(np.zeros(n0), np.zeros(p0.plane.nodes.size, bool), visco0, 0.0, np.zeros(n0), 1.0, None, 0), p0, 0.0
+    )
+
+    def step(t0, old: _Fitted, t1, prev):
+        d1, dt = d_of_t(t1), t1 - t0
+        s_old = old.state
+        guess = s_old.x
+        p_old = prev[1].state if prev is not None else None
+        if p_old is not None and abs(s_old.delta - p_old.delta) > 1e-14:
+            guess = s_old.x + (s_old.x - p_old.x) * (d1 - s_old.delta) / (s_old.delta - p_old.delta)
+        if old.edge <= 0.0:  # the first contact
+            e0 = _edge_guess([], [], d1)
+        elif p_old is not None and prev[1].edge > 0.0 and abs(s_old.delta - p_old.delta) > 1e-14:
+            e0 = _edge_guess([p_old.delta, s_old.delta], [prev[1].edge, old.edge], d1)
+        else:
+            e0 = old.edge * np.sqrt(d1 / s_old.delta) if s_old.delta > 0 else old.edge
+        history: dict = {}
+
+        def on(prob: _Problem) -> ve.MaxwellState:
+            """The Maxwell history of the old step at the Gauss points of prob's mesh."""
+            key = id(prob)
+            if key not in history:
+                if prob is old.problem or beta.size == 0 or not np.any(s_old.visco.S_iso):
+                    history[key] = s_old.visco
+                else:
+                    tr = _gauss_transfer(old.problem.m, prob.m)
+                    history[key] = ve.MaxwellState(tr(s_old.visco.Q), tr(s_old.visco.S_iso))
+            return history[key]
+
+        visc = lambda prob: ve.algorithmic(on(prob), beta, tau, dt)
+        prob, st, e, its, n = fit.solve(d1, e0, guess, load_of_t(t1), visc=visc)
+        S_new = prob.asm.iso_S(st.x, fit.mat)
+        visco = ve.update(on(prob), beta, tau, dt, S_new)
+        return _Fitted(st._replace(visco=visco, passes=n), prob, e), its
+
+    return [
+        (st.t, st.state.problem, st.state.state, st.iterations, st.state.state.passes, st.wall_s)
+        for st in march(step, s0, times, too_large=too_large)
+    ]
 
 
 def compress(
@@ -546,18 +690,11 @@ def compress(
         done = _static_fitted(fit, dscaled, times, load_of)
         steps = [(t, pr, st, its, n_s, w) for t, pr, st, its, n_s, w, _ in done]
         m = done[-1][1].m
+    elif fit is not None:  # every step on its own fitted mesh, the Maxwell history carried by index
+        steps = _timed_fitted(fit, beta, tau, dscaled, times, load_of, too_large)
+        m = steps[-1][1].m
     else:
-        if fit is not None:  # one mesh fitted to the contact edge of the held (largest) approach
-            d_hold = dscaled(end_time) if d_max is not None else max(dscaled(t) for t in np.linspace(0, end_time, 401))
-            if d_hold > 0:
-                edge = _static_fitted(
-                    fit, lambda t: d_hold * t, [1.0], lambda t: f"delta = {2 * a0 * d_hold * t * 1e6:.4g} um"
-                )[-1][6]
-            else:
-                edge = 0.5
-            m = fitted_mesh(a0, level, edge)
-        else:
-            m = make_mesh(mesh, a0)
+        m = make_mesh(mesh, a0)
         prob = _Problem(m, mat, beta, tau, rtol)
         n0 = prob.asm.ndof
         pole = np.argmin(np.hypot(prob.plane.R, prob.plane.Z - 1.0))
@@ -587,7 +724,7 @@ def compress(
         want = set(range(len(steps)))
     for k, (t_k, prob, s, its_k, passes_k, wall_k) in enumerate(steps):
         F, Fr, rm, rc, rcn, vmm, vm, q, N, gmin, nmin = prob.observe(s)
-        if fit is not None and static:
+        if fit is not None:
             rc = rcn  # the edge node is the contact edge
         if F > 0 and abs(F - Fr) > FORCE_CHECK * abs(F) + 1e3 * prob.floor:
             raise RuntimeError(
