@@ -48,6 +48,7 @@ the outermost active node and the next one, from the gaps of the first free node
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable, Sequence
 from typing import NamedTuple
 
@@ -64,6 +65,8 @@ from tissuemech.fem.newton import NewtonError, newton, symmetric_solve
 from tissuemech.fem.output import SpheroidField, SpheroidResult
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
 from tissuemech.reduced.material import validate_branches, validate_material, validate_positive
+
+log = logging.getLogger(__name__)
 
 __all__ = ["compress", "make_mesh", "fitted_mesh", "MESHES", "LEVELS", "hertz_force"]
 
@@ -411,8 +414,27 @@ def _edge_guess(ds: list, es: list, d: float) -> float:
     return es[-1] + (es[-1] - es[-2]) * (s - s1) / (s1 - s0)
 
 
+def _beyond_fit(es: list, e_next: float, err: Exception | None = None) -> bool:
+    """Whether the contact edge leaves the fitted range (the pole block): the predicted next edge is past
+    EDGE_MAX, or the edge iteration failed (``err``) with the last edge in the outer tenth of the range."""
+    if e_next > EDGE_MAX:
+        return True
+    return isinstance(err, ContactError) and bool(es) and es[-1] > 0.9 * EDGE_MAX
+
+
+def _warn_nodal(load: str) -> None:
+    log.warning(
+        "the contact edge leaves the fitted range of the pole block (%.3g deg) at %s: node-by-node contact on "
+        "the last fitted mesh from here on (the force carries the edge quantisation, ~1e-3)",
+        np.degrees(SPLIT * EDGE_MAX),
+        load,
+    )
+
+
 def _static_fitted(fit: _EdgeFit, d_of_t, times, load_of_t, max_cuts: int = 6):
-    """Static states on fitted meshes at the load fractions ``times``: [(t, problem, state, its, passes, wall, edge)]."""
+    """Static states on fitted meshes at the load fractions ``times``: [(t, problem, state, its, passes, wall,
+    edge)]. Where the contact edge leaves the fitted range (``_beyond_fit``), the remaining states are solved with
+    node-by-node contact on the last fitted mesh (a logged warning; their edge is NaN)."""
     import time as _time
 
     out: list[tuple] = []
@@ -420,6 +442,7 @@ def _static_fitted(fit: _EdgeFit, d_of_t, times, load_of_t, max_cuts: int = 6):
     es: list[float] = []
     xs: list[np.ndarray] = []
     t_done = 0.0
+    nodal: tuple | None = None  # (problem, state, previous state) once the contact is node by node
     for t in times:
         targets, cuts = [t], 0
         while targets:
@@ -431,9 +454,24 @@ def _static_fitted(fit: _EdgeFit, d_of_t, times, load_of_t, max_cuts: int = 6):
                 guess = xs[-1]
                 if len(xs) > 1 and ds[-1] != ds[-2]:
                     guess = xs[-1] + (xs[-1] - xs[-2]) * (d - ds[-1]) / (ds[-1] - ds[-2])
+            e_next = _edge_guess(ds, es, d)
             try:
-                prob, st, e, its, n = fit.solve(d, _edge_guess(ds, es, d), guess, load_of_t(tt))
-            except NewtonError:
+                if nodal is None and out and _beyond_fit(es, e_next):
+                    raise ContactError("the contact edge leaves the fitted range", load=load_of_t(tt))
+                if nodal is None:
+                    prob, st, e, its, n = fit.solve(d, e_next, guess, load_of_t(tt))
+                else:
+                    prob, s_last, s_prev = nodal
+                    st, its = prob.step(s_last, d, None, s_prev, load_of_t(tt))
+                    e, n = float("nan"), st.passes
+            except NewtonError as err:
+                if nodal is None and out and _beyond_fit(es, e_next, err):
+                    _warn_nodal(load_of_t(tt))
+                    p_last, s_last = out[-1][1], out[-1][2]
+                    shape = p_last.asm.w.shape + (5,)
+                    s_last = s_last._replace(visco=ve.initial_state(0, shape))
+                    nodal = (p_last, s_last, None)
+                    continue
                 cuts += 1
                 if cuts > max_cuts:
                     raise
@@ -441,9 +479,12 @@ def _static_fitted(fit: _EdgeFit, d_of_t, times, load_of_t, max_cuts: int = 6):
                 continue
             targets.pop()
             t_done = tt
-            ds.append(d)
-            es.append(e)
-            xs.append(st.x)
+            if nodal is None:
+                ds.append(d)
+                es.append(e)
+                xs.append(st.x)
+            else:
+                nodal = (nodal[0], st, nodal[1])
             if not targets:
                 out.append((tt, prob, st, its, n, _time.perf_counter() - w0, e))
     return out
@@ -559,9 +600,11 @@ def _timed_fitted(fit: _EdgeFit, beta, tau, d_of_t, times, load_of_t, too_large=
         p_old = prev[1].state if prev is not None else None
         if p_old is not None and abs(s_old.delta - p_old.delta) > 1e-14:
             guess = s_old.x + (s_old.x - p_old.x) * (d1 - s_old.delta) / (s_old.delta - p_old.delta)
-        if old.edge <= 0.0:  # the first contact
+        if np.isnan(old.edge):  # node-by-node contact (beyond the fitted range)
+            e0 = float("nan")
+        elif old.edge <= 0.0:  # the first contact
             e0 = _edge_guess([], [], d1)
-        elif p_old is not None and prev[1].edge > 0.0 and abs(s_old.delta - p_old.delta) > 1e-14:
+        elif p_old is not None and prev[1].edge > 0.0 and abs(s_old.delta - p_old.delta) > 1e-14:  # nan: False
             e0 = _edge_guess([p_old.delta, s_old.delta], [prev[1].edge, old.edge], d1)
         else:
             e0 = old.edge * np.sqrt(d1 / s_old.delta) if s_old.delta > 0 else old.edge
@@ -578,14 +621,32 @@ def _timed_fitted(fit: _EdgeFit, beta, tau, d_of_t, times, load_of_t, too_large=
                     history[key] = ve.MaxwellState(tr(s_old.visco.Q), tr(s_old.visco.S_iso))
             return history[key]
 
+        def nodal() -> tuple[_Fitted, int]:
+            """Node-by-node contact on the previous step's mesh (beyond the fitted range)."""
+            prob = old.problem
+            if not np.isnan(old.edge):
+                _warn_nodal(load_of_t(t1))
+            iso_scale, extra = ve.algorithmic(s_old.visco, beta, tau, dt)
+            sol = prob.solve(s_old, d1, iso_scale, extra, guess, load_of_t(t1))
+            visco = ve.update(s_old.visco, beta, tau, dt, prob.asm.iso_S(sol.x, fit.mat))
+            st = _State(sol.x, sol.active, visco, d1, sol.residual, iso_scale, extra, sol.sets)
+            return _Fitted(st, prob, float("nan")), sol.iterations
+
+        if np.isnan(old.edge) or (old.edge > 0.0 and e0 > EDGE_MAX):
+            return nodal()
         visc = lambda prob: ve.algorithmic(on(prob), beta, tau, dt)
-        prob, st, e, its, n = fit.solve(d1, e0, guess, load_of_t(t1), visc=visc)
+        try:
+            prob, st, e, its, n = fit.solve(d1, e0, guess, load_of_t(t1), visc=visc)
+        except NewtonError as err:
+            if old.edge > 0.0 and _beyond_fit([old.edge], e0, err):
+                return nodal()
+            raise
         S_new = prob.asm.iso_S(st.x, fit.mat)
         visco = ve.update(on(prob), beta, tau, dt, S_new)
         return _Fitted(st._replace(visco=visco, passes=n), prob, e), its
 
     return [
-        (st.t, st.state.problem, st.state.state, st.iterations, st.state.state.passes, st.wall_s)
+        (st.t, st.state.problem, st.state.state, st.iterations, st.state.state.passes, st.wall_s, st.state.edge)
         for st in march(step, s0, times, too_large=too_large)
     ]
 
@@ -686,13 +747,14 @@ def compress(
     def load_of(t1):
         return f"delta = {dfun(t1) * 1e6:.4g} um" if static else f"t = {t1:.6g} s, delta = {dfun(t1) * 1e6:.4g} um"
 
-    if fit is not None and static:
-        done = _static_fitted(fit, dscaled, times, load_of)
+    if fit is not None:  # every state / step on its own fitted mesh
+        if static:
+            done = _static_fitted(fit, dscaled, times, load_of)
+        else:  # the Maxwell history interpolated onto each step's mesh
+            done = _timed_fitted(fit, beta, tau, dscaled, times, load_of, too_large)
         steps = [(t, pr, st, its, n_s, w) for t, pr, st, its, n_s, w, _ in done]
+        modes = tuple("fitted" if np.isfinite(e) else "nodal" for *_, e in done)
         m = done[-1][1].m
-    elif fit is not None:  # every step on its own fitted mesh, the Maxwell history carried by index
-        steps = _timed_fitted(fit, beta, tau, dscaled, times, load_of, too_large)
-        m = steps[-1][1].m
     else:
         m = make_mesh(mesh, a0)
         prob = _Problem(m, mat, beta, tau, rtol)
@@ -713,6 +775,7 @@ def compress(
             (st.t, prob, st.state, st.iterations, st.state.passes, st.wall_s)
             for st in march(step, s0, times, too_large=too_large)
         ]
+        modes = ("nodal",) * len(steps)
 
     L2 = C * a0**2
     rows, fields = [], []
@@ -724,7 +787,7 @@ def compress(
         want = set(range(len(steps)))
     for k, (t_k, prob, s, its_k, passes_k, wall_k) in enumerate(steps):
         F, Fr, rm, rc, rcn, vmm, vm, q, N, gmin, nmin = prob.observe(s)
-        if fit is not None:
+        if modes[k] == "fitted":
             rc = rcn  # the edge node is the contact edge
         if F > 0 and abs(F - Fr) > FORCE_CHECK * abs(F) + 1e3 * prob.floor:
             raise RuntimeError(
@@ -792,5 +855,6 @@ def compress(
             branches=tuple((float(b), float(t)) for b, t in br),
             ramp_time=None if static else float(ramp_time),
             end_time=None if static else float(end_time),
+            contact=modes,
         ),
     )

@@ -115,10 +115,12 @@ def test_contact_force_equals_midplane_reaction_and_signorini(fig10_coarse):
     r = fig10_coarse
     assert np.all(r.force > 0)
     assert np.max(np.abs(r.force - r.reaction_force) / r.force) < 1e-6
-    assert np.all(r.min_gap >= -1e-12 * A0) and np.all(r.min_contact_force >= -1e-9 * r.force)
+    # every step on its own fitted mesh: the edge node's multiplier vanishes to EDGE_TOL (1e-4) of the force
+    assert r.parameters["contact"] == ("fitted",) * r.time.size
+    assert np.all(r.min_gap >= -1e-12 * A0) and np.all(r.min_contact_force >= -2e-4 * r.force)
     # multipliers compressive on the active nodes (exactly zero elsewhere), at every stored state
     for f in r.fields:
-        assert np.all(f.contact_nodal_force >= -1e-9 * f.contact_nodal_force.sum())
+        assert np.all(f.contact_nodal_force >= -2e-4 * f.contact_nodal_force.sum())
         # no node of the surface above the plate z = a0 - delta/2
         z = f.deformed_nodes[:, 1]
         assert np.max(z) <= A0 - 25e-6 + 1e-12 * A0
