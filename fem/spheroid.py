@@ -20,7 +20,7 @@ Inside, lengths are scaled by a0, stresses by C, forces by C a0^2.
 * ``static=True``: branches and times are ignored; the steps are equilibrium states from delta = 0 to
   ``displacement`` (``n_static`` equal steps, default 0.02 in delta/(2 a0) on a level, cut back on failure):
   the F_eq(delta) curve; ``time`` then holds the load fraction delta/displacement. On a level every state
-  has its own mesh (same topology and numbering); the result's ``mesh`` is the last state's.
+  has its own mesh (same topology and numbering); the result's ``mesh`` is the last state's (time runs too).
 * ``mesh``: "coarse", "default", "fine" or a level 0..4 (0 = coarse, 1 = default, 2 = fine; ``LEVELS``
   gives (n_core, n_radial, surface grading, n_contact, n_equator) of ``fitted_mesh``; 3 x 3 Gauss points):
   CONTACT-EDGE-FITTED meshes. Static runs solve every state on its own mesh whose surface node
@@ -28,8 +28,13 @@ Inside, lengths are scaled by a0, stresses by C, forces by C a0^2.
   condition at the edge (its nodal multiplier N_edge = 0, to ``EDGE_TOL`` of the force; the force is
   stationary in the edge position there): the plate force is a smooth function of delta and converges
   smoothly under refinement (no node-to-node jitter; levels 1..4 are self-similar, h ~ 1/n_core). Time
-  runs use one mesh, fitted to the edge of the static state at the held (largest) approach, with the
-  active-set contact below (the edge moves during the ramp, not in the hold). Or an ``AxiMesh`` from
+  runs do the same at every time step (the step's algorithmic viscoelastic stress in the edge condition):
+  the Maxwell history (Q_m, S_iso per Gauss point) is interpolated onto each new mesh's Gauss points in the
+  reference configuration (the old element's quadratic through its 3 x 3 Gauss values), so it stays tied to
+  material points while the mesh follows the edge; while the plate is held the edge and the mesh stay put
+  (no interpolation). Beyond the fitted range (edge past SPLIT * EDGE_MAX = 50.6 deg from the pole, about
+  delta/(2 a0) = 0.49) the remaining states / steps use node-by-node contact on the last fitted mesh (a
+  logged warning; ``parameters["contact"]`` gives "fitted" or "nodal" per step). Or an ``AxiMesh`` from
   ``fem.mesh.ball_section`` (built with length_scale = radius): a fixed mesh with node-by-node contact
   (its force carries the edge quantisation, ~0.2 %).
 * ``field_times``: times (s) at which the deformed mesh, von Mises and pressure fields are stored
@@ -41,7 +46,7 @@ Outputs per converged step: plate force from the contact multipliers (sum of the
 active nodes; they include the 2 pi R of the axisymmetric volume element, so this is the force on the
 whole plate), the midplane reaction (must be equal: checked to 1e-6 relative, else RuntimeError),
 midplane radius (deformed equator), nominal stress F / (pi r_mid^2), volume-averaged von Mises stress
-(deformed volume), contact radius (static runs on a level: the edge node; else an edge estimate between
+(deformed volume), contact radius (fitted states: the edge node; else an edge estimate between
 the outermost active node and the next one, from the gaps of the first free nodes;
 ``contact_radius_node``: the outermost active node itself).
 """
