@@ -504,10 +504,11 @@ def _lagrange2(t: np.ndarray, node: np.ndarray):
     return v, d
 
 
-def _local_coordinates(xe: np.ndarray, ref: np.ndarray, x: np.ndarray, iters: int = 30) -> np.ndarray:
-    """Reference coordinates (2, n) in [0, 1]^2 (outside it for points outside; Newton, bounded to [-1, 2]) of
-    the points x (2, n) in Q2 elements with node coordinates xe (2, 9, n), reference nodes ref (2, 9)."""
-    X = np.full(x.shape, 0.5)
+def _local_coordinates(xe: np.ndarray, ref: np.ndarray, x: np.ndarray, iters: int = 30, start=None) -> np.ndarray:
+    """Reference coordinates (2, n) in [0, 1]^2 (outside it for points outside; Newton from ``start``, default
+    the element centre, bounded to [-1, 2]) of the points x (2, n) in Q2 elements with node coordinates
+    xe (2, 9, n), reference nodes ref (2, 9)."""
+    X = np.full(x.shape, 0.5) if start is None else np.array(start, float)
     for _ in range(iters):
         va, da = _lagrange2(X[0], ref[0])
         vb, db = _lagrange2(X[1], ref[1])
@@ -540,19 +541,19 @@ def _gauss_transfer(old: AxiMesh, new: AxiMesh) -> Callable[[np.ndarray], np.nda
     ref = np.asarray(bo.elem.doflocs, float).T  # (2, 9): the Q2 nodes in [0, 1]^2 (isoparametric geometry)
     xe = bo.doflocs[:, bo.element_dofs]  # (2, 9, n_el)
     own = np.repeat(np.arange(ne), nq)
-    loc = _local_coordinates(xe[:, :, own], ref, pts)
+    loc = _local_coordinates(xe[:, :, own], ref, pts, start=np.tile(np.asarray(bn.X, float), (1, ne)))
     excess = np.max(np.maximum(np.maximum(-loc, loc - 1.0), 0.0), axis=0)
     elem = own.copy()
     out = np.flatnonzero(excess > 1e-10)
     if out.size:
-        _, cand = cKDTree(xe.mean(axis=1).T).query(pts[:, out].T, k=min(12, ne))
+        _, cand = cKDTree(xe.mean(axis=1).T).query(pts[:, out].T, k=min(8, ne))
         best = excess[out].copy()
         for j in range(cand.shape[1]):
             todo = np.flatnonzero(best > 1e-10)  # points not yet inside an element
             if not todo.size:
                 break
             c = cand[todo, j]
-            lc = _local_coordinates(xe[:, :, c], ref, pts[:, out[todo]], iters=12)
+            lc = _local_coordinates(xe[:, :, c], ref, pts[:, out[todo]], iters=10)
             ex = np.max(np.maximum(np.maximum(-lc, lc - 1.0), 0.0), axis=0)
             better = ex < best[todo] - 1e-14
             k = todo[better]
