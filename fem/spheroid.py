@@ -40,7 +40,11 @@ Inside, lengths are scaled by a0, stresses by C, forces by C a0^2.
 * ``field_times``: times (s) at which the deformed mesh, von Mises and pressure fields are stored
   (they become step times; static runs: load fractions delta/displacement in (0, 1], the stored field is
   the closest step); the last step is always stored. ``field_times="all"``: every converged step
-  (for ``SpheroidResult.to_pvd``).
+  (for ``SpheroidResult.to_pvd``). On a level every state has its own fitted mesh of the same topology; a
+  stored field is given on the result's ``mesh`` (the last state's): ``deformed_nodes`` are the state's deformed
+  node positions (m) and ``displacement`` = deformed_nodes - the result mesh's reference positions, so warping
+  the result's mesh (ParaView, ``to_pvd``) shows the state's deformed shape (for the last state it is the
+  displacement itself).
 
 Outputs per converged step: plate force from the contact multipliers (sum of the nodal reactions of the
 active nodes; they include the 2 pi R of the axisymmetric volume element, so this is the force on the
@@ -821,11 +825,14 @@ def compress(
         if k in want:
             w = prob.asm.w
             u = s.x[: prob.asm.n_u].reshape(-1, 2) * a0
+            xd = prob.m.X.T * a0 + u
+            if prob.m is not m:  # an earlier state's own fitted mesh: same topology, given on the result's mesh
+                u = xd - m.X.T * a0
             fields.append(
                 SpheroidField(
                     time=t_k,
                     displacement=u,
-                    deformed_nodes=prob.m.X.T * a0 + u,
+                    deformed_nodes=xd,
                     von_mises=(vm * w).sum(1) / w.sum(1) * C,
                     hydrostatic_pressure=-(q * w).sum(1) / w.sum(1) * C,
                     contact_nodal_force=N * L2,
