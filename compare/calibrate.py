@@ -16,8 +16,11 @@ the discretisation error = max relative difference of f against an independent f
 ``check_alphas``, and the residual of the small-x basis fit h = 1 + sum_k c_k s^k).
 
 ``python -m tissuemech.compare.calibrate [--out PATH] [--store DIR] [--n-x N] [--x-max X] [--alphas a,b,..]
-[--mesh M] [--error-mesh M] [--check-alphas a,b,..]`` regenerates it through ``compare.batch`` (resumable
-with ``--store``).
+[--mesh M] [--error-mesh M] [--check-alphas a,b,..] [--reference JSON]`` regenerates it through ``compare.batch``
+(resumable with ``--store``). With ``--reference`` (converged Richardson forces, e.g. notes/issue10_reference.json)
+the metadata also gets ``model_error_rel`` = half the table's largest error against that reference (the relative
+1-sigma error of F_eq that ``compare.fit`` adds with ``model_error="auto"``; the finer-level check alone does not
+set it).
 """
 
 from __future__ import annotations
@@ -39,6 +42,7 @@ __all__ = [
     "sqrt_basis",
     "write",
     "load",
+    "reference_error",
     "main",
     "DEFAULT_ALPHAS",
     "CHECK_ALPHAS",
@@ -224,6 +228,33 @@ def load(path: str | Path = DEFAULT_OUT) -> tuple[MasterCurves, dict]:
         return MasterCurves(z["x"], z["alpha"], z["f"], z["g"]), json.loads(str(z["metadata"]))
 
 
+def reference_error(table: str | Path, reference: dict) -> tuple[float, str]:
+    """Largest |f_table / f_ref - 1| of a written table over converged reference points: (error, point name).
+
+    ``reference``: {"alpha A x X": {"reference": f_ref, ...}, ...} (f = F_eq/(C a0^2); the format of
+    ``compare.bench.fem_spheroid.reference``; other keys are ignored), e.g. notes/issue10_reference.json.
+    Points outside the table's x or alpha range are skipped. Raises ValueError when none is inside.
+    """
+    from tissuemech.reduced import spheroid
+
+    mc = spheroid.master_curve(str(table))
+    curves, _ = load(table)
+    worst, at = -1.0, ""
+    for name, v in reference.items():
+        parts = name.split()
+        if len(parts) != 4 or parts[0] != "alpha" or parts[2] != "x" or not isinstance(v, dict):
+            continue
+        a, x = float(parts[1]), float(parts[3])
+        if not (curves.alpha.min() <= a <= curves.alpha.max() and 0 < x <= curves.x.max()):
+            continue
+        e = abs(float(mc.f(x, a)) / float(v["reference"]) - 1.0)
+        if e > worst:
+            worst, at = e, name
+    if worst < 0:
+        raise ValueError("the reference has no point 'alpha A x X' inside the table's x and alpha range")
+    return worst, at
+
+
 def _count(text: str) -> int:
     try:
         v = int(text)
@@ -273,6 +304,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     ap.add_argument("--check-alphas", default=",".join(str(a) for a in CHECK_ALPHAS))
     ap.add_argument("--degree", type=int, default=8, help="degree in sqrt(x) of the small-x basis fit (a check)")
+    ap.add_argument(
+        "--reference",
+        default=None,
+        help="JSON of converged (Richardson) reference forces {'alpha A x X': {'reference': f}} (e.g. "
+        "notes/issue10_reference.json): the table's error against it sets metadata model_error_rel = max |error| / 2",
+    )
     a = ap.parse_args(list(sys.argv[1:] if argv is None else argv))
     try:
         alphas = [float(v) for v in a.alphas.split(",")]
@@ -313,6 +350,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         definition="f = F_eq/(C a0^2), g = r_mid/a0, x = delta/(2 a0) (total approach delta)",
     )
     write(a.out, raw, meta)
+    if a.reference:
+        ref_err, ref_at = reference_error(a.out, json.loads(Path(a.reference).read_text()))
+        # the relative 1-sigma error of F_eq the fits add to their noise model (compare.fit model_error="auto"):
+        # the largest error against the converged reference, taken as a 2-sigma bound
+        meta.update(
+            model_error_rel=ref_err / 2,
+            model_error_basis=f"half the largest |f_table / f_ref - 1| = {ref_err:.3g} (at {ref_at}) over the "
+            f"converged reference {a.reference}, taken as a 2-sigma bound",
+        )
+        write(a.out, raw, meta)
+        print(f"error against the converged reference {a.reference}: {ref_err:.2e} at {ref_at}")
     print(
         f"wrote {a.out}: {len(raw.alpha)} alphas x {len(raw.x)} points (x up to {raw.x[-1]:g}); "
         f"discretisation error of f vs level {a.error_mesh}: {err if err is not None else 'not estimated'}"

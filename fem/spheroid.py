@@ -10,6 +10,7 @@ forces by C a0^2 (``fem.problem.SceneProblem``). Contact-edge-fitted meshes: :fu
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable, Sequence
 from typing import NamedTuple
 
@@ -26,6 +27,8 @@ from tissuemech.fem.output import SpheroidField, SpheroidResult
 from tissuemech.fem.problem import SPHEROID_MARGIN, SceneProblem, check_mesh, mesh_spec, roundoff_floor, secant
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
 from tissuemech.reduced.material import validate_branches, validate_material, validate_positive
+
+log = logging.getLogger(__name__)
 
 __all__ = ["compress", "make_mesh", "fitted_mesh", "MESHES", "LEVELS", "hertz_force"]
 
@@ -203,7 +206,7 @@ class _Problem(SceneProblem):
         """Equilibrium with exact contact under the plate at h = 1 - d1 (scaled), from ``guess``, with the
         step's branch stresses; the active set starts from ``s0.active``. Returns ``ContactSolution``."""
         h = 1.0 - d1
-        fun = lambda x: self.asm.internal(x, self.mat, extra_S=extra, iso_scale=iso_scale)
+        fun = lambda x: self.asm.internal(x, self.mat, extra_S=extra, iso_scale=iso_scale, tangent="lazy")
         ref = max(32.0 / 3.0 * max(d1, 1e-6) ** 1.5 * iso_scale, 1e-12)
         res = lambda x: self.asm.internal(x, self.mat, extra_S=extra, iso_scale=iso_scale, tangent=False)[0]
         sol = self.plane.solve(
@@ -305,12 +308,13 @@ class _EdgeFit:
             self._cache[key] = _Problem(fitted_mesh(self.a0, self.level, key), self.mat, [], [], self.rtol)
         return self._cache[key]
 
-    def _state(self, prob: _Problem, d: float, guesses, load):
+    def _state(self, prob: _Problem, d: float, guesses, load, visc=None):
         pl, n_act = prob.plane, 2 * self.k + 1
         act = np.zeros(pl.nodes.size, bool)
         act[:n_act] = True
         fr = np.setdiff1d(prob.free, pl.dofs[act], assume_unique=True)
-        fun = lambda x: prob.asm.internal(x, prob.mat)
+        iso_scale, extra = (1.0, None) if visc is None else visc(prob)
+        fun = lambda x: prob.asm.internal(x, prob.mat, extra_S=extra, iso_scale=iso_scale, tangent="lazy")
         X = prob.m.X
         affine = np.zeros(prob.asm.ndof)  # a uniform squeeze: always admissible
         affine[0 : prob.asm.n_u : 2], affine[1 : prob.asm.n_u : 2] = 0.5 * d * X[0], -d * X[1]
@@ -327,7 +331,7 @@ class _EdgeFit:
                     xg,
                     free=fr,
                     load=load,
-                    ref_norm=max(32.0 / 3.0 * d**1.5, 1e-12),
+                    ref_norm=max(32.0 / 3.0 * d**1.5 * iso_scale, 1e-12),
                     rtol=self.rtol,
                     xtol=1e-9,
                     atol=prob.floor,
@@ -338,10 +342,10 @@ class _EdgeFit:
             except NewtonError as e:
                 err = e
                 continue
-            r = prob.asm.internal(res.x, prob.mat, tangent=False)[0]
+            r = prob.asm.internal(res.x, prob.mat, extra_S=extra, iso_scale=iso_scale, tangent=False)[0]
             N = pl.normal_force(r)
             F = float(N[act].sum())
-            st = _State(res.x, act, None, d, r, 1.0, None, 1)
+            st = _State(res.x, act, None, d, r, iso_scale, extra, 1)
             phi = float(N[n_act - 1]) / max(F, 1e-300)
             # a tensile node inside the last contact element: the zone is too large (a spurious root of
             # N_edge = 0 with the element lifting off in its middle): report it as negative
@@ -355,15 +359,17 @@ class _EdgeFit:
             return st, res.iterations, phi
         raise err if err is not None else NewtonError("no admissible initial guess", load=load, hint="reduce the step")
 
-    def solve(self, d: float, edge0: float, x0, load, tol: float = EDGE_TOL):
+    def solve(self, d: float, edge0: float, x0, load, tol: float = EDGE_TOL, visc=None):
         """(problem, state, edge, Newton iterations, solves) at plate displacement d (scaled).
 
         Safeguarded secant on phi(edge): phi > 0 (edge node pressed) means the zone is too small, phi < 0
         (edge node or its element pulled) too large; the root is kept inside that bracket (bisection when a
-        secant step leaves it)."""
+        secant step leaves it). ``visc(problem) -> (iso_scale, extra_S)``: the algorithmic viscoelastic stress of a
+        time step on that problem's mesh (``fem.viscoelastic.algorithmic`` of the history mapped onto its Gauss
+        points); None: elastic."""
         lo, hi = 1e-4, EDGE_MAX  # phi(lo) > 0 > phi(hi) (bounds until evaluated)
         e_a = float(np.clip(edge0, lo, hi))
-        st_a, its, phi_a = self._state(self.problem(e_a), d, [x0], load)
+        st_a, its, phi_a = self._state(self.problem(e_a), d, [x0], load, visc)
         n = 1
         if abs(phi_a) < tol:
             return self.problem(e_a), st_a, e_a, its, n
@@ -372,7 +378,7 @@ class _EdgeFit:
         step = float(np.clip(-phi_a / self.slope, -0.1, 0.1)) if self.slope < 0 else 0.03 * np.sign(phi_a)
         e_b = float(np.clip(e_a * (1.0 + step), lo, hi))
         for _ in range(30):
-            st_b, it, phi_b = self._state(self.problem(e_b), d, [st_a.x, x0], load)
+            st_b, it, phi_b = self._state(self.problem(e_b), d, [st_a.x, x0], load, visc)
             its, n = its + it, n + 1
             if abs(phi_b) < tol:
                 if phi_b != phi_a and e_b != e_a:
@@ -408,8 +414,27 @@ def _edge_guess(ds: list, es: list, d: float) -> float:
     return es[-1] + (es[-1] - es[-2]) * (s - s1) / (s1 - s0)
 
 
+def _beyond_fit(es: list, e_next: float, err: Exception | None = None) -> bool:
+    """Whether the contact edge leaves the fitted range (the pole block): the predicted next edge is past
+    EDGE_MAX, or the edge iteration failed (``err``) with the last edge in the outer tenth of the range."""
+    if e_next > EDGE_MAX:
+        return True
+    return isinstance(err, ContactError) and bool(es) and es[-1] > 0.9 * EDGE_MAX
+
+
+def _warn_nodal(load: str) -> None:
+    log.warning(
+        "the contact edge leaves the fitted range of the pole block (%.3g deg) at %s: node-by-node contact on "
+        "the last fitted mesh from here on (the force carries the edge quantisation, ~1e-3)",
+        np.degrees(SPLIT * EDGE_MAX),
+        load,
+    )
+
+
 def _static_fitted(fit: _EdgeFit, d_of_t, times, load_of_t, max_cuts: int = 6):
-    """Static states on fitted meshes at the load fractions ``times``: [(t, problem, state, its, passes, wall, edge)]."""
+    """Static states on fitted meshes at the load fractions ``times``: [(t, problem, state, its, passes, wall,
+    edge)]. Where the contact edge leaves the fitted range (``_beyond_fit``), the remaining states are solved with
+    node-by-node contact on the last fitted mesh (a logged warning; their edge is NaN)."""
     import time as _time
 
     out: list[tuple] = []
@@ -417,6 +442,7 @@ def _static_fitted(fit: _EdgeFit, d_of_t, times, load_of_t, max_cuts: int = 6):
     es: list[float] = []
     xs: list[np.ndarray] = []
     t_done = 0.0
+    nodal: tuple | None = None  # (problem, state, previous state) once the contact is node by node
     for t in times:
         targets, cuts = [t], 0
         while targets:
@@ -428,9 +454,24 @@ def _static_fitted(fit: _EdgeFit, d_of_t, times, load_of_t, max_cuts: int = 6):
                 guess = xs[-1]
                 if len(xs) > 1 and ds[-1] != ds[-2]:
                     guess = xs[-1] + (xs[-1] - xs[-2]) * (d - ds[-1]) / (ds[-1] - ds[-2])
+            e_next = _edge_guess(ds, es, d)
             try:
-                prob, st, e, its, n = fit.solve(d, _edge_guess(ds, es, d), guess, load_of_t(tt))
-            except NewtonError:
+                if nodal is None and out and _beyond_fit(es, e_next):
+                    raise ContactError("the contact edge leaves the fitted range", load=load_of_t(tt))
+                if nodal is None:
+                    prob, st, e, its, n = fit.solve(d, e_next, guess, load_of_t(tt))
+                else:
+                    prob, s_last, s_prev = nodal
+                    st, its = prob.step(s_last, d, None, s_prev, load_of_t(tt))
+                    e, n = float("nan"), st.passes
+            except NewtonError as err:
+                if nodal is None and out and _beyond_fit(es, e_next, err):
+                    _warn_nodal(load_of_t(tt))
+                    p_last, s_last = out[-1][1], out[-1][2]
+                    shape = p_last.asm.w.shape + (5,)
+                    s_last = s_last._replace(visco=ve.initial_state(0, shape))
+                    nodal = (p_last, s_last, None)
+                    continue
                 cuts += 1
                 if cuts > max_cuts:
                     raise
@@ -438,12 +479,177 @@ def _static_fitted(fit: _EdgeFit, d_of_t, times, load_of_t, max_cuts: int = 6):
                 continue
             targets.pop()
             t_done = tt
-            ds.append(d)
-            es.append(e)
-            xs.append(st.x)
+            if nodal is None:
+                ds.append(d)
+                es.append(e)
+                xs.append(st.x)
+            else:
+                nodal = (nodal[0], st, nodal[1])
             if not targets:
                 out.append((tt, prob, st, its, n, _time.perf_counter() - w0, e))
     return out
+
+
+def _lagrange2(t: np.ndarray, node: np.ndarray):
+    """1D quadratic Lagrange basis on the nodes 0, 1/2, 1 of [0, 1]: values and derivatives at t (n,) for
+    each node position ``node`` (9,) in {0, 1/2, 1}: (9, n) arrays."""
+    t, c = t[None, :], node[:, None]
+    v = np.where(c == 0.0, 2 * (t - 0.5) * (t - 1), np.where(c == 1.0, 2 * t * (t - 0.5), -4 * t * (t - 1)))
+    d = np.where(c == 0.0, 4 * t - 3, np.where(c == 1.0, 4 * t - 1, -8 * t + 4))
+    return v, d
+
+
+def _local_coordinates(xe: np.ndarray, ref: np.ndarray, x: np.ndarray, iters: int = 30, start=None) -> np.ndarray:
+    """Reference coordinates (2, n) in [0, 1]^2 (outside it for points outside; Newton from ``start``, default
+    the element centre, bounded to [-1, 2]) of the points x (2, n) in Q2 elements with node coordinates
+    xe (2, 9, n), reference nodes ref (2, 9)."""
+    X = np.full(x.shape, 0.5) if start is None else np.array(start, float)
+    for _ in range(iters):
+        va, da = _lagrange2(X[0], ref[0])
+        vb, db = _lagrange2(X[1], ref[1])
+        F = np.einsum("ikn,kn->in", xe, va * vb)
+        J0 = np.einsum("ikn,kn->in", xe, da * vb)  # dx/dxi
+        J1 = np.einsum("ikn,kn->in", xe, va * db)  # dx/deta
+        det = J0[0] * J1[1] - J1[0] * J0[1]
+        r = x - F
+        dX = np.stack([J1[1] * r[0] - J1[0] * r[1], -J0[1] * r[0] + J0[0] * r[1]]) / det
+        X = np.clip(X + dX, -1.0, 2.0)
+        if np.max(np.abs(dX)) < 1e-13:
+            break
+    return X
+
+
+def _gauss_transfer(old: AxiMesh, new: AxiMesh) -> Callable[[np.ndarray], np.ndarray]:
+    """Map Gauss-point fields (..., n_el, n_qp, c) of ``old`` to the Gauss points of ``new`` (same quadrature)
+    by interpolation in the reference configuration: each new Gauss point is located in the old mesh (the
+    element of the same index first, else the nearest elements), and the old element's field is evaluated
+    there from its tensor-product quadratic through the element's 3 x 3 Gauss values (exact for fields
+    quadratic in the element's reference coordinates; slightly extrapolated for a point just outside the old
+    discretised boundary)."""
+    from scipy.spatial import cKDTree
+
+    bo, bn = old.basis, new.basis
+    xq = np.asarray(bn.mapping.F(bn.X))  # (2, n_el, n_qp)
+    ne, nq = xq.shape[1:]
+    pts = xq.reshape(2, -1)
+    n = pts.shape[1]
+    ref = np.asarray(bo.elem.doflocs, float).T  # (2, 9): the Q2 nodes in [0, 1]^2 (isoparametric geometry)
+    xe = bo.doflocs[:, bo.element_dofs]  # (2, 9, n_el)
+    own = np.repeat(np.arange(ne), nq)
+    loc = _local_coordinates(xe[:, :, own], ref, pts, start=np.tile(np.asarray(bn.X, float), (1, ne)))
+    excess = np.max(np.maximum(np.maximum(-loc, loc - 1.0), 0.0), axis=0)
+    elem = own.copy()
+    out = np.flatnonzero(excess > 1e-10)
+    if out.size:
+        _, cand = cKDTree(xe.mean(axis=1).T).query(pts[:, out].T, k=min(8, ne))
+        best = excess[out].copy()
+        for j in range(cand.shape[1]):
+            todo = np.flatnonzero(best > 1e-10)  # points not yet inside an element
+            if not todo.size:
+                break
+            c = cand[todo, j]
+            lc = _local_coordinates(xe[:, :, c], ref, pts[:, out[todo]], iters=10)
+            ex = np.max(np.maximum(np.maximum(-lc, lc - 1.0), 0.0), axis=0)
+            better = ex < best[todo] - 1e-14
+            k = todo[better]
+            best[k], elem[out[k]], loc[:, out[k]] = ex[better], c[better], lc[:, better]
+    G = np.asarray(bo.X)  # (2, n_qp) in [0, 1]^2
+    powers = [(i, j) for i in range(3) for j in range(3)]
+    V = np.stack([G[0] ** i * G[1] ** j for i, j in powers], axis=1)  # (n_qp, 9)
+    P = np.stack([loc[0] ** i * loc[1] ** j for i, j in powers], axis=1)  # (n, 9)
+    L = P @ np.linalg.inv(V)  # (n, n_qp): weights of the old element's Gauss values
+    assert L.shape == (n, nq)
+
+    def transfer(f: np.ndarray) -> np.ndarray:
+        g = f[..., elem, :, :]  # (..., n, n_qp, c)
+        return np.einsum("np,...npc->...nc", L, g).reshape(f.shape[:-3] + (ne, nq, f.shape[-1]))
+
+    return transfer
+
+
+class _Fitted(NamedTuple):
+    """A converged time step on its own fitted mesh."""
+
+    state: _State
+    problem: _Problem
+    edge: float
+
+
+def _timed_fitted(fit: _EdgeFit, beta, tau, d_of_t, times, load_of_t, too_large=None):
+    """Time steps on fitted meshes (one per step): [(t, problem, state, its, passes, wall)].
+
+    Every step is an equilibrium state whose contact edge is a node of its own fitted mesh (``_EdgeFit``,
+    with the step's algorithmic viscoelastic stress). The meshes of one level share topology and numbering,
+    so the Maxwell variables (Q_m, S_iso^n per element and Gauss point) and the displacement guess are
+    carried from step to step by index: a material point's history is taken to the Gauss point of the same
+    index, which moves by a fraction of an element in the reference configuration when the edge moves (ramp
+    steps only; while the plate is held the edge stays where it is, the mesh with it). Only the combination
+    Q^n - beta g S_iso^n enters the next step's stress, and for dt << tau it is O(dt / tau) of the stress,
+    so the index carry-over error is that small fraction of the Gauss-point shift times the stress gradient.
+    """
+    p0 = fit.problem(0.5)
+    n0 = p0.asm.ndof
+    visco0 = ve.initial_state(beta.size, p0.asm.w.shape + (5,))
+    s0 = _Fitted(
+        _State(np.zeros(n0), np.zeros(p0.plane.nodes.size, bool), visco0, 0.0, np.zeros(n0), 1.0, None, 0), p0, 0.0
+    )
+
+    def step(t0, old: _Fitted, t1, prev):
+        d1, dt = d_of_t(t1), t1 - t0
+        s_old = old.state
+        guess = s_old.x
+        p_old = prev[1].state if prev is not None else None
+        if p_old is not None and abs(s_old.delta - p_old.delta) > 1e-14:
+            guess = s_old.x + (s_old.x - p_old.x) * (d1 - s_old.delta) / (s_old.delta - p_old.delta)
+        if np.isnan(old.edge):  # node-by-node contact (beyond the fitted range)
+            e0 = float("nan")
+        elif old.edge <= 0.0:  # the first contact
+            e0 = _edge_guess([], [], d1)
+        elif p_old is not None and prev[1].edge > 0.0 and abs(s_old.delta - p_old.delta) > 1e-14:  # nan: False
+            e0 = _edge_guess([p_old.delta, s_old.delta], [prev[1].edge, old.edge], d1)
+        else:
+            e0 = old.edge * np.sqrt(d1 / s_old.delta) if s_old.delta > 0 else old.edge
+        history: dict = {}
+
+        def on(prob: _Problem) -> ve.MaxwellState:
+            """The Maxwell history of the old step at the Gauss points of prob's mesh."""
+            key = id(prob)
+            if key not in history:
+                if prob is old.problem or beta.size == 0 or not np.any(s_old.visco.S_iso):
+                    history[key] = s_old.visco
+                else:
+                    tr = _gauss_transfer(old.problem.m, prob.m)
+                    history[key] = ve.MaxwellState(tr(s_old.visco.Q), tr(s_old.visco.S_iso))
+            return history[key]
+
+        def nodal() -> tuple[_Fitted, int]:
+            """Node-by-node contact on the previous step's mesh (beyond the fitted range)."""
+            prob = old.problem
+            if not np.isnan(old.edge):
+                _warn_nodal(load_of_t(t1))
+            iso_scale, extra = ve.algorithmic(s_old.visco, beta, tau, dt)
+            sol = prob.solve(s_old, d1, iso_scale, extra, guess, load_of_t(t1))
+            visco = ve.update(s_old.visco, beta, tau, dt, prob.asm.iso_S(sol.x, fit.mat))
+            st = _State(sol.x, sol.active, visco, d1, sol.residual, iso_scale, extra, sol.sets)
+            return _Fitted(st, prob, float("nan")), sol.iterations
+
+        if np.isnan(old.edge) or (old.edge > 0.0 and e0 > EDGE_MAX):
+            return nodal()
+        visc = lambda prob: ve.algorithmic(on(prob), beta, tau, dt)
+        try:
+            prob, st, e, its, n = fit.solve(d1, e0, guess, load_of_t(t1), visc=visc)
+        except NewtonError as err:
+            if old.edge > 0.0 and _beyond_fit([old.edge], e0, err):
+                return nodal()
+            raise
+        S_new = prob.asm.iso_S(st.x, fit.mat)
+        visco = ve.update(on(prob), beta, tau, dt, S_new)
+        return _Fitted(st._replace(visco=visco, passes=n), prob, e), its
+
+    return [
+        (st.t, st.state.problem, st.state.state, st.iterations, st.state.state.passes, st.wall_s, st.state.edge)
+        for st in march(step, s0, times, too_large=too_large)
+    ]
 
 
 def compress(
@@ -487,16 +693,23 @@ def compress(
             ``n_contact`` sits on the contact edge, found by a secant iteration on the Signorini
             condition there (its nodal multiplier N_edge = 0 to ``EDGE_TOL`` of the force; the force is
             stationary in the edge position): the plate force is a smooth function of delta and converges
-            smoothly under refinement (levels 1..4 are self-similar, h ~ 1/n_core). Time runs use one
-            mesh, fitted to the edge of the static state at the held (largest) approach, with the
-            active-set contact. Or an ``AxiMesh`` from ``fem.mesh.ball_section`` built with length_scale =
-            radius: a fixed mesh with node-by-node contact (its force carries the edge quantisation, ~0.2 %).
+            smoothly under refinement (levels 1..4 are self-similar, h ~ 1/n_core). Time runs do the same
+            at every step (the step's algorithmic viscoelastic stress in the edge condition); the Maxwell
+            history (Q_m, S_iso per Gauss point) is interpolated onto each new mesh's Gauss points in the
+            reference configuration, so it stays tied to material points; while the plate is held the
+            edge and the mesh stay put. Beyond the fitted range (edge past 50.6 deg from the pole, about
+            delta/(2 a0) = 0.49) the remaining states / steps use node-by-node contact on the last fitted
+            mesh (a logged warning; ``parameters["contact"]`` says "fitted" or "nodal" per step).
+            Or an ``AxiMesh`` from ``fem.mesh.ball_section`` built with length_scale = radius: a fixed
+            mesh with node-by-node contact (its force carries the edge quantisation, ~0.2 %).
         static: equilibrium states from delta = 0 to ``displacement`` (the F_eq(delta) curve; branches and
             times are ignored); ``time`` then holds the load fraction delta / displacement. On a level every
             state has its own mesh (same topology and numbering); the result's ``mesh`` is the last state's.
         field_times: times (s; static runs: load fractions in (0, 1]) at which the fields are stored (they
             become step times; static runs store the closest step); the last step is always stored.
-            ``"all"``: every converged step (for ``SpheroidResult.to_pvd``).
+            ``"all"``: every converged step (for ``SpheroidResult.to_pvd``). A stored field is given on the
+            result's ``mesh`` (the last state's): ``deformed_nodes`` are the state's deformed positions (m),
+            ``displacement`` = deformed_nodes - the result mesh's reference positions.
         n_ramp, n_hold: ramp steps (default 6) and geometrically growing hold steps (default 20).
         n_static: static steps (default: 0.04 in delta / a0 on a level, 0.02 on a mesh object, at least 8;
             failed steps are cut back).
@@ -597,22 +810,16 @@ def compress(
     def load_of(t1):
         return f"delta = {dfun(t1) * 1e6:.4g} um" if static else f"t = {t1:.6g} s, delta = {dfun(t1) * 1e6:.4g} um"
 
-    if fit is not None and static:
-        done = _static_fitted(fit, dscaled, times, load_of)
+    if fit is not None:  # every state / step on its own fitted mesh
+        if static:
+            done = _static_fitted(fit, dscaled, times, load_of)
+        else:  # the Maxwell history interpolated onto each step's mesh
+            done = _timed_fitted(fit, beta, tau, dscaled, times, load_of, too_large)
         steps = [_Solved(t, pr, st, its, n_s, w) for t, pr, st, its, n_s, w, _ in done]
+        modes = tuple("fitted" if np.isfinite(e) else "nodal" for *_, e in done)
         m = steps[-1].problem.m
     else:
-        if fit is not None:  # one mesh fitted to the contact edge of the held (largest) approach
-            d_hold = dscaled(end_time) if d_max is not None else max(dscaled(t) for t in np.linspace(0, end_time, 401))
-            if d_hold > 0:
-                edge = _static_fitted(
-                    fit, lambda t: d_hold * t, [1.0], lambda t: f"delta = {2 * a0 * d_hold * t * 1e6:.4g} um"
-                )[-1][6]
-            else:
-                edge = 0.5
-            m = fitted_mesh(a0, level, edge)
-        else:
-            m = make_mesh(mesh, a0)
+        m = make_mesh(mesh, a0)
         prob = _Problem(m, mat, beta, tau, rtol)
         n0 = prob.asm.ndof
         pole = np.argmin(np.hypot(prob.plane.R, prob.plane.Z - 1.0))
@@ -629,6 +836,7 @@ def compress(
             _Solved(st.time, prob, st.state, st.newton_iterations, st.state.passes, st.wall_time)
             for st in march(step, s0, times, too_large=too_large)
         ]
+        modes = ("nodal",) * len(steps)
 
     L2 = C * a0**2
     rows: list[_Row] = []
@@ -643,8 +851,8 @@ def compress(
         prob, s = st.problem, st.state
         ob = prob.observe(s)
         F, Fr = ob.plate_force, ob.reaction_force
-        # fitted static states: the edge node is the contact edge
-        rc = ob.contact_radius_node if fit is not None and static else ob.contact_radius
+        # fitted states: the edge node is the contact edge
+        rc = ob.contact_radius_node if modes[k] == "fitted" else ob.contact_radius
         if F > 0 and abs(F - Fr) > FORCE_CHECK * abs(F) + 1e3 * prob.floor:
             raise RuntimeError(
                 f"contact force {F * L2:.6g} N and midplane reaction {Fr * L2:.6g} N differ by "
@@ -670,12 +878,15 @@ def compress(
         )
         if k in want:
             u = prob.displacement(s.x)
+            xd = prob.deformed_nodes(u)
+            if prob.m is not m:  # an earlier state's own fitted mesh: same topology, given on the result's mesh
+                u = xd - m.X.T * a0
             vm_el, ph_el = prob.element_fields(ob.von_mises, ob.pressure, C)
             fields.append(
                 SpheroidField(
                     time=st.time,
                     displacement=u,
-                    deformed_nodes=prob.deformed_nodes(u),
+                    deformed_nodes=xd,
                     von_mises=vm_el,
                     hydrostatic_pressure=ph_el,
                     contact_nodal_force=ob.normal_force * L2,
@@ -699,5 +910,6 @@ def compress(
             branches=tuple((float(b), float(t)) for b, t in br),
             ramp_time=None if static else float(ramp_time),
             end_time=None if static else float(end_time),
+            contact=modes,
         ),
     )

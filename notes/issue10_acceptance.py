@@ -1,10 +1,12 @@
-"""Acceptance numbers of issue 10 (run: python notes/issue10_acceptance.py [jitter|table|fit|speed] ...).
+"""Acceptance numbers of issue 10 (run: python notes/issue10_acceptance.py [jitter|table|fit|speed|ramp|push] ...).
 
 jitter: RMS deviation of a 40-point static curve (alpha 0.2, x to 0.3, default mesh) from a smooth fit
         (polynomial of degree 6 in sqrt(x) of F / F_Hertz).
 table:  shipped master curves vs the Richardson reference (JSON written by the bench reference, path arg 2).
 fit:    noise-free and 0.5 %-noise fits of (C, alpha, beta, tau) to two-level default-mesh FE records.
 speed:  default-mesh Fig. 10 run and static curve to 30 % (min of 3 after a warm-up).
+ramp:   reduced/FE - 1 per step (ramp and hold) of the fit case's two FE records (mesh: optional arg, default 1).
+push:   static compression to x = 0.79 (default mesh): which states used fitted / node-by-node contact.
 """
 
 import json
@@ -97,6 +99,36 @@ def speed() -> None:
     print(f"speed: Fig. 10 default mesh {min(a):.2f} s, static curve to 30 % {min(b):.2f} s (min of 3)")
 
 
+def ramp(mesh: int = 1) -> None:
+    from tissuemech.reduced import spheroid as sp
+
+    a0, C, alpha, br = 400e-6, 260.0, 0.3, [(0.7, 120.0)]
+    for d in (40e-6, 120e-6):
+        r = compress(radius=a0, C=C, alpha=alpha, branches=br, displacement=d, ramp_time=1.0, end_time=900.0, mesh=mesh)
+        k = r.time > 0
+        red = np.asarray(
+            sp.nominal_stress(r.time[k], radius=a0, C=C, alpha=alpha, branches=br, displacement=d, ramp_time=1.0)
+        )
+        rat = red / r.nominal_stress[k] - 1
+        ramp_k = r.time[k] <= 1.0 + 1e-9
+        print(f"ramp: mesh {mesh}, delta {d * 1e6:g} um, reduced/FE - 1 per step")
+        print("  ramp:", " ".join(f"{v:+.2e}" for v in rat[ramp_k]))
+        print("  hold:", " ".join(f"{v:+.2e}" for v in rat[~ramp_k]))
+        print(f"  F(1 s) = {np.interp(1.0, r.time, r.force):.9e} N, F(900 s) = {r.force[-1]:.9e} N")
+
+
+def push() -> None:
+    r = compress(
+        radius=A0, C=200.0, alpha=0.2, branches=(), displacement=2 * A0 * 0.79, ramp_time=1, end_time=1, static=True
+    )
+    x, mode = r.approach / (2 * A0), np.array(r.parameters["contact"])
+    fit = x[mode == "fitted"]
+    print(
+        f"push: reached x = {x[-1]:.3f}; fitted contact for x <= {fit.max():.3f} ({fit.size} states), node-by-node "
+        f"for x = {x[mode == 'nodal'].min():.3f}..{x[-1]:.3f}; force monotone: {bool(np.all(np.diff(r.force) > 0))}"
+    )
+
+
 if __name__ == "__main__":
     what = sys.argv[1:] or ["jitter", "speed"]
     for w in what:
@@ -108,3 +140,8 @@ if __name__ == "__main__":
             fit_case()
         elif w == "speed":
             speed()
+        elif w == "ramp":
+            i = sys.argv.index("ramp") + 1
+            ramp(int(sys.argv[i]) if i < len(sys.argv) and sys.argv[i].isdigit() else 1)
+        elif w == "push":
+            push()

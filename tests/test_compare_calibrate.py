@@ -64,3 +64,70 @@ def test_short_run_and_bad_input_raise():
         calibrate.tabulate(alphas=(0.2,), executor="serial", curve=_short_curve)
     with pytest.raises(ValueError, match="x_max"):
         calibrate.tabulate(x_max=0.7, executor="serial", curve=fake_curve)
+
+
+# sha256 of the shipped table's arrays before its metadata got model_error_rel (commit e85ba2f)
+SHIPPED_SHA256 = {
+    "x": "9e019baea9874eafae66126ac205eb7de7edfad85f575e7d9bd2840bfae9661f",
+    "alpha": "b04a7bb20bf42160ef8ff9fc5ae3a9828e63c7519a69112b8aae22673af1f2ea",
+    "f": "ed42097e16648512b43eb2b0dafbe3f75caa3e08eeaba7607d0772f3e7bd7fd3",
+    "g": "767366978ba3da0bec5cf76afe88ea81e90bab9a1958c06675de0e93b204972d",
+    "f_over_hertz": "5ab250956051d87f59fae89e41a2421e6341d7202b9464bfbde29951598b7dd2",
+}
+
+
+def test_shipped_table_arrays_unchanged_and_model_error_in_metadata():
+    """The metadata edit left every array bit-identical; the fits read the table's own error estimate."""
+    import hashlib
+    import json
+    from pathlib import Path
+
+    from tissuemech.compare.fit import model_error_of
+
+    with np.load(calibrate.DEFAULT_OUT, allow_pickle=False) as z:
+        assert sorted(k for k in z.files if k != "metadata") == sorted(SHIPPED_SHA256)
+        for k, digest in SHIPPED_SHA256.items():
+            assert hashlib.sha256(np.ascontiguousarray(z[k]).tobytes()).hexdigest() == digest, k
+        meta = json.loads(str(z["metadata"]))
+    assert meta["model_error_rel"] == pytest.approx(3.8e-5)
+    assert model_error_of("fem") == meta["model_error_rel"]
+    # it is half the table's largest error against the converged reference shipped in the notes
+    ref = Path(__file__).resolve().parent.parent / "notes" / "issue10_reference.json"
+    if ref.exists():
+        err, at = calibrate.reference_error(calibrate.DEFAULT_OUT, json.loads(ref.read_text()))
+        assert err / 2 == pytest.approx(meta["model_error_rel"], rel=0.02) and at == "alpha 0 x 0.35"
+
+
+def test_reference_error_of_a_written_table(tmp_path):
+    curves = calibrate.tabulate(alphas=(0.0, 0.5, 1.0), n_x=16, x_max=0.3, executor="serial", curve=fake_curve)
+    out = tmp_path / "master.npz"
+    calibrate.write(out, curves, {"mesh": "fake"})
+    exact = lambda x, a: float(calibrate.hertz_f(np.array(x)) * np.exp(a * x))
+    ref = {"_about": "ignored", "alpha 0.5 x 0.1": {"reference": exact(0.1, 0.5) * (1 - 1e-3)}}
+    ref["alpha 0 x 0.2"] = {"reference": exact(0.2, 0.0)}
+    ref["alpha 2 x 0.2"] = {"reference": 1.0}  # outside the alpha range: skipped
+    err, at = calibrate.reference_error(out, ref)
+    assert at == "alpha 0.5 x 0.1" and err == pytest.approx(1e-3, rel=0.05)
+    with pytest.raises(ValueError, match="no point"):
+        calibrate.reference_error(out, {"alpha 3 x 0.1": {"reference": 1.0}})
+
+
+def test_main_writes_model_error_rel_from_a_reference(tmp_path, monkeypatch):
+    import json
+
+    fake = calibrate.tabulate(alphas=(0.0, 0.5, 1.0), n_x=16, x_max=0.3, executor="serial", curve=fake_curve)
+    monkeypatch.setattr(calibrate, "tabulate", lambda **kw: fake)
+    x, a = 0.1, 0.5
+    ref = tmp_path / "ref.json"
+    ref.write_text(
+        json.dumps(
+            {f"alpha {a} x {x}": {"reference": float(calibrate.hertz_f(np.array(x)) * np.exp(a * x)) * (1 + 4e-4)}}
+        )
+    )
+    out = tmp_path / "m.npz"
+    args = ["--out", str(out), "--alphas", "0.0,0.5,1.0", "--check-alphas", "0.0", "--error-mesh", "", "--degree", "0"]
+    assert calibrate.main(args) == 0
+    assert "model_error_rel" not in calibrate.load(out)[1]  # a finer-level check alone does not set it
+    assert calibrate.main([*args, "--reference", str(ref)]) == 0
+    meta = calibrate.load(out)[1]
+    assert meta["model_error_rel"] == pytest.approx(2e-4, rel=0.05) and "2-sigma" in meta["model_error_basis"]
