@@ -55,6 +55,7 @@ panel is used and entries whose indicator exceeds 12 are NaN (the documented fla
 from __future__ import annotations
 
 import functools
+import math
 from typing import Any, NamedTuple
 
 import jax
@@ -326,6 +327,37 @@ def _pack(*values):
     return values
 
 
+_BUCKET_MAX = 1024  # concrete calls with at most this many points run padded to a power-of-two size
+
+
+def _call(core, x, params, *static):
+    """Run a compiled core on ``x`` (per-point values, or None) and ``params`` (A, B, C, alpha, ...).
+
+    Concrete calls with at most ``_BUCKET_MAX`` points are flattened and padded (with their first
+    entry, always a valid input) to a power-of-two size of at least 16, so that one compiled program
+    serves every small shape (a command line that calls with scalars, 2, 11 and 600 points compiles
+    each core once or twice, not once per shape); their outputs come back as NumPy arrays. Traced or
+    larger calls run the core on the inputs as they are (outputs: JAX arrays).
+    """
+    values = tuple(params) if x is None else (x, *params)
+    if not all(type(v) is np.ndarray for v in values):  # traced (or a JAX array passed through)
+        return core(*(() if x is None else (x,)), _pack(*params), *static)
+    shape = np.broadcast_shapes(*(v.shape for v in values))
+    n = math.prod(shape)
+    if n > _BUCKET_MAX or (x is None and n == 1):
+        return core(*(() if x is None else (x,)), _pack(*params), *static)
+    size = max(16, 1 << (n - 1).bit_length())
+
+    def pad(v):
+        f = np.broadcast_to(v, shape).ravel()
+        return np.concatenate([f, np.full(size - n, f[0])])
+
+    scalar_params = all(v.ndim == 0 for v in params)
+    ps = _pack(*params) if scalar_params else tuple(pad(v) for v in params)
+    out = core(*(() if x is None else (pad(x),)), ps, *static)
+    return jax.tree_util.tree_map(lambda o: np.asarray(o)[:n].reshape(shape + o.shape[1:]), out)
+
+
 @jax.jit
 def _pressure_core(la, params):
     """C p/C(lambda_a) by one panel; NaN where an eager call must take the composite rule (or raise)."""
@@ -383,7 +415,7 @@ def pressure(
             raise ValueError(
                 f"rtol (relative tolerance of the ODE integrator) must be one number; got shape {rt.shape}"
             )
-        p = _pressure_ode_core(la, _pack(A, B, C_, al), _concrete(rt, rtol))
+        p = jnp.asarray(_pressure_ode_core(la, _pack(A, B, C_, al), _concrete(rt, rtol)))
         if not is_traced(p):
             bad = ~np.isfinite(np.asarray(p))
             if np.any(bad):
@@ -393,9 +425,9 @@ def pressure(
                     f"reach the inner wall in {_ODE_MAX_STEPS} steps). Hint: use method='quadrature' (exact to 1e-13)."
                 )
         return p
-    p = _pressure_core(la, _pack(A, B, C_, al))
+    p = _call(_pressure_core, la, (A, B, C_, al))
     if is_traced(p) or not np.isnan(np.asarray(p)).any():
-        return p
+        return jnp.asarray(p)
     k, omk = _geometry(A, B)
     return jnp.asarray(C_, dtype=jnp.float64) * _p_over_C(la, k, omk, al)
 
@@ -427,7 +459,7 @@ def pressure_derivative(
     """
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
     A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
-    return _pressure_derivative_core(la, _pack(A, B, C_, al))
+    return jnp.asarray(_call(_pressure_derivative_core, la, (A, B, C_, al)))
 
 
 @jax.jit
@@ -446,7 +478,7 @@ def outer_stretch(inner_stretch: Array, *, inner_radius: Array, outer_radius: Ar
     """
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
     A, B = validate_radii(inner_radius, outer_radius)
-    return _outer_stretch_core(la, _pack(_concrete(A, inner_radius), _concrete(B, outer_radius)))
+    return jnp.asarray(_call(_outer_stretch_core, la, (_concrete(A, inner_radius), _concrete(B, outer_radius))))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -580,7 +612,7 @@ def limit_point(*, inner_radius: Array, outer_radius: Array, C: Array, alpha: Ar
     ``ValueError`` for bad inputs in eager calls.
     """
     A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
-    pmax, la, redo = _limit_core(_pack(A, B, C_, al))
+    pmax, la, redo = _call(_limit_core, None, (A, B, C_, al))
     if is_traced(pmax):
         return LimitPoint(pmax, la)
     if np.asarray(redo).any():  # stiff states: the error-controlled quadrature (eager, rare)
@@ -592,7 +624,7 @@ def limit_point(*, inner_radius: Array, outer_radius: Array, C: Array, alpha: Ar
         if np.isnan(pmax):
             return None
         return LimitPoint(float(pmax), float(la))
-    return LimitPoint(pmax, la)
+    return LimitPoint(jnp.asarray(pmax), jnp.asarray(la))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -788,11 +820,11 @@ def inner_stretch(pressure: Array, *, inner_radius: Array, outer_radius: Array, 
     if is_traced(pressure, inner_radius, outer_radius, C, alpha):  # differentiable path (implicit function)
         la, _ = inner_stretch_solve(pressure, inner_radius=inner_radius, outer_radius=outer_radius, C=C, alpha=alpha)
         return la
-    la, conv, rule_ok = _inverse_core(p, _pack(A, B, C_, al))
+    la, conv, rule_ok = _call(_inverse_core, p, (A, B, C_, al))
     conv = np.asarray(conv)
     rule_ok = np.asarray(rule_ok)
     if conv.all() and rule_ok.all():
-        return la
+        return jnp.asarray(la)
     la, conv = np.array(la), conv.copy()
     fix = conv & ~rule_ok
     if np.any(fix):  # stiff states: polish with the error-controlled quadrature (Newton in log lambda_a)
@@ -915,9 +947,9 @@ def profiles(
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
     A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
     n = validate_int("n (number of points through the wall)", n, minimum=2)
-    out, redo = _profiles_core(la, _pack(A, B, C_, al), n)
+    out, redo = _call(_profiles_core, la, (A, B, C_, al), n)
     if is_traced(redo) or not np.asarray(redo).any():
-        return out
+        return Profiles(*(jnp.asarray(v) for v in out))
     # stiff states (large alpha l^2): sigma_r by the error-controlled composite rule (eager, rare)
     R, r, lam, _, _, _ = out
     kR, omkR, alpha_b, C_b = _wall_geometry(*(jnp.asarray(v, dtype=jnp.float64)[..., None] for v in (A, B)), R, al, C_)
