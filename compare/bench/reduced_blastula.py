@@ -290,6 +290,42 @@ def api_rows(n: int = 1_000_000, repeats: int = 5, seed: int = 0, memory: bool =
     return out
 
 
+def cli_rows(repeats: int = 3) -> list[dict]:
+    """Wall time of the whole ``tissuemech blastula`` process (its defaults, the PNG into a temporary
+    folder): cold (an empty compilation cache), warm (the cache the cold run wrote) and with the cache
+    switched off (``TISSUEMECH_NO_JIT_CACHE=1``); median of ``repeats`` runs each, interleaved."""
+    import os
+    import shutil
+    import subprocess
+    import sys
+    import tempfile
+
+    exe = [sys.executable, "-c", "import sys; from tissuemech.compare.cli import main; sys.exit(main())", "blastula"]
+    times: dict[str, list[float]] = {"cold": [], "warm": [], "no cache": []}
+    with tempfile.TemporaryDirectory() as tmp:
+        for _ in range(repeats):
+            for kind in times:
+                env = dict(os.environ, XDG_CACHE_HOME=os.path.join(tmp, "cache"))
+                env.pop("JAX_COMPILATION_CACHE_DIR", None)
+                if kind == "cold":
+                    shutil.rmtree(env["XDG_CACHE_HOME"], ignore_errors=True)
+                if kind == "no cache":
+                    env["TISSUEMECH_NO_JIT_CACHE"] = "1"
+                t0 = time.perf_counter()
+                subprocess.run(
+                    exe + ["--out", os.path.join(tmp, "b.png")], env=env, cwd=tmp, check=True, capture_output=True
+                )
+                times[kind].append(time.perf_counter() - t0)
+    return [
+        dict(
+            function=f"tissuemech blastula (whole process, {kind})",
+            points="",
+            eager_points_per_s=f"{np.median(v):.2f} s",
+        )
+        for kind, v in times.items()
+    ]
+
+
 def base_fwd(rows_so_far: list[dict]) -> float:
     return rows_so_far[0]["baseline_points_per_s"]
 
@@ -301,8 +337,9 @@ def main(argv: Sequence[str] | None = None) -> list[dict]:
     ap.add_argument("--n", type=int, default=1_000_000, help="points per vectorised call")
     ap.add_argument("--baseline", type=int, default=2000, help="points in the scipy quad loop")
     ap.add_argument("--api-only", action="store_true", help="only part 1: eager calls against jit (issue 14)")
+    ap.add_argument("--no-cli", action="store_true", help="skip the tissuemech blastula process timings")
     args = ap.parse_args(list(argv) if argv is not None else None)
-    api = api_rows(args.n)
+    api = api_rows(args.n) + ([] if args.no_cli else cli_rows())
     print_rows(api)
     if args.api_only:
         return api
