@@ -355,6 +355,11 @@ def test_eager_stiff_entries_still_error_controlled():
     assert np.all(np.isfinite(eager)) and np.isnan(jitted[-1])
     ref = [fung_quad(x, A, 75e-6, C, 5.0) for x in la]
     np.testing.assert_allclose(eager, ref, rtol=1e-10)
+    pr = bl.profiles(la, **GEO, C=C, alpha=5.0, n=9)  # the through-wall integral, redone the same way
+    assert np.all(np.isfinite(np.asarray(pr.sigma_r)))
+    np.testing.assert_allclose(np.asarray(pr.sigma_r[:, 0]), -eager, rtol=1e-12)
+    np.testing.assert_allclose(np.asarray(pr.sigma_r[:, -1]), 0.0, atol=1e-12 * eager.max())
+    np.testing.assert_allclose(np.asarray(pr.von_mises), np.abs(np.asarray(pr.sigma_theta - pr.sigma_r)), rtol=1e-12)
 
 
 def test_chunked_limit_point_equals_unchunked():
