@@ -358,6 +358,7 @@ def _call(core, x, params, *static):
         f = np.broadcast_to(v, shape).ravel()
         return np.concatenate([f, np.full(size - n, f[0])])
 
+    params = tuple(v.reshape(()) if v.size == 1 else v for v in params)  # (the output shape is known)
     scalar_params = all(v.ndim == 0 for v in params)
     ps = _pack(*params) if scalar_params else tuple(pad(v) for v in params)
     out = core(*(() if x is None else (pad(x),)), ps, *static)
