@@ -27,7 +27,7 @@ Numerics (everything is computed for ``p / C`` as a function of ``(lambda_a, k, 
   ``e = lambda_a^3 - 1 = expm1(3 log lambda_a)`` and ``1 - k = (B - A)(B^2 + AB + A^2)/B^3``, so ``p``
   keeps full relative accuracy at ``lambda_a = 1 + 1e-9`` (where ``p ~ 8 C (1 - k)(lambda_a - 1)``).
 * ``method="ode"``: the radial equilibrium ODE integrated through the deformed wall with diffrax
-  (Dopri8, PID control, rtol = 1e-10), in the variable ``s = log l`` as well:
+  (Dopri8, PID control, ``rtol=`` argument of :func:`pressure`, default 1e-10), in the variable ``s = log l`` as well:
   ``d(sigma_r/C)/ds = -G(s)`` from ``s_b = log lambda_b`` (``sigma_r = 0``) to ``s_a = log lambda_a``;
   ``p = -sigma_r(a)``. The two paths agree to ~2e-13 relative (tested to 1e-10).
 
@@ -35,6 +35,11 @@ Stretch domain: ``lambda_a > 0``. ``lambda_a < 1`` is deflation (negative pressu
 the collapse ``lambda_a -> 0`` where ``p -> -infinity``). ``lambda_a <= 0``, non-finite or non-numeric
 values raise ``ValueError`` in eager calls (inside ``jit`` no check can run: results there are NaN
 for ``lambda_a <= 0``).
+
+Eager calls check their inputs with NumPy, then run one compiled program per public function (the
+same core a user's ``jax.jit`` runs); calls with up to 1024 points run padded to a power-of-two size,
+so that every small shape shares one compiled program. Eager results are NumPy float64 arrays
+(``limit_point``: Python floats for scalar input); traced calls return JAX arrays.
 
 Error control of the quadrature
 -------------------------------
@@ -55,6 +60,7 @@ panel is used and entries whose indicator exceeds 12 are NaN (the documented fla
 from __future__ import annotations
 
 import functools
+import math
 from typing import Any, NamedTuple
 
 import jax
@@ -68,6 +74,7 @@ from tissuemech.reduced.validation import (
     validate_finite,
     validate_int,
     validate_material,
+    validate_positive,
     validate_radii,
 )
 
@@ -89,7 +96,6 @@ Array = Any
 # Gauss-Legendre rule on [-1, 1] and its a-priori error control (see the module docstring)
 # ---------------------------------------------------------------------------------------------
 N_GAUSS = 20
-_ODE_RTOL = 1e-10  # diffrax tolerance of the radial-ODE path (agrees with the quadrature to ~2e-13)
 _X, _W = np.polynomial.legendre.leggauss(N_GAUSS)
 # A panel [s1, s2] of width h is integrated by the 20-point rule to < 1e-13 relative when its indicator
 # c = |h| (max |d log G/ds| + 4) / 2 <= PANEL_INDICATOR (measured: max error 4e-14 for c <= 15 over
@@ -101,18 +107,23 @@ _LOG_FLOAT_MAX = 705.0  # log(p/C) above this would overflow float64 (max ~ 1.8e
 _NODES_PER_CHUNK = 4_000_000  # eager composite rules are evaluated in chunks of this many nodes
 
 
-def _check_stretch(name: str, value: Any) -> None:
-    """Eager check: stretch finite and > 0 (``< 1`` is deflation and allowed)."""
+def _check_stretch(name: str, value: Any) -> np.ndarray | None:
+    """Eager check: stretch finite and > 0 (``< 1`` is deflation and allowed); the float64 array
+    (None for a traced value)."""
     v = validate_finite(name, value, "a/A, dimensionless")
-    if v is not None and np.any(v <= 0):
+    if v is not None and (v <= 0).any():
         raise ValueError(
             f"{name} must be positive (a/A > 0; values below 1 mean the cavity shrinks); got {np.min(v):g}"
         )
+    return v
 
 
-def _validate(inner_radius, outer_radius, C, alpha) -> None:
-    validate_radii(inner_radius, outer_radius)
-    validate_material(C, alpha)
+def _validate(inner_radius, outer_radius, C, alpha) -> tuple[Any, Any, Any, Any]:
+    """Check the shell and the material; (A, B, C, alpha) as float64 NumPy arrays where concrete,
+    the traced values as they came otherwise (what the compiled cores take)."""
+    a, b = validate_radii(inner_radius, outer_radius)
+    c, al = validate_material(C, alpha)
+    return _concrete(a, inner_radius), _concrete(b, outer_radius), _concrete(c, C), _concrete(al, alpha)
 
 
 def _geometry(inner_radius, outer_radius):
@@ -144,7 +155,9 @@ def _G(s, alpha):
 
 def _g(l, alpha):
     """Integrand in l, divided by C: g(l)/C = 4 W'(I1)/C (l^3 + 1)/l^5 (dimensionless)."""
-    return _G(jnp.log(l), alpha) / l
+    l2 = l * l
+    l4 = l2 * l2
+    return 4.0 * dW_dI1(2.0 * l2 + 1.0 / l4, 1.0, alpha) * (l2 * l + 1.0) / (l4 * l)
 
 
 def _log_G_and_slope(s, alpha, xp):
@@ -200,19 +213,49 @@ def _p_over_C_panels(la, k, omk, alpha, m):
     return h * jnp.sum(jnp.asarray(w) * _G(s, alpha[:, None]), axis=-1)
 
 
+def _p_over_C_flagged(la, k, omk, alpha):
+    """(p/C by one panel, NaN where the indicator exceeds PANEL_INDICATOR; flag) for broadcast inputs.
+
+    ``flag`` marks the entries an eager call must redo with more panels (indicator above
+    PANEL_INDICATOR, NaN indicator) or reject (log p/C beyond the float64 range)."""
+    la, k, omk, alpha = jnp.broadcast_arrays(*(jnp.asarray(v, dtype=jnp.float64) for v in (la, k, omk, alpha)))
+    c, log_bound = quadrature_indicator(la, k, omk, alpha)
+    ok = c <= PANEL_INDICATOR
+    pc = jnp.where(ok, _p_over_C_quad(la, k, omk, alpha), jnp.nan)
+    return pc, ~ok | ~(log_bound <= _LOG_FLOAT_MAX)
+
+
+_p_over_C_core = jax.jit(_p_over_C_flagged)
+
+
 def _p_over_C(la, k, omk, alpha, what: str = "inner_stretch"):
     """p/C with the error kept below 1e-10 relative (the module docstring).
 
-    Eager (concrete) input: every entry gets ceil(c / PANEL_INDICATOR) panels (rounded up to a power
-    of 2, so few rules are compiled); a result beyond the float64 range raises ``ValueError``.
+    Eager (concrete) input: one compiled call (one panel everywhere), then the entries whose indicator
+    exceeds PANEL_INDICATOR get ceil(c / PANEL_INDICATOR) panels (rounded up to a power of 2, so few
+    rules are compiled); a result beyond the float64 range raises ``ValueError``.
     Traced input (jit/vmap/grad): one panel; entries whose indicator exceeds PANEL_INDICATOR are NaN
     (the documented flag: the 20-point rule cannot be trusted there), overflow gives inf.
     """
-    la, k, omk, alpha = jnp.broadcast_arrays(*(jnp.asarray(v, dtype=jnp.float64) for v in (la, k, omk, alpha)))
     if is_traced(la, k, omk, alpha):
-        c, _ = quadrature_indicator(la, k, omk, alpha)
-        return jnp.where(c <= PANEL_INDICATOR, _p_over_C_quad(la, k, omk, alpha), jnp.nan)
-    L, K, O, Al = (np.asarray(v).ravel() for v in (la, k, omk, alpha))
+        return _p_over_C_flagged(la, k, omk, alpha)[0]
+    pc, flag = _p_over_C_core(la, k, omk, alpha)
+    if not np.asarray(flag).any():
+        return pc
+    return _fix_panels(pc, flag, la, k, omk, alpha, what)
+
+
+def _fix_panels(pc, flag, la, k, omk, alpha, what: str):
+    """Eager: redo the flagged entries of a one-panel p/C with the error-controlled composite rule."""
+    flag = np.asarray(flag)
+    L, K, O, Al = (np.broadcast_to(np.asarray(v, dtype=float), flag.shape)[flag] for v in (la, k, omk, alpha))
+    out = np.array(pc)
+    out[flag] = _p_over_C_panels_eager(L, K, O, Al, what)
+    return jnp.asarray(out)
+
+
+def _p_over_C_panels_eager(L, K, O, Al, what: str) -> np.ndarray:
+    """p/C of 1-D NumPy inputs, ceil(c / PANEL_INDICATOR) panels each (raises on overflow)."""
     c, log_bound = quadrature_indicator(L, K, O, Al)
     with np.errstate(invalid="ignore"):
         over = log_bound > _LOG_FLOAT_MAX
@@ -238,12 +281,19 @@ def _p_over_C(la, k, omk, alpha, what: str = "inner_stretch"):
         for s0 in range(0, idx.size, step):
             sel = idx[s0 : s0 + step]
             out[sel] = np.asarray(_p_over_C_panels(L[sel], K[sel], O[sel], Al[sel], int(b)))
-    return jnp.asarray(out.reshape(la.shape))
+    return out
 
 
-def _p_over_C_ode(la, k, one_minus_k, alpha):
+ODE_RTOL = 1e-10  # default relative tolerance of the radial-ODE path (agrees with the quadrature to ~2e-13)
+_ODE_MAX_STEPS = 4096
+
+
+def _p_over_C_ode(la, k, one_minus_k, alpha, rtol=ODE_RTOL):
+    """p/C by the radial-equilibrium ODE (diffrax Dopri8, PID control at relative tolerance ``rtol``);
+    NaN where the integration fails."""
     la, k, one_minus_k, alpha = jnp.broadcast_arrays(la, k, one_minus_k, alpha)
     sb, h = _log_stretches(la, k, one_minus_k)
+    rtol = jnp.asarray(rtol, dtype=jnp.float64)
 
     def one(sb_i, h_i, alpha_i):
         import diffrax
@@ -258,8 +308,8 @@ def _p_over_C_ode(la, k, one_minus_k, alpha):
             t1=1.0,
             dt0=None,
             y0=jnp.zeros((), dtype=jnp.float64),
-            stepsize_controller=diffrax.PIDController(rtol=_ODE_RTOL, atol=1e-300),
-            max_steps=4096,
+            stepsize_controller=diffrax.PIDController(rtol=rtol, atol=1e-300),
+            max_steps=_ODE_MAX_STEPS,
             saveat=diffrax.SaveAt(t1=True),
             throw=False,
         )
@@ -267,6 +317,70 @@ def _p_over_C_ode(la, k, one_minus_k, alpha):
 
     flat = jax.vmap(one)(sb.ravel(), h.ravel(), alpha.ravel())
     return flat.reshape(la.shape)
+
+
+def _concrete(checked, raw):
+    """The validated NumPy array where the value was concrete, else the raw (traced) value."""
+    return raw if checked is None else checked
+
+
+def _pack(*values):
+    """Concrete 0-d parameters as one float64 vector (one host-to-device transfer instead of one per
+    argument; a compiled core unpacks it as it would a tuple), anything else as the tuple itself."""
+    if all(type(v) is np.ndarray and v.ndim == 0 for v in values):
+        return np.array(values, dtype=float)
+    return values
+
+
+_BUCKET_MAX = 1024  # concrete calls with at most this many points run padded to a power-of-two size
+
+
+def _call(core, x, params, *static):
+    """Run a compiled core on ``x`` (per-point values, or None) and ``params`` (A, B, C, alpha, ...).
+
+    Concrete calls with at most ``_BUCKET_MAX`` points are flattened and padded (with their first
+    entry, always a valid input) to a power-of-two size of at least 16, so that one compiled program
+    serves every small shape (a command line that calls with scalars, 2, 11 and 600 points compiles
+    each core once or twice, not once per shape); their outputs come back as NumPy arrays. Traced or
+    larger calls run the core on the inputs as they are. Concrete calls get NumPy outputs (a view of
+    the result buffer on CPU, no copy), traced calls the tracers.
+    """
+    values = tuple(params) if x is None else (x, *params)
+    if not all(type(v) is np.ndarray for v in values):  # traced (or a JAX array passed through)
+        return core(*(() if x is None else (x,)), _pack(*params), *static)
+    shape = np.broadcast_shapes(*(v.shape for v in values))
+    n = math.prod(shape)
+    if n > _BUCKET_MAX or (x is None and n == 1):
+        return jax.tree_util.tree_map(np.asarray, core(*(() if x is None else (x,)), _pack(*params), *static))
+    size = max(16, 1 << (n - 1).bit_length())
+
+    def pad(v):
+        f = np.broadcast_to(v, shape).ravel()
+        return np.concatenate([f, np.full(size - n, f[0])])
+
+    params = tuple(v.reshape(()) if v.size == 1 else v for v in params)  # (the output shape is known)
+    scalar_params = all(v.ndim == 0 for v in params)
+    ps = _pack(*params) if scalar_params else tuple(pad(v) for v in params)
+    out = core(*(() if x is None else (pad(x),)), ps, *static)
+    return jax.tree_util.tree_map(lambda o: np.asarray(o)[:n].reshape(shape + o.shape[1:]), out)
+
+
+@jax.jit
+def _pressure_core(la, params):
+    """C p/C(lambda_a) by one panel; NaN where an eager call must take the composite rule (or raise)."""
+    A, B, C, alpha = params
+    k, omk = _geometry(A, B)
+    pc, flag = _p_over_C_flagged(la, k, omk, alpha)
+    return jnp.where(flag, jnp.nan, jnp.asarray(C, dtype=jnp.float64) * pc)
+
+
+@jax.jit
+def _pressure_ode_core(la, params, rtol):
+    A, B, C, alpha = params
+    k, omk = _geometry(A, B)
+    la = jnp.asarray(la, dtype=jnp.float64)
+    alpha = jnp.asarray(alpha, dtype=jnp.float64)
+    return jnp.asarray(C, dtype=jnp.float64) * _p_over_C_ode(la, k, omk, alpha, rtol)
 
 
 def pressure(
@@ -277,6 +391,7 @@ def pressure(
     C: Array,
     alpha: Array,
     method: str = "quadrature",
+    rtol: float = ODE_RTOL,
 ) -> Array:
     r"""Internal pressure p (Pa) that holds the shell at inner stretch ``lambda_a = a/A``.
 
@@ -289,37 +404,53 @@ def pressure(
     method         "quadrature" (20-point Gauss-Legendre in log l with a-priori error control, the
                    fast default) or "ode" (diffrax Dopri8 through the wall; an independent check,
                    ~40x slower; raises RuntimeError in eager calls if the integration fails, NaN inside jit).
+    rtol           relative tolerance of the ODE integrator (dimensionless, > 0; default 1e-10, where
+                   the two methods agree to ~2e-13); used by ``method="ode"`` only.
     Returns p in Pa, shape of the broadcast inputs.
 
     Accuracy: below 1e-10 relative for every input (module docstring, "Error control"). Eager calls
     raise ``ValueError`` for bad inputs and where p would overflow float64; inside jit/vmap/grad the
     one-panel rule is used and entries it cannot resolve (large alpha lambda_a^2) are NaN.
+    Eager calls run one compiled program (the same one a user's ``jax.jit`` runs), after the input checks.
     """
-    _check_stretch("inner_stretch", inner_stretch)
-    _validate(inner_radius, outer_radius, C, alpha)
-    la = jnp.asarray(inner_stretch, dtype=jnp.float64)
-    k, omk = _geometry(inner_radius, outer_radius)
-    alpha = jnp.asarray(alpha, dtype=jnp.float64)
+    la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
+    A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
     validate_choice("method", method, ("quadrature", "ode"))
-    if method == "quadrature":
-        pc = _p_over_C(la, k, omk, alpha)
-    elif method == "ode":
-        pc = _p_over_C_ode(la, k, omk, alpha)
-        if not is_traced(pc) and not bool(np.all(np.isfinite(np.asarray(pc)))):
-            bad = np.asarray(jnp.broadcast_to(la, pc.shape))[~np.isfinite(np.asarray(pc))]
-            raise RuntimeError(
-                f"the radial-ODE integration failed at inner stretch {bad.ravel()[0]:g} (diffrax did not "
-                "reach the inner wall in 4096 steps). Hint: use method='quadrature' (exact to 1e-13)."
+    if method == "ode":
+        rt = validate_positive("rtol (relative tolerance of the ODE integrator)", rtol, "dimensionless")
+        if rt is not None and rt.ndim != 0:
+            raise ValueError(
+                f"rtol (relative tolerance of the ODE integrator) must be one number; got shape {rt.shape}"
             )
-    else:
-        raise ValueError(f'method must be "quadrature" or "ode"; got {method!r}')
-    return jnp.asarray(C, dtype=jnp.float64) * pc
+        p = jnp.asarray(_pressure_ode_core(la, _pack(A, B, C_, al), _concrete(rt, rtol)))
+        if not is_traced(p):
+            bad = ~np.isfinite(np.asarray(p))
+            if np.any(bad):
+                stretch = np.broadcast_to(np.asarray(la, dtype=float), bad.shape)[bad]
+                raise RuntimeError(
+                    f"the radial-ODE integration failed at inner stretch {stretch.ravel()[0]:g} (diffrax did not "
+                    f"reach the inner wall in {_ODE_MAX_STEPS} steps). Hint: use method='quadrature' (exact to 1e-13)."
+                )
+        return p
+    p = _call(_pressure_core, la, (A, B, C_, al))
+    if is_traced(p) or not np.isnan(p).any():
+        return p
+    k, omk = _geometry(A, B)
+    return np.asarray(jnp.asarray(C_, dtype=jnp.float64) * _p_over_C(la, k, omk, al))
 
 
 def _dp_over_C(la, k, alpha):
     """d(p/C)/d lambda_a = g(lambda_a) - g(lambda_b) k lambda_a^2 / lambda_b^2 (Leibniz)."""
-    lb = jnp.cbrt(1.0 + (la**3 - 1.0) * k)
+    lb = jnp.exp(jnp.log1p((la**3 - 1.0) * k) / 3.0)  # the cube root, 2x cheaper than jnp.cbrt on CPU
     return _g(la, alpha) - _g(lb, alpha) * k * la**2 / lb**2
+
+
+@jax.jit
+def _pressure_derivative_core(la, params):
+    A, B, C, alpha = params
+    k, _ = _geometry(A, B)
+    la = jnp.asarray(la, dtype=jnp.float64)
+    return jnp.asarray(C, dtype=jnp.float64) * _dp_over_C(la, k, jnp.asarray(alpha, dtype=jnp.float64))
 
 
 def pressure_derivative(
@@ -329,25 +460,32 @@ def pressure_derivative(
 
     dp/d lambda_a = g(lambda_a) - g(lambda_b) d lambda_b/d lambda_a,
     d lambda_b/d lambda_a = (A/B)^3 lambda_a^2 / lambda_b^2,  g(l) = 4 W'(I1(l)) (l^3 + 1)/l^5.
+
+    Arguments as :func:`pressure` (inner_stretch > 0; A < B in m; C > 0 in Pa; alpha >= 0), broadcast.
+    Returns dp/d lambda_a in Pa. Raises ``ValueError`` for bad inputs in eager calls.
     """
-    _check_stretch("inner_stretch", inner_stretch)
-    _validate(inner_radius, outer_radius, C, alpha)
-    la = jnp.asarray(inner_stretch, dtype=jnp.float64)
-    k, _ = _geometry(inner_radius, outer_radius)
-    return jnp.asarray(C, dtype=jnp.float64) * _dp_over_C(la, k, jnp.asarray(alpha, dtype=jnp.float64))
+    la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
+    A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
+    return _call(_pressure_derivative_core, la, (A, B, C_, al))
+
+
+@jax.jit
+def _outer_stretch_core(la, params):
+    A, B = params
+    k, omk = _geometry(A, B)
+    sb, _ = _log_stretches(jnp.asarray(la, dtype=jnp.float64), k, omk)
+    return jnp.exp(sb)
 
 
 def outer_stretch(inner_stretch: Array, *, inner_radius: Array, outer_radius: Array) -> Array:
     r"""Outer stretch lambda_b = b/B from incompressibility (dimensionless):
 
     lambda_b^3 = 1 + (lambda_a^3 - 1)(A/B)^3,  A = inner_radius, B = outer_radius (m).
+    Raises ``ValueError`` for bad inputs in eager calls.
     """
-    _check_stretch("inner_stretch", inner_stretch)
-    validate_radii(inner_radius, outer_radius)
-    la = jnp.asarray(inner_stretch, dtype=jnp.float64)
-    k, omk = _geometry(inner_radius, outer_radius)
-    sb, _ = _log_stretches(la, k, omk)
-    return jnp.exp(sb)
+    la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
+    A, B = validate_radii(inner_radius, outer_radius)
+    return _call(_outer_stretch_core, la, (_concrete(A, inner_radius), _concrete(B, outer_radius)))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -355,28 +493,48 @@ def outer_stretch(inner_stretch: Array, *, inner_radius: Array, outer_radius: Ar
 # ---------------------------------------------------------------------------------------------
 
 LIMIT_SEARCH_MAX_STRETCH = 10.0  # a maximum is searched for on 1 < lambda_a <= 10
-_LIMIT_GRID = np.geomspace(1.0, LIMIT_SEARCH_MAX_STRETCH, 257)[1:]
-_BISECTIONS = 60
+_LIMIT_NODES = 256
+_LIMIT_GRID = np.geomspace(1.0, LIMIT_SEARCH_MAX_STRETCH, _LIMIT_NODES + 1)[1:]
+_BISECTIONS = 12  # the grid cell (0.9 % wide) to ~2e-6, then Newton (quadratic) to round-off
+_NEWTON_STEPS = 4
 
 
 class LimitPoint(NamedTuple):
     """Maximum of the pressure-stretch curve: ``pressure`` (Pa) at ``inner_stretch`` (a/A).
 
     Beyond it the shell inflates without bound under a prescribed pressure ("bursts").
-    NaN entries (array or traced calls) mean: no maximum for 1 < lambda_a <= 10.
+    Read the fields by name. Eager scalar calls hold Python floats; array or traced calls hold
+    arrays, where NaN entries mean: no maximum for 1 < lambda_a <= 10.
     """
 
     pressure: Array
     inner_stretch: Array
 
 
-@jax.jit
-def _limit_stretch(k, alpha):
-    """First root of dp/dla on (1, 10] (NaN if dp/dla > 0 on the whole search grid)."""
-    k, alpha = jnp.broadcast_arrays(jnp.asarray(k, dtype=jnp.float64), jnp.asarray(alpha, dtype=jnp.float64))
+_LIMIT_CHUNK = 2048  # lanes per block of the grid scan: memory stays flat in N (256 x 2048 doubles a temporary)
+
+
+def _falling(la, k, alpha):
+    """dp/dla <= 0 (past the maximum), in a form with one exponential and no cube root:
+    g(la) <= g(lb) k la^2/lb^2  <=>  exp(alpha (q(la) - q(lb))) (la^3 + 1) la^-7 <= k (lb^3 + 1) lb^-7,
+    q(l) = 2 l^2 + l^-4, lb^3 = 1 + (la^3 - 1) k."""
+    la2 = la * la
+    la3 = la2 * la
+    lb3 = 1.0 + (la3 - 1.0) * k
+    inv_lb = jnp.exp(-jnp.log(lb3) / 3.0)
+    ib2 = inv_lb * inv_lb
+    ib4 = ib2 * ib2
+    ila4 = 1.0 / (la2 * la2)
+    dq = 2.0 * la2 + ila4 - 2.0 / ib2 - ib4
+    return jnp.exp(alpha * dq) * (la3 + 1.0) * ila4 * ila4 * la <= k * (lb3 + 1.0) * ib4 * ib2 * inv_lb
+
+
+def _limit_bracket(k, alpha):
+    """First root of dp/dla on (1, 10] (1-D k, alpha of one block; no gradient): scan of the
+    ``_LIMIT_GRID`` nodes, ``_BISECTIONS`` bisections, then safeguarded Newton steps on dp/dla.
+    Returns (stretch, exists)."""
     grid = jnp.asarray(_LIMIT_GRID)
-    d = _dp_over_C(grid, k[..., None], alpha[..., None])
-    falling = d <= 0.0
+    falling = _falling(grid, k[:, None], alpha[:, None])
     exists = jnp.any(falling, axis=-1)
     i = jnp.argmax(falling, axis=-1)  # first grid node past the maximum
     hi = jnp.take(grid, i)
@@ -385,11 +543,44 @@ def _limit_stretch(k, alpha):
     def bisect(_, bounds):
         lo, hi = bounds
         mid = 0.5 * (lo + hi)
-        down = _dp_over_C(mid, k, alpha) <= 0.0
+        down = _falling(mid, k, alpha)
         return jnp.where(down, lo, mid), jnp.where(down, mid, hi)
 
     lo, hi = jax.lax.fori_loop(0, _BISECTIONS, bisect, (lo, hi))
-    la = jax.lax.stop_gradient(0.5 * (lo + hi))
+
+    def newton(_, state):
+        x, lo, hi = state
+        d, dd = jax.jvp(lambda v: _dp_over_C(v, k, alpha), (x,), (jnp.ones_like(x),))
+        down = d <= 0.0
+        lo, hi = jnp.where(down, lo, x), jnp.where(down, x, hi)
+        step = x - d / jnp.where(dd < 0.0, dd, -1.0)
+        ok = (dd < 0.0) & (step >= lo) & (step <= hi)
+        return jnp.where(ok, step, 0.5 * (lo + hi)), lo, hi
+
+    x, _, _ = jax.lax.fori_loop(0, _NEWTON_STEPS, newton, (0.5 * (lo + hi), lo, hi))
+    return x, exists
+
+
+def _limit_stretch(k, alpha):
+    """First root of dp/dla on (1, 10] (NaN if dp/dla > 0 on the whole search grid), broadcast inputs.
+
+    The scan runs block by block (``_LIMIT_CHUNK`` lanes) so that memory does not grow with the
+    256-node grid; the gradient comes from one Newton step with a frozen curvature (implicit function)."""
+    k, alpha = jnp.broadcast_arrays(jnp.asarray(k, dtype=jnp.float64), jnp.asarray(alpha, dtype=jnp.float64))
+    ks, als = (jax.lax.stop_gradient(v).ravel() for v in (k, alpha))
+    n = ks.size
+    if n <= _LIMIT_CHUNK:
+        la, exists = _limit_bracket(ks, als)
+    else:
+        m = -(-n // _LIMIT_CHUNK)
+        pad = m * _LIMIT_CHUNK - n
+        blocks = tuple(
+            jnp.concatenate([v, jnp.full((pad,), f)]).reshape(m, _LIMIT_CHUNK) for v, f in ((ks, 0.3), (als, 0.0))
+        )
+        la, exists = jax.lax.map(lambda kb: _limit_bracket(*kb), blocks)
+        la, exists = la.ravel()[:n], exists.ravel()[:n]
+    la, exists = la.reshape(k.shape), exists.reshape(k.shape)
+    la = jax.lax.stop_gradient(la)
     # one Newton step with a frozen curvature: same value, exact implicit derivative in (k, alpha)
     h = 1e-6 * la
     curv = jax.lax.stop_gradient((_dp_over_C(la + h, k, alpha) - _dp_over_C(la - h, k, alpha)) / (2 * h))
@@ -397,28 +588,52 @@ def _limit_stretch(k, alpha):
     return jnp.where(exists, la, jnp.nan)
 
 
+@jax.jit
+def _limit_core(params):
+    """(p_max, stretch at the maximum); p_max NaN where there is no maximum or where an eager call
+    must take the composite rule (then ``redo`` is True there)."""
+    A, B, C, alpha = params
+    k, omk = _geometry(A, B)
+    alpha = jnp.asarray(alpha, dtype=jnp.float64)
+    la = _limit_stretch(k, alpha)
+    la_b, k_b, omk_b, alpha_b = jnp.broadcast_arrays(la, k, omk, alpha)
+    none = jnp.isnan(la_b)
+    pc, flag = _p_over_C_flagged(jnp.where(none, 1.0, la_b), k_b, omk_b, alpha_b)
+    pmax = jnp.where(none | flag, jnp.nan, jnp.asarray(C, dtype=jnp.float64) * pc)
+    return pmax, la_b, flag & ~none
+
+
 def limit_point(*, inner_radius: Array, outer_radius: Array, C: Array, alpha: Array) -> LimitPoint | None:
     r"""Limit point of the inflation curve: ``(p_max [Pa], lambda_a at the maximum)``, or ``None``.
 
     The maximum is the first root of the closed-form slope (Leibniz rule)
     dp/dlambda_a = g(lambda_a) - g(lambda_b) (A/B)^3 lambda_a^2/lambda_b^2 on 1 < lambda_a <= 10
-    (scan on a 256-node geometric grid, then 60 bisections; the stretch is exact to ~1e-15).
+    (scan on a 256-node geometric grid, 12 bisections, 4 safeguarded Newton steps; the stretch is exact
+    to round-off, ~1e-14).
+    Arguments: inner_radius A and outer_radius B in m (A < B), C in Pa (> 0), alpha >= 0 (broadcast).
     Returns ``None`` for scalar eager inputs without a maximum up to lambda_a = 10 (e.g. Fung with
-    alpha >= ~0.06 for A/B = 2/3 stiffens before it can go unstable). For array or traced
-    (jit/vmap/grad) inputs it returns a ``LimitPoint`` with NaN where there is no maximum.
+    alpha >= ~0.06 for A/B = 2/3 stiffens before it can go unstable), a ``LimitPoint`` of two floats
+    for scalar eager inputs with one. For array or traced (jit/vmap/grad) inputs it returns a
+    ``LimitPoint`` of arrays with NaN where there is no maximum.
     Gradients are exact (envelope theorem for p_max; implicit function theorem for the stretch).
+    The scan runs in blocks of lanes: memory does not grow with the 256-node grid. Raises
+    ``ValueError`` for bad inputs in eager calls.
     """
-    _validate(inner_radius, outer_radius, C, alpha)
-    k, omk = _geometry(inner_radius, outer_radius)
-    alpha = jnp.asarray(alpha, dtype=jnp.float64)
-    C = jnp.asarray(C, dtype=jnp.float64)
-    la = _limit_stretch(k, alpha)
-    la_b, k_b, omk_b, alpha_b = jnp.broadcast_arrays(la, k, omk, alpha)
-    pmax = C * _p_over_C(jnp.where(jnp.isnan(la_b), 1.0, la_b), k_b, omk_b, alpha_b, "limit stretch")
-    pmax = jnp.where(jnp.isnan(la_b), jnp.nan, pmax)
-    if not is_traced(inner_radius, outer_radius, C, alpha) and np.ndim(pmax) == 0 and np.isnan(pmax):
-        return None
-    return LimitPoint(pmax, la_b)
+    A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
+    pmax, la, redo = _call(_limit_core, None, (A, B, C_, al))
+    if is_traced(pmax):
+        return LimitPoint(pmax, la)
+    if np.asarray(redo).any():  # stiff states: the error-controlled quadrature (eager, rare)
+        k, omk = _geometry(A, B)
+        la_s = jnp.where(jnp.isnan(la), 1.0, la)
+        la_b, k_b, omk_b, al_b = jnp.broadcast_arrays(la_s, k, omk, jnp.asarray(al, dtype=jnp.float64))
+        pc = _p_over_C(la_b, k_b, omk_b, al_b, "limit stretch")
+        pmax = jnp.where(jnp.isnan(la), jnp.nan, jnp.asarray(C_, dtype=jnp.float64) * pc)
+    if np.ndim(pmax) == 0:
+        if np.isnan(pmax):
+            return None
+        return LimitPoint(float(pmax), float(la))
+    return LimitPoint(np.asarray(pmax), np.asarray(la))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -493,7 +708,7 @@ def _newton(pt, k, omk, alpha, x0, lo, hi, rule, max_iter, tol):
     return x, r, d
 
 
-_CHUNK = 8192  # large inputs are solved chunk by chunk: each chunk stops when its own lanes converge
+_CHUNK = 1024  # large inputs are solved chunk by chunk: each chunk stops when its own lanes converge
 
 
 @jax.jit
@@ -609,25 +824,35 @@ def inner_stretch(pressure: Array, *, inner_radius: Array, outer_radius: Array, 
     Inside ``jit``/``vmap`` no exception can be raised: those entries are NaN (NaN convention; use
     :func:`inner_stretch_solve` for the explicit ``converged`` flag).
     """
-    validate_finite("pressure", pressure, "Pa")
-    _validate(inner_radius, outer_radius, C, alpha)
-    traced = is_traced(pressure, inner_radius, outer_radius, C, alpha)
-    if traced:
+    p = _concrete(validate_finite("pressure", pressure, "Pa"), pressure)
+    A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
+    if is_traced(pressure, inner_radius, outer_radius, C, alpha):  # differentiable path (implicit function)
         la, _ = inner_stretch_solve(pressure, inner_radius=inner_radius, outer_radius=outer_radius, C=C, alpha=alpha)
         return la
-    k, omk = _geometry(inner_radius, outer_radius)
-    Cj = jnp.asarray(C, dtype=jnp.float64)
-    alpha_j = jnp.asarray(alpha, dtype=jnp.float64)
-    pt = jnp.asarray(pressure, dtype=jnp.float64) / Cj
-    la, conv, rule_ok = (np.array(v) for v in _solve_stretch(pt, k, omk, alpha_j))
-    conv = np.array(conv, dtype=bool)
-    fix = conv & ~np.asarray(rule_ok, dtype=bool)
+    la, conv, rule_ok = _call(_inverse_core, p, (A, B, C_, al))
+    conv = np.asarray(conv)
+    rule_ok = np.asarray(rule_ok)
+    if conv.all() and rule_ok.all():
+        return la
+    la, conv = np.array(la), conv.copy()
+    fix = conv & ~rule_ok
     if np.any(fix):  # stiff states: polish with the error-controlled quadrature (Newton in log lambda_a)
-        b = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (pt, k, omk, alpha_j)))
+        k, omk = _geometry(A, B)
+        pt = np.asarray(p, dtype=float) / np.asarray(C_, dtype=float)
+        b = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (pt, k, omk, al)))
         la[fix], conv[fix] = _polish(la[fix], *(v[fix] for v in b))
     if not bool(np.all(conv)):
         _raise_no_solution(pressure, conv, inner_radius, outer_radius, C, alpha)
-    return jnp.asarray(la)
+    return la
+
+
+@jax.jit
+def _inverse_core(p, params):
+    """(lambda_a, converged, rule_ok) of the rising-branch inverse (no gradient: see ``_inverse``)."""
+    A, B, C, alpha = params
+    k, omk = _geometry(A, B)
+    pt = jnp.asarray(p, dtype=jnp.float64) / jnp.asarray(C, dtype=jnp.float64)
+    return _solve_stretch(pt, k, omk, jnp.asarray(alpha, dtype=jnp.float64))
 
 
 def _polish(la, pt, k, omk, alpha, max_iter: int = 40):
@@ -728,22 +953,49 @@ def profiles(
     sigma_theta = sigma_r + 2 W'(I1)(l^2 - l^-4), I1 = 2 l^2 + l^-4; von Mises |sigma_theta - sigma_r|.
     Inputs broadcast; the profile axis is appended last.
     """
-    _check_stretch("inner_stretch", inner_stretch)
-    _validate(inner_radius, outer_radius, C, alpha)
+    la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
+    A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
     n = validate_int("n (number of points through the wall)", n, minimum=2)
+    out, redo = _call(_profiles_core, la, (A, B, C_, al), n)
+    if is_traced(redo) or not np.asarray(redo).any():
+        return out
+    # stiff states (large alpha l^2): sigma_r by the error-controlled composite rule (eager, rare)
+    R, r, lam, _, _, _ = out
+    A_, B_ = (jnp.asarray(v, dtype=jnp.float64)[..., None] for v in (A, B))
+    kR, omkR, alpha_b, C_b = _wall_geometry(A_, B_, R, al, C_)
+    lam_b, kR_b, omkR_b, alpha_b, C_b = jnp.broadcast_arrays(lam, kR, omkR, alpha_b, C_b)
+    sigma_r = -C_b * _p_over_C(lam_b, kR_b, omkR_b, alpha_b, "hoop stretch in the wall")
+    diff = _hoop_minus_radial(lam_b, C_b, alpha_b)
+    return Profiles(*(np.asarray(v) for v in (R, r, lam, sigma_r, sigma_r + diff, jnp.abs(diff))))
+
+
+def _wall_geometry(A, B, R, alpha, C):
+    """(A/R)^3-type factors of the shell inside radius R: k_R = (R/B)^3, 1 - k_R; alpha, C with a profile axis."""
+    kR = (R / B) ** 3
+    omkR = (B - R) * (B * B + R * B + R * R) / B**3
+    return kR, omkR, jnp.asarray(alpha, dtype=jnp.float64)[..., None], jnp.asarray(C, dtype=jnp.float64)[..., None]
+
+
+def _hoop_minus_radial(lam, C, alpha):
+    """sigma_theta - sigma_r = 2 W'(I1)(l^2 - l^-4) in Pa."""
+    I1 = 2.0 * lam**2 + lam**-4
+    return 2.0 * dW_dI1(I1, C, alpha) * (lam**2 - lam**-4)
+
+
+@functools.partial(jax.jit, static_argnums=(2,))
+def _profiles_core(inner_stretch, params, n):
+    """Profiles by the one-panel rule and ``redo``: True where an eager call must take the composite rule."""
+    inner_radius, outer_radius, C, alpha = params
     A = jnp.asarray(inner_radius, dtype=jnp.float64)[..., None]
     B = jnp.asarray(outer_radius, dtype=jnp.float64)[..., None]
     la = jnp.asarray(inner_stretch, dtype=jnp.float64)[..., None]
-    C = jnp.asarray(C, dtype=jnp.float64)[..., None]
-    alpha = jnp.asarray(alpha, dtype=jnp.float64)[..., None]
     t = jnp.linspace(0.0, 1.0, int(n))
     R = A + (B - A) * t
     e = jnp.expm1(3.0 * jnp.log(la))
     lam = jnp.exp(jnp.log1p(e * (A / R) ** 3) / 3.0)
-    kR = (R / B) ** 3
-    omkR = (B - R) * (B * B + R * B + R * R) / B**3
+    kR, omkR, alpha, C = _wall_geometry(A, B, R, alpha, C)
     lam_b, kR_b, omkR_b, alpha_b, C_b, R_b = jnp.broadcast_arrays(lam, kR, omkR, alpha, C, R)
-    sigma_r = -C_b * _p_over_C(lam_b, kR_b, omkR_b, alpha_b, "hoop stretch in the wall")
-    I1 = 2.0 * lam_b**2 + lam_b**-4
-    diff = 2.0 * dW_dI1(I1, C_b, alpha_b) * (lam_b**2 - lam_b**-4)
-    return Profiles(R_b, lam_b * R_b, lam_b, sigma_r, sigma_r + diff, jnp.abs(diff))
+    pc, redo = _p_over_C_flagged(lam_b, kR_b, omkR_b, alpha_b)
+    sigma_r = -C_b * pc
+    diff = _hoop_minus_radial(lam_b, C_b, alpha_b)
+    return Profiles(R_b, lam_b * R_b, lam_b, sigma_r, sigma_r + diff, jnp.abs(diff)), redo

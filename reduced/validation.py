@@ -16,6 +16,7 @@ returns without a word for them (models then follow their documented NaN convent
 
 from __future__ import annotations
 
+import math
 import numbers
 from collections.abc import Iterable, Sequence
 from typing import Any, SupportsInt, cast
@@ -77,6 +78,11 @@ def as_array(name: str, value: Any, unit: str = "") -> np.ndarray | None:
 
     Text, None, bools, complex numbers and ragged or non-numeric containers are refused.
     """
+    t = type(value)
+    if t is float or t is int:  # the common scalar: skip the type ladder (a bool is not an int here)
+        return np.asarray(value, dtype=float)
+    if t is np.ndarray and value.dtype.kind in "iuf":
+        return value if value.dtype == np.float64 else np.asarray(value, dtype=float)
     if is_traced(value):
         return None
     u = _unit_phrase(unit)
@@ -106,22 +112,36 @@ def as_array(name: str, value: Any, unit: str = "") -> np.ndarray | None:
     return np.asarray(raw, dtype=float)
 
 
+def _finite_scalar(value: Any) -> float | None:
+    """``value`` as a float if it is a plain finite Python float or int (the fast path), else None."""
+    t = type(value)
+    if (t is float or t is int) and math.isfinite(value):
+        return float(value)
+    return None
+
+
 def validate_finite(name: str, value: Any, unit: str = "") -> np.ndarray | None:
     """Raise unless every entry of ``value`` is a finite real number; returns the float array."""
+    x = _finite_scalar(value)
+    if x is not None:
+        return np.asarray(x)
     v = as_array(name, value, unit)
     if v is None:
         return None
     if v.size == 0:
         raise InputError(f"{name} must not be empty{_unit_phrase(unit)}; got {_describe(value)}")
-    if not np.all(np.isfinite(v)):
+    if not np.isfinite(v).all():
         raise InputError(f"{name} must be a finite number{_unit_phrase(unit)}; got {_describe(value)}")
     return v
 
 
 def validate_positive(name: str, value: Any, unit: str = "") -> np.ndarray | None:
     """Raise unless every entry of ``value`` is finite and > 0."""
+    x = _finite_scalar(value)
+    if x is not None and x > 0:
+        return np.asarray(x)
     v = validate_finite(name, value, unit)
-    if v is not None and np.any(v <= 0):
+    if v is not None and (v <= 0).any():
         raise InputError(f"{name} must be positive{_unit_phrase(unit)}; got {_with_unit(float(np.min(v)), unit)}")
     return v
 
@@ -134,27 +154,34 @@ def validate_nonnegative(name: str, value: Any, unit: str = "") -> np.ndarray | 
     return v
 
 
-def validate_material(C: Any, alpha: Any, kappa: Any = None) -> None:
-    """Check the Fung parameters: C > 0 (Pa), alpha >= 0 (dimensionless), optional kappa > 0 (Pa)."""
-    validate_positive("C (the Fung stiffness, shear modulus / 2)", C, "Pa")
+def validate_material(C: Any, alpha: Any, kappa: Any = None) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Check the Fung parameters: C > 0 (Pa), alpha >= 0 (dimensionless), optional kappa > 0 (Pa).
+
+    Returns (C, alpha) as float64 arrays (None for a traced value), so that callers need not convert twice.
+    """
+    c = validate_positive("C (the Fung stiffness, shear modulus / 2)", C, "Pa")
     name = "alpha (the Fung stiffening exponent)"
-    v = as_array(name, alpha, "dimensionless")
-    if v is not None:
-        if v.size == 0 or not np.all(np.isfinite(v)):
+    x = _finite_scalar(alpha)
+    v = np.asarray(x) if x is not None else as_array(name, alpha, "dimensionless")
+    if v is not None and not (x is not None and x >= 0):
+        if v.size == 0 or not np.isfinite(v).all():
             raise InputError(f"{name} must be finite (dimensionless); got {_describe(alpha)}")
-        if np.any(v < 0):
+        if (v < 0).any():
             raise InputError(f"{name} must be >= 0 (dimensionless, 0 is neo-Hookean); got {np.min(v):g}")
     if kappa is not None:
         validate_positive("kappa (the bulk modulus)", kappa, "Pa")
+    return c, v
 
 
-def validate_radii(inner_radius: Any, outer_radius: Any) -> None:
-    """Check a hollow sphere: 0 < inner_radius < outer_radius (both in m)."""
+def validate_radii(inner_radius: Any, outer_radius: Any) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Check a hollow sphere: 0 < inner_radius < outer_radius (both in m).
+
+    Returns the two radii as float64 arrays (None for a traced value)."""
     a = validate_positive("inner_radius", inner_radius, "m")
     b = validate_positive("outer_radius", outer_radius, "m")
-    if a is not None and b is not None:
+    if a is not None and b is not None and not (a.ndim == 0 and b.ndim == 0 and float(a) < float(b)):
         try:
-            thin = np.any(a >= b)
+            thin = (a >= b).any()
         except ValueError:
             raise InputError(
                 f"inner_radius (shape {a.shape}) and outer_radius (shape {b.shape}) must broadcast (in m)"
@@ -164,6 +191,7 @@ def validate_radii(inner_radius: Any, outer_radius: Any) -> None:
                 "inner_radius must be smaller than outer_radius (the wall needs a positive "
                 f"thickness); got inner {np.max(a):g} m >= outer {np.min(b):g} m"
             )
+    return a, b
 
 
 def validate_branches(branches: Iterable[Sequence[float]] | None) -> tuple[tuple[Any, Any], ...]:

@@ -5,6 +5,30 @@ import re
 import pytest
 
 from tissuemech.compare import cli
+from tissuemech.compare.cli import blastula as cli_blastula
+
+
+@pytest.fixture(autouse=True)
+def _no_jit_cache_in_home(monkeypatch):
+    """The commands would keep compiled programs in ~/.cache/tissuemech/jax: not from the tests."""
+    monkeypatch.setenv(cli_blastula.JIT_CACHE_OPT_OUT, "1")
+
+
+def test_jit_cache_is_opt_out_and_respects_a_user_choice(monkeypatch, tmp_path):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    assert cli_blastula.enable_jit_cache() is None  # opted out (fixture)
+    assert not (tmp_path / "tissuemech").exists()
+    monkeypatch.setenv(cli_blastula.JIT_CACHE_OPT_OUT, "0")
+    monkeypatch.setenv("JAX_COMPILATION_CACHE_DIR", str(tmp_path / "mine"))
+    assert cli_blastula.enable_jit_cache() is None  # the user's own cache setting wins
+    assert not (tmp_path / "tissuemech").exists()
+
+
+def test_only_the_named_command_is_imported():
+    assert cli._command_in(["-v", "blastula", "--step", "50"]) == "blastula"
+    assert cli._command_in(["--version"]) is None and cli._command_in(["nosuch"]) is None
+    sub = next(a for a in cli.build_parser("blastula")._actions if a.dest == "command")
+    assert list(sub.choices) == ["blastula"]
 
 
 def test_blastula_table_and_plot(tmp_path, capsys):

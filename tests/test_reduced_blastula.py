@@ -308,3 +308,96 @@ def test_bounded_inverse_stays_on_the_first_branch():
     la, ok = bl.inner_stretch_solve(p, **geo, max_inner_stretch=lim.inner_stretch)
     assert np.all(np.asarray(ok)) and np.all(np.asarray(la) <= float(lim.inner_stretch))
     np.testing.assert_allclose(np.asarray(bl.pressure(np.asarray(la), **geo)), p, rtol=1e-10)
+
+
+# ------------------------------------------------------------------ eager calls run the compiled cores (issue 14)
+
+
+def _rel(a, b):
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    assert a.shape == b.shape
+    assert np.array_equal(np.isnan(a), np.isnan(b))
+    m = ~np.isnan(a)
+    return float(np.max(np.abs(a[m] - b[m]) / np.maximum(np.abs(b[m]), 1e-300), initial=0.0))
+
+
+@pytest.mark.parametrize("n", [1, 300, 1500])  # scalar-like, padded bucket, exact shape
+def test_eager_equals_jit(n):
+    rng = np.random.default_rng(10 + n)
+    la = rng.uniform(0.6, 4.0, n)
+    al = rng.uniform(0.0, 0.3, n)
+    Bs = rng.uniform(52e-6, 100e-6, n)
+    p = np.asarray(bl.pressure(la, **GEO, C=C, alpha=0.2))
+    cases = [
+        (lambda x, a: bl.pressure(x, **GEO, C=C, alpha=a), (la, al)),
+        (lambda x, a: bl.pressure_derivative(x, **GEO, C=C, alpha=a), (la, al)),
+        (lambda x, a: bl.outer_stretch(x, **GEO), (la, al)),
+        (lambda q, a: bl.inner_stretch(q, **GEO, C=C, alpha=0.2), (p, al)),
+        (lambda x, a: bl.profiles(x, **GEO, C=C, alpha=a, n=7), (la, al)),
+        (lambda b, a: bl.limit_point(inner_radius=A, outer_radius=b, C=C, alpha=0.05 * a), (Bs, al)),
+    ]
+    for f, args in cases:
+        eager, jitted = f(*args), jax.jit(f)(*args)
+        for e, j in zip(jax.tree_util.tree_leaves(eager), jax.tree_util.tree_leaves(jitted)):
+            assert _rel(e, j) <= 1e-14
+    # scalar in, scalar out (0-d), equal to the array call
+    assert np.shape(bl.pressure(1.5, **GEO, C=C, alpha=0.2)) == ()
+    assert float(bl.pressure(1.5, **GEO, C=C, alpha=0.2)) == float(
+        bl.pressure(np.array([1.5]), **GEO, C=C, alpha=0.2)[0]
+    )
+
+
+def test_eager_stiff_entries_still_error_controlled():
+    """Entries the one-panel rule cannot resolve (NaN under jit) are redone eagerly with more panels."""
+    la = np.array([1.5, 3.0, 6.0])
+    eager = np.asarray(bl.pressure(la, **GEO, C=C, alpha=5.0))
+    jitted = np.asarray(jax.jit(lambda x: bl.pressure(x, **GEO, C=C, alpha=5.0))(la))
+    assert np.all(np.isfinite(eager)) and np.isnan(jitted[-1])
+    ref = [fung_quad(x, A, 75e-6, C, 5.0) for x in la]
+    np.testing.assert_allclose(eager, ref, rtol=1e-10)
+    pr = bl.profiles(la, **GEO, C=C, alpha=5.0, n=9)  # the through-wall integral, redone the same way
+    assert np.all(np.isfinite(np.asarray(pr.sigma_r)))
+    np.testing.assert_allclose(np.asarray(pr.sigma_r[:, 0]), -eager, rtol=1e-12)
+    np.testing.assert_allclose(np.asarray(pr.sigma_r[:, -1]), 0.0, atol=1e-12 * eager.max())
+    np.testing.assert_allclose(np.asarray(pr.von_mises), np.abs(np.asarray(pr.sigma_theta - pr.sigma_r)), rtol=1e-12)
+
+
+def test_chunked_limit_point_equals_unchunked():
+    rng = np.random.default_rng(11)
+    n = 2 * bl._LIMIT_CHUNK + 37  # scanned in blocks inside the compiled core
+    Bs = rng.uniform(52e-6, 100e-6, n)
+    al = rng.uniform(0.0, 0.06, n)
+    whole = bl.limit_point(inner_radius=A, outer_radius=Bs, C=C, alpha=al)
+    assert 0 < np.mean(np.isnan(np.asarray(whole.pressure))) < 1
+    for s in (slice(0, 500), slice(1990, 2110), slice(n - 300, n)):  # one block each
+        part = bl.limit_point(inner_radius=A, outer_radius=Bs[s], C=C, alpha=al[s])
+        assert _rel(whole.pressure[s], part.pressure) <= 1e-15
+        assert _rel(whole.inner_stretch[s], part.inner_stretch) <= 1e-15
+    for i in (0, 2100):  # scalar calls agree too
+        one = bl.limit_point(inner_radius=A, outer_radius=float(Bs[i]), C=C, alpha=float(al[i]))
+        if one is None:
+            assert np.isnan(float(whole.pressure[i]))
+        else:
+            assert one.pressure == pytest.approx(float(whole.pressure[i]), rel=1e-15)
+
+
+def test_limit_point_fields_are_floats_for_scalar_input():
+    lim = bl.limit_point(**GEO, C=C, alpha=0.0)
+    assert type(lim.pressure) is float and type(lim.inner_stretch) is float
+    assert lim.pressure == lim[0] and lim.inner_stretch == lim[1]
+    arr = bl.limit_point(**GEO, C=C, alpha=np.array([0.0, 0.01]))
+    assert np.shape(arr.pressure) == (2,) and np.shape(arr.inner_stretch) == (2,)
+
+
+def test_ode_rtol_reaches_the_integrator():
+    la = np.linspace(1.1, 3.5, 9)
+    q = np.asarray(bl.pressure(la, **GEO, C=C, alpha=0.2))
+    loose = np.asarray(bl.pressure(la, **GEO, C=C, alpha=0.2, method="ode", rtol=1e-3))
+    tight = np.asarray(bl.pressure(la, **GEO, C=C, alpha=0.2, method="ode", rtol=1e-12))
+    assert np.max(np.abs(loose / q - 1)) > 1e-9  # a loose tolerance changes the answer
+    np.testing.assert_allclose(tight, q, rtol=1e-12, atol=0)  # a tight one agrees with the quadrature
+    under_jit = jax.jit(lambda x: bl.pressure(x, **GEO, C=C, alpha=0.2, method="ode", rtol=1e-3))(la)
+    np.testing.assert_allclose(np.asarray(under_jit), loose, rtol=1e-14)
+    for bad in (0.0, -1e-6, float("nan"), "tight"):
+        with pytest.raises(ValueError, match="rtol"):
+            bl.pressure(la, **GEO, C=C, alpha=0.2, method="ode", rtol=bad)

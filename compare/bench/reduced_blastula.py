@@ -1,6 +1,11 @@
 """Benchmark of the reduced blastula paths (``reduced.blastula``, ``reduced.viscoshell``).
 
-    python -m tissuemech.compare.bench.reduced_blastula [--n 1000000] [--baseline 2000]
+    python -m tissuemech.compare.bench.reduced_blastula [--n 1000000] [--baseline 2000] [--api-only]
+
+Part 1 (:func:`api_rows`, issue 14): every public function called eagerly with NumPy arrays, as a
+user calls it, against the same call under ``jax.jit``, interleaved in one run (median of the
+repeats): the ratio eager/jit at ``n`` points and the per-call cost at N = 1; ``limit_point``'s peak
+memory at 1e4 / 1e5 / 1e6 points (fresh interpreters, ``ru_maxrss``) shows it flat in N.
 
 Each row: the path, points per call, compile time, throughput after compile (points/s, best of a
 few calls with ``block_until_ready``), the max relative error against a high-accuracy reference,
@@ -177,6 +182,149 @@ def rows(n: int = 1_000_000, n_baseline: int = 2000, seed: int = 0) -> list[dict
     return out
 
 
+def _median_pair(f: Callable, g: Callable, repeats: int, inner: int = 1) -> tuple[float, float]:
+    """Median seconds per call of f and of g, interleaved (f, g, f, g, ...), ``inner`` calls per sample."""
+    import jax
+
+    jax.block_until_ready(f())
+    jax.block_until_ready(g())
+    tf, tg = [], []
+    for _ in range(repeats):
+        for fn, acc in ((f, tf), (g, tg)):
+            t0 = time.perf_counter()
+            for _ in range(inner):
+                out = fn()
+            jax.block_until_ready(out)
+            acc.append((time.perf_counter() - t0) / inner)
+    return float(np.median(tf)), float(np.median(tg))
+
+
+def _api_cases(n: int, rng: np.random.Generator) -> list[tuple[str, Callable, tuple, int]]:
+    """(name, function of arrays, arguments at n points, output points per call)."""
+    from tissuemech.reduced import blastula as bl
+
+    geo = dict(inner_radius=A, outer_radius=B, C=C)
+    la = rng.uniform(1.0, 4.0, n)
+    al = rng.uniform(0.0, 0.3, n)
+    p = np.asarray(bl.pressure(rng.uniform(0.6, 4.0, n), **geo, alpha=0.2))
+    npr = max(n // 50, 1)
+    Bs = rng.uniform(52e-6, 100e-6, n)
+    al_lim = rng.uniform(0.0, 0.05, n)
+    return [
+        ("pressure", lambda x, a: bl.pressure(x, **geo, alpha=a), (la, al), n),
+        ("pressure_derivative", lambda x, a: bl.pressure_derivative(x, **geo, alpha=a), (la, al), n),
+        ("outer_stretch", lambda x: bl.outer_stretch(x, inner_radius=A, outer_radius=B), (la,), n),
+        ("inner_stretch (alpha=0.2)", lambda q: bl.inner_stretch(q, **geo, alpha=0.2), (p,), n),
+        ("profiles (n=50)", lambda x, a: bl.profiles(x, **geo, alpha=a), (la[:npr], al[:npr]), 50 * npr),
+        (
+            "limit_point",
+            lambda b, a: bl.limit_point(inner_radius=A, outer_radius=b, C=C, alpha=a),
+            (Bs, al_lim),
+            n,
+        ),
+    ]
+
+
+def limit_point_memory(n: int) -> float:
+    """Peak resident memory (MB, ``ru_maxrss``) of a fresh interpreter that imports the package and calls
+    ``limit_point`` once at n points (compile included): flat in n when the scan runs in blocks."""
+    import subprocess
+    import sys
+
+    code = (
+        "import resource, numpy as np, tissuemech.reduced\n"
+        "from tissuemech.reduced import blastula as bl\n"
+        "rng = np.random.default_rng(0)\n"
+        "def call(m):\n"
+        "    bl.limit_point(inner_radius=50e-6, outer_radius=rng.uniform(52e-6, 1e-4, m), C=200.0,"
+        " alpha=rng.uniform(0, 0.05, m))\n"
+        f"call({int(n)})\n"
+        "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)\n"
+    )
+    return float(subprocess.check_output([sys.executable, "-c", code]).decode().strip().splitlines()[-1])
+
+
+def api_rows(n: int = 1_000_000, repeats: int = 5, seed: int = 0, memory: bool = True) -> list[dict]:
+    """Eager public calls (NumPy in) against the same call under ``jax.jit``, interleaved; see the module
+    docstring. Columns: function, points, eager_points_per_s, jit_points_per_s, eager_over_jit, n1_eager_us,
+    n1_jit_us, eager_equals_jit (max relative difference of the results)."""
+    import jax
+
+    rng = np.random.default_rng(seed)
+    out: list[dict] = []
+    small = {name: args for name, _, args, _ in _api_cases(1, np.random.default_rng(seed + 1))}
+    for name, fn, args, pts in _api_cases(n, rng):
+        jf = jax.jit(fn)
+        big = max(1, repeats if pts <= 2e6 else 3)
+        te, tj = _median_pair(lambda: fn(*args), lambda: jf(*args), big)
+        e, j = jax.tree_util.tree_leaves(fn(*args)), jax.tree_util.tree_leaves(jf(*args))
+        with np.errstate(invalid="ignore", divide="ignore"):  # NaN entries (no limit point) compare as equal
+            diff = max(
+                float(np.nanmax(np.abs(np.asarray(a) / np.asarray(b) - 1), initial=0.0)) if np.size(a) else 0.0
+                for a, b in zip(e, j)
+            )
+        a1 = small[name]
+        t1e, t1j = _median_pair(lambda: fn(*a1), lambda: jf(*a1), 15, inner=20)
+        out.append(
+            dict(
+                function=name,
+                points=pts,
+                eager_points_per_s=pts / te,
+                jit_points_per_s=pts / tj,
+                eager_over_jit=te / tj,
+                n1_eager_us=t1e * 1e6,
+                n1_jit_us=t1j * 1e6,
+                eager_vs_jit_max_rel=diff,
+            )
+        )
+    if memory:
+        mem = {m: limit_point_memory(m) for m in (10_000, 100_000, 1_000_000)}
+        out.append(
+            dict(
+                function="limit_point peak RSS of the process (MB)",
+                points="1e4/1e5/1e6",
+                eager_points_per_s=" / ".join(f"{v:.0f}" for v in mem.values()),
+            )
+        )
+    return out
+
+
+def cli_rows(repeats: int = 3) -> list[dict]:
+    """Wall time of the whole ``tissuemech blastula`` process (its defaults, the PNG into a temporary
+    folder): cold (an empty compilation cache), warm (the cache the cold run wrote) and with the cache
+    switched off (``TISSUEMECH_NO_JIT_CACHE=1``); median of ``repeats`` runs each, interleaved."""
+    import os
+    import shutil
+    import subprocess
+    import sys
+    import tempfile
+
+    exe = [sys.executable, "-c", "import sys; from tissuemech.compare.cli import main; sys.exit(main())", "blastula"]
+    times: dict[str, list[float]] = {"cold": [], "warm": [], "no cache": []}
+    with tempfile.TemporaryDirectory() as tmp:
+        for _ in range(repeats):
+            for kind in times:
+                env = dict(os.environ, XDG_CACHE_HOME=os.path.join(tmp, "cache"))
+                env.pop("JAX_COMPILATION_CACHE_DIR", None)
+                if kind == "cold":
+                    shutil.rmtree(env["XDG_CACHE_HOME"], ignore_errors=True)
+                if kind == "no cache":
+                    env["TISSUEMECH_NO_JIT_CACHE"] = "1"
+                t0 = time.perf_counter()
+                subprocess.run(
+                    exe + ["--out", os.path.join(tmp, "b.png")], env=env, cwd=tmp, check=True, capture_output=True
+                )
+                times[kind].append(time.perf_counter() - t0)
+    return [
+        dict(
+            function=f"tissuemech blastula (whole process, {kind})",
+            points="",
+            eager_points_per_s=f"{np.median(v):.2f} s",
+        )
+        for kind, v in times.items()
+    ]
+
+
 def base_fwd(rows_so_far: list[dict]) -> float:
     return rows_so_far[0]["baseline_points_per_s"]
 
@@ -187,10 +335,16 @@ def main(argv: Sequence[str] | None = None) -> list[dict]:
     ap = argparse.ArgumentParser(prog="python -m tissuemech.compare.bench.reduced_blastula")
     ap.add_argument("--n", type=int, default=1_000_000, help="points per vectorised call")
     ap.add_argument("--baseline", type=int, default=2000, help="points in the scipy quad loop")
+    ap.add_argument("--api-only", action="store_true", help="only part 1: eager calls against jit (issue 14)")
+    ap.add_argument("--no-cli", action="store_true", help="skip the tissuemech blastula process timings")
     args = ap.parse_args(list(argv) if argv is not None else None)
+    api = api_rows(args.n) + ([] if args.no_cli else cli_rows())
+    print_rows(api)
+    if args.api_only:
+        return api
     r = rows(args.n, args.baseline)
     print_rows(r)
-    return r
+    return api + r
 
 
 if __name__ == "__main__":

@@ -40,8 +40,9 @@ COMMANDS: list[tuple[str, str]] = [
 ]
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The argparse root with every subcommand of ``COMMANDS`` registered."""
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The argparse root with every subcommand of ``COMMANDS`` registered (or only the command ``only``:
+    registering a command imports its module, and some pull in pandas or the report)."""
     import tissuemech
 
     p = argparse.ArgumentParser(
@@ -58,15 +59,25 @@ def build_parser() -> argparse.ArgumentParser:
         help="log what the solvers do (-v: INFO, -vv: DEBUG: every load/time step and cut-back)",
     )
     sub = p.add_subparsers(dest="command", metavar="COMMAND")
-    for _, module in COMMANDS:
-        importlib.import_module(module).add_parser(sub)
+    for name, module in COMMANDS:
+        if only is None or name == only:
+            importlib.import_module(module).add_parser(sub)
     return p
+
+
+def _command_in(argv: Sequence[str]) -> str | None:
+    """The subcommand named in ``argv`` (the first word that is not an option), if it is one of ``COMMANDS``."""
+    for word in argv:
+        if not word.startswith("-"):
+            return word if word in dict(COMMANDS) else None
+    return None
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``tissuemech`` console script; returns the exit code."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    words = list(sys.argv[1:] if argv is None else argv)
+    parser = build_parser(_command_in(words))  # a known command: import only its module
+    args = parser.parse_args(words)
     if args.command is None:
         parser.print_help()
         return 0

@@ -38,8 +38,41 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
 MAX_TABLE_ROWS = 10_000  # the table: max_pressure / step rows at most
 
 
+JIT_CACHE_OPT_OUT = "TISSUEMECH_NO_JIT_CACHE"  # set to 1 to keep the command from writing compiled programs
+
+
+def enable_jit_cache() -> str | None:
+    """Keep JAX's compiled programs between runs: a persistent compilation cache in the user's cache
+    folder (``$XDG_CACHE_HOME/tissuemech/jax``, default ``~/.cache/tissuemech/jax``).
+
+    Nothing is done where ``TISSUEMECH_NO_JIT_CACHE`` is set (to anything but ``0`` or empty), where the
+    user chose a cache already (``JAX_COMPILATION_CACHE_DIR``), or where the folder cannot be created.
+    The cache holds only XLA executables keyed by program, JAX version and machine; deleting the folder
+    is always safe. Returns the folder used, or None.
+    """
+    import os
+
+    if os.environ.get(JIT_CACHE_OPT_OUT, "") not in ("", "0") or os.environ.get("JAX_COMPILATION_CACHE_DIR"):
+        return None
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    folder = os.path.join(base, "tissuemech", "jax")
+    try:
+        os.makedirs(folder, exist_ok=True)
+    except OSError:
+        return None
+    if not os.access(folder, os.W_OK | os.X_OK):
+        return None
+    import jax
+
+    jax.config.update("jax_compilation_cache_dir", folder)
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+    jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+    return folder
+
+
 def run(args: Namespace) -> None:
     """Run ``tissuemech blastula`` with parsed arguments."""
+    enable_jit_cache()
     rows = args.max_pressure / args.step
     if rows > MAX_TABLE_ROWS:
         raise CLIError(
@@ -62,7 +95,7 @@ def blastula_curves(C: float, inner_radius: float, max_pressure: float, step: fl
     for fig, alpha, B in cases.BLASTULA_SETS:
         geo = dict(inner_radius=inner_radius, outer_radius=B)
         lim = blastula.limit_point(**geo, C=C, alpha=alpha)
-        ok = pressures < lim[0] if lim is not None else np.ones_like(pressures, bool)
+        ok = pressures < lim.pressure if lim is not None else np.ones_like(pressures, bool)
         la = np.full_like(pressures, np.nan)
         if ok.any():
             la[ok] = np.asarray(blastula.inner_stretch(pressures[ok], **geo, C=C, alpha=alpha))
@@ -100,7 +133,7 @@ def _print_blastula(curves: list[dict[str, Any]], inner_radius: float) -> None:
         if lim is None:
             print(f"  {where}: none (p rises monotonically)")
         else:
-            print(f"  {where}: p_max = {float(lim[0]):.2f} Pa at lambda_a = {float(lim[1]):.4f}")
+            print(f"  {where}: p_max = {lim.pressure:.2f} Pa at lambda_a = {lim.inner_stretch:.4f}")
 
 
 def blastula_table(args: Namespace) -> None:

@@ -12,7 +12,7 @@ pressure residual of that state against the exact incompressible shell,
 
 * reduced, quadrature path: ``reduced.blastula.inner_stretch(p)`` (20-point Gauss-Legendre + Newton);
 * reduced, diffrax path: ``reduced.blastula.pressure(lambda_exact, method="ode")`` with the Dopri8
-  tolerance set to rtol in {1e-3 .. 1e-10} (``_ode_rtol``);
+  tolerance set to rtol in {1e-3 .. 1e-10} (its ``rtol=`` argument);
 * FE: ``fem.blastula.inflate`` (load control, kappa = 2.2 GPa) on 4 mesh levels (n_radial, n_circ).
 
 Wall times: the median of ``repeats`` calls after one warm-up call (``wall_s``; 21 calls for the
@@ -33,9 +33,8 @@ caller), FE on every level.
 
 from __future__ import annotations
 
-import contextlib
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from typing import Any, TypeVar, cast
 
 import numpy as np
@@ -94,23 +93,6 @@ def timed(fn: Callable[[], _T], repeats: int = 3) -> tuple[float, float, _T]:
     return first, best, out
 
 
-@contextlib.contextmanager
-def _ode_rtol(rtol: float) -> Iterator[None]:
-    """Temporarily set the relative tolerance of ``reduced.blastula``'s radial-ODE (diffrax) path.
-
-    The path reads the module constant ``_ODE_RTOL`` when it is traced (each eager call), so a
-    different value takes effect at once and the default is restored afterwards.
-    """
-    from tissuemech.reduced import blastula
-
-    old = blastula._ODE_RTOL
-    blastula._ODE_RTOL = float(rtol)
-    try:
-        yield
-    finally:
-        blastula._ODE_RTOL = old
-
-
 def _pressure_error(stretch: Any, pressure: Any, alpha: float = ALPHA) -> float:
     return float(
         max(
@@ -152,9 +134,8 @@ def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
     )
 
     for rtol in ODE_RTOLS:
-        fwd = jax.jit(lambda x: bl.pressure(x, **geo, method="ode"))
-        with _ode_rtol(rtol):  # the tolerance is read when the call is traced (first call, in the block)
-            first, walls, p = timed_stats(lambda: jax.block_until_ready(fwd(la_ex)), max(repeats, 21))
+        fwd = jax.jit(lambda x, rtol=rtol: bl.pressure(x, **geo, method="ode", rtol=rtol))
+        first, walls, p = timed_stats(lambda: jax.block_until_ready(fwd(la_ex)), max(repeats, 21))
         p = np.asarray(p)
         rows.append(
             dict(
