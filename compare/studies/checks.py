@@ -27,6 +27,7 @@ import numpy as np
 import pandas as pd
 
 from tissuemech.compare import cases
+from tissuemech.compare.cases import spheroid_keywords
 
 __all__ = ["blastula", "blastula_creep", "spheroid", "hertz_table", "fit_demo", "SPHEROID_CASES", "CREEP_CASES", "main"]
 
@@ -171,7 +172,7 @@ def spheroid(
     rows = []
     for name, c in cases.items():
         t0 = time.perf_counter()
-        kw = cases.spheroid_keywords(c, radius=radius, displacement=c["displacement"], ramp_time=ramp_time)
+        kw = spheroid_keywords(c, radius=radius, displacement=c["displacement"], ramp_time=ramp_time)
         r = fe.compress(**kw, end_time=end_time, mesh=mesh)
         wall = time.perf_counter() - t0
         t = np.asarray(r.time)
@@ -225,7 +226,7 @@ def fit_demo(
     rng = np.random.default_rng(seed)
     records = []
     for d in levels:
-        kw = cases.spheroid_keywords(truth, radius=radius, displacement=d, ramp_time=ramp_time)
+        kw = spheroid_keywords(truth, radius=radius, displacement=d, ramp_time=ramp_time)
         r = fe.compress(**kw, end_time=end_time, mesh=mesh, n_ramp=n_ramp, n_hold=n_hold)
         s = np.asarray(r.nominal_stress)
         records.append((np.asarray(r.time), s + noise * s.max() * rng.standard_normal(s.shape), d))
