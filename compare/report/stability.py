@@ -159,15 +159,23 @@ def _compression_text(comp: pd.DataFrame) -> str:
     if not len(bad):
         return f"Every approach tried converged (largest {top} of the diameter); no failure was reached."
     first = bad.iloc[0]
+    nodal = ""
+    if "nodal_contact_states" in comp and (ok.nodal_contact_states > 0).any():
+        f0 = 100 * ok[ok.nodal_contact_states > 0].fraction.min()
+        nodal = (
+            f" From {f0:.0f} % on, the states beyond about 48 % of the diameter (the contact edge past the fitted range) use "
+            "node-by-node contact on the last fitted mesh (logged; `result.parameters['contact']`), with the ~1e-3 "
+            "edge quantisation of nodal contact."
+        )
     if first.failure == "refused (cap)":
         return (
-            f"Every approach tried below the cap converged (largest {top} of the diameter). The push ends at "
+            f"Every approach tried below the cap converged (largest {top} of the diameter).{nodal} The push ends at "
             f"{100 * first.fraction:.0f} % because `fem.spheroid.compress` refuses an approach of 80 % of the "
             "diameter or more up front (the ball would be squeezed below 20 % of its height; the model is not "
             "meant for that): the cap, not a failure of the method, ends this map. Not shown: how the method "
             "would fail beyond it."
         )
     return (
-        f"Converged up to {top} of the diameter; at {100 * first.fraction:.0f} % it fails by "
+        f"Converged up to {top} of the diameter;{nodal} at {100 * first.fraction:.0f} % it fails by "
         f"**{first.failure}** ({first.note})."
     )

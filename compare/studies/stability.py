@@ -256,7 +256,8 @@ def compression_map(
     """Static elastic compression to increasing total approach (fraction of the diameter) until it fails.
 
     Needs ``fem.spheroid``. Columns: fraction, approach_um, converged, force_N, steps,
-    newton_iterations, failure (how it failed: "Newton", "contact check", "refused (cap)", ...),
+    newton_iterations, nodal_contact_states (states beyond the fitted-contact range),
+    failure (how it failed: "Newton", "contact check", "refused (cap)", ...),
     wall_s, note. Stops at the first failure. With ``probe_cap`` and no failure below it, one more
     attempt at ``CAP_FRACTION`` records that ``fem.spheroid.compress`` refuses it up front (the
     model's stated cap: the ball squeezed below 20 % of its height), so a reader sees whether the
@@ -294,6 +295,7 @@ def compression_map(
                     force_N=float(r.force[-1]),
                     steps=len(r.force),
                     newton_iterations=int(np.sum(r.newton_iterations)),
+                    nodal_contact_states=sum(1 for c in r.parameters.get("contact", ()) if c == "nodal"),
                     failure="",
                     wall_s=time.perf_counter() - t0,
                     note="",
@@ -316,6 +318,7 @@ def compression_map(
                     force_N=np.nan,
                     steps=0,
                     newton_iterations=0,
+                    nodal_contact_states=0,
                     failure=how,
                     wall_s=time.perf_counter() - t0,
                     note=f"{type(e).__name__}: {str(e)[:160]}",
