@@ -25,7 +25,7 @@ from typing import Any
 try:
     __version__ = version("tissuemech")
 except PackageNotFoundError:  # running from a checkout that is not installed
-    __version__ = "0.2.0"
+    __version__ = "0.3.0"
 
 __all__ = ["__version__", "compare", "fem", "reduced"]
 
