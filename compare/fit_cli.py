@@ -127,7 +127,7 @@ def read_table(path: str | Path) -> Table:
         if ncol is None and not header and not rows and any(v is None for v in nums):
             if all(_number(f) is None and f for f in fields):
                 header = tuple(_header_fields(s))
-                ncol = len(fields)
+                ncol = len(header)
                 continue
         if ncol is None:
             ncol = len(fields)

@@ -18,7 +18,7 @@ def section(*, quick: bool = False) -> Section:
             df,
             title="Blastula (alpha = 0.2, B = 75 um, p = 200/500/1000 Pa): error vs exact",
             note="FE labels: n_radial x n_circ Q2/P1 elements (kappa = 2.2 GPa); diffrax labels: Dopri8 relative "
-            "tolerance; reduced paths jitted, timed after compile (compile time: "first call [s]" in the table).",
+            "tolerance; reduced paths jitted, timed after compile (compile time: 'first call [s]' in the table).",
         ),
         "accuracy_blastula.png",
     )

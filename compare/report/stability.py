@@ -150,9 +150,7 @@ def section(
         ]
     else:
         sec.md += [f"### Static compression depth: not available ({spheroid_reason})", ""]
-    sec.summary["limit_load_control_Pa"] = {
-        f"{r['B [um]']:g}": r["p reached [Pa]"] for r in lc.to_dict("records")
-    }
+    sec.summary["limit_load_control_Pa"] = {f"{r['B [um]']:g}": r["p reached [Pa]"] for r in lc.to_dict("records")}
     sec.data.update(limit=lim, traces=traces)
     return sec
 
