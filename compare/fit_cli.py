@@ -9,7 +9,9 @@ CSV format (one file per compression level)
 * text, one sample per line: time in s, then nominal stress in Pa (``F / A_mid``) or plate force in N;
   further columns are ignored. Fields separated by commas, semicolons, tabs or spaces.
 * an optional header line (the first non-comment line), e.g. ``time_s,stress_Pa`` or
-  ``time_s,force_N``: a second-column name containing "force" or ending in "_N" means force
+  ``time_s,force_N``, or in the ``name [unit]`` style of tissuemech's own tables
+  ``time [s],stress [Pa]`` / ``time [s],force [N]`` (also space-separated: ``time [s] force [N]``):
+  a second-column name containing "force" or ending in "_N", "(N)" or "[N]" means force
   (``--quantity auto``); forces are turned into nominal stress with the incompressible midplane
   estimate r_mid = a0 / sqrt(1 - delta(t)/(2 a0)) and the model is fitted with the same estimate.
 * lines starting with ``#`` are comments; ``# displacement_um: 50`` in a file gives that file's total
@@ -63,6 +65,20 @@ def _split(line: str) -> list[str]:
     return line.split()
 
 
+def _header_fields(line: str) -> list[str]:
+    """Header names; with whitespace separators a ``[unit]`` / ``(unit)`` token joins the name before it."""
+    fields = _split(line)
+    if any(sep in line for sep in (",", ";", "\t")):
+        return fields
+    out: list[str] = []
+    for f in fields:
+        if out and f[:1] in "[(" and f[-1:] in "])":
+            out[-1] = f"{out[-1]} {f}"
+        else:
+            out.append(f)
+    return out
+
+
 def _number(text: str) -> float | None:
     try:
         v = float(text)
@@ -110,8 +126,8 @@ def read_table(path: str | Path) -> Table:
         nums = [_number(f) for f in fields]
         if ncol is None and not header and not rows and any(v is None for v in nums):
             if all(_number(f) is None and f for f in fields):
-                header = tuple(fields)
-                ncol = len(fields)
+                header = tuple(_header_fields(s))
+                ncol = len(header)
                 continue
         if ncol is None:
             ncol = len(fields)
@@ -125,7 +141,7 @@ def read_table(path: str | Path) -> Table:
         rows.append([float(v) for v in nums])  # type: ignore[arg-type]
         lines.append(no)
     if not rows:
-        raise ValueError(f"{path}: no data rows (empty file); expected lines 'time_s, stress_Pa'")
+        raise ValueError(f"{path}: no data rows (empty file); expected lines 'time [s], stress [Pa]'")
     if ncol is not None and ncol < 2:
         raise ValueError(f"{path}: only one column; expected time (s) and nominal stress (Pa) or force (N)")
     return Table(path, header, np.array(rows, dtype=float), meta, tuple(lines))

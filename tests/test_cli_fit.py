@@ -80,6 +80,30 @@ def test_read_table_header_comments_and_separators(tmp_path):
     assert fit_cli.read_table(g).values.shape == (2, 2)
 
 
+@pytest.mark.parametrize(
+    "header, force",
+    [
+        ("time [s],stress [Pa]", False),
+        ("time [s];force [N]", True),
+        ("time [s]\tforce [N]", True),
+        ("time [s] stress [Pa]", False),
+        ("time [s]  force [N]", True),
+        ("time_s,stress_Pa", False),
+        ("time_s force_N", True),
+    ],
+)
+def test_unit_bracket_headers_are_read(tmp_path, header, force):
+    sep = "," if "," in header else (";" if ";" in header else ("\t" if "\t" in header else " "))
+    f = tmp_path / "h.csv"
+    f.write_text(header + "\n" + f"0.1{sep}1e-6\n0.2{sep}2e-6\n0.3{sep}3e-6\n")
+    t = fit_cli.read_table(f)
+    assert len(t.header) == 2 and t.values.shape == (3, 2)
+    assert t.header[0] in ("time [s]", "time_s")
+    (rec,), forces = fit_cli.load_records([str(f)], radius=500e-6, displacements=[100e-6], ramp_time=0.2)
+    assert forces == [force]
+    assert np.allclose(rec[0], [0.1, 0.2, 0.3])
+
+
 def test_force_is_converted_with_the_incompressible_midplane(tmp_path):
     f = tmp_path / "force.csv"
     t = np.array([0.1, 0.2, 10.0])

@@ -75,8 +75,8 @@ def test_limit_point_map(quick_report):
     lim = _csv(out, "stability_limit_point.csv")
     exact = {52.0: 19.44, 60.0: 90.06, 75.0: 197.41}
     for b, p in exact.items():
-        g = lim[lim.B_um == b].set_index("method")
-        assert g.loc["reduced (exact)", "p_reached_Pa"] == pytest.approx(p, abs=0.006)
+        g = lim[lim["B [um]"] == b].set_index("method")
+        assert g.loc["reduced (exact)", "p reached [Pa]"] == pytest.approx(p, abs=0.006)
         arc = g.loc["FE arc-length"]
         assert abs(arc.rel_err_p) < 5e-3 and bool(arc.passed_limit)
         lc = g.loc["FE load control"]
@@ -100,8 +100,8 @@ def test_kappa_map_mixed_beats_displacement(quick_report):
 def test_viscous_and_stiff_maps(quick_report):
     out, _ = quick_report
     b = _csv(out, "stability_viscous_boundary.csv").set_index("update")
-    assert b.loc["exact-linear", "largest_ok_step_s"] >= 100 * b.loc["backward Euler", "largest_ok_step_s"]
-    assert 0.1 < b.loc["backward Euler", "largest_ok_step_s"] < 10
+    assert b.loc["exact-linear", "largest ok step [s]"] >= 100 * b.loc["backward Euler", "largest ok step [s]"]
+    assert 0.1 < b.loc["backward Euler", "largest ok step [s]"] < 10
     s = _csv(out, "stability_stiff_solvers.csv")
     imp = s[s.solver == "Kvaerno5"]
     assert not imp.failed.any() and imp.steps.max() < 500

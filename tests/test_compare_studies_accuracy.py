@@ -7,5 +7,5 @@ from tissuemech.compare.studies.accuracy import pareto
 
 
 def test_pareto_front_marks_non_dominated_rows():
-    df = pd.DataFrame(dict(wall_s=[1.0, 2.0, 0.5, 3.0, np.nan], error=[1e-3, 1e-6, 1e-2, 1e-6, 1e-9]))
+    df = pd.DataFrame({"wall_time [s]": [1.0, 2.0, 0.5, 3.0, np.nan], "error": [1e-3, 1e-6, 1e-2, 1e-6, 1e-9]})
     assert pareto(df).tolist() == [True, True, True, False, False]

@@ -39,20 +39,22 @@ def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16, note: 
     """Log-log error vs wall time: one marker per method, timing spread as horizontal bars, Pareto front.
 
     Labels sit to the right of their points, stacked so they never overlap, with a leader line.
-    ``df`` columns: method, setting, wall_s, error, pareto and optionally wall_min_s / wall_max_s.
+    ``df`` columns: method, setting, ``wall_time [s]``, error, pareto and optionally
+    ``wall_time min [s]`` / ``wall_time max [s]``.
     """
     plt = _plt()
     fig, ax = plt.subplots(figsize=(9, 6))
-    d = df[np.isfinite(df.wall_s.to_numpy(float)) & np.isfinite(df.error.to_numpy(float))].copy()
+    d = df[np.isfinite(df["wall_time [s]"].to_numpy(float)) & np.isfinite(df.error.to_numpy(float))].copy()
     d["err_plot"] = np.maximum(d.error.to_numpy(float), floor)
     markers = iter("osD^vP*X")
     span = np.log10(d.err_plot.max()) - np.log10(d.err_plot.min())
     min_sep = max(0.06 * span, 0.25)  # decades between stacked labels: about one line of text
     for method, g in d.groupby("method", sort=False):
-        x = g.wall_s.to_numpy(float)
+        x = g["wall_time [s]"].to_numpy(float)
         y = g.err_plot.to_numpy(float)
-        if "wall_min_s" in g and "wall_max_s" in g:
-            xerr = np.vstack([x - g.wall_min_s.to_numpy(float), g.wall_max_s.to_numpy(float) - x])
+        if "wall_time min [s]" in g and "wall_time max [s]" in g:
+            lo, hi = g["wall_time min [s]"].to_numpy(float), g["wall_time max [s]"].to_numpy(float)
+            xerr = np.vstack([x - lo, hi - x])
             (ln,) = ax.plot(x, y, next(markers), ms=7, mfc="none", label=method)
             ax.errorbar(x, y, xerr=np.maximum(xerr, 0), fmt="none", ecolor=ln.get_color(), lw=0.8, capsize=2)
         else:
@@ -70,9 +72,9 @@ def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16, note: 
                 va="center",
                 arrowprops=dict(arrowstyle="-", color=ln.get_color(), lw=0.5, alpha=0.6),
             )
-    front = d[d.pareto.astype(bool)].sort_values("wall_s")
+    front = d[d.pareto.astype(bool)].sort_values("wall_time [s]")
     ax.plot(
-        front.wall_s,
+        front["wall_time [s]"],
         front.err_plot,
         "o-",
         color="r",
@@ -84,7 +86,7 @@ def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16, note: 
     )
     ax.set_xscale("log")
     ax.set_yscale("log")
-    xmin, xmax = d.wall_s.min(), d.wall_s.max()
+    xmin, xmax = d["wall_time [s]"].min(), d["wall_time [s]"].max()
     ax.set_xlim(xmin / 3, xmax * 30)
     ax.set_xlabel("wall time per solve (s): median of repeated calls after a warm-up; bars: min..max")
     ax.set_ylabel("relative error")
@@ -106,13 +108,13 @@ def limit_point_panel(ax, limit: pd.DataFrame) -> None:
     Three separate geometries: markers side by side per outer radius (no lines between them); symlog
     y so that the sign (below / past the limit) and the size (1e-6 .. 1e-2) both read.
     """
-    bs = sorted(limit.B_um.unique())
+    bs = sorted(limit["B [um]"].unique())
     methods = list(dict.fromkeys(limit.method))
     width = 0.7 / max(len(methods), 1)
     for k, (method, mk) in enumerate(zip(methods, "so^Dv")):
-        g = limit[limit.method == method].set_index("B_um")
+        g = limit[limit.method == method].set_index("B [um]")
         xs = [bs.index(b) - 0.35 + width * (k + 0.5) for b in g.index]
-        ax.plot(xs, g.p_reached_Pa / g.p_max_exact_Pa - 1, mk, ms=8, mfc="none", ls="none", label=method)
+        ax.plot(xs, g["p reached [Pa]"] / g["p max exact [Pa]"] - 1, mk, ms=8, mfc="none", ls="none", label=method)
     ax.set_yscale("symlog", linthresh=1e-7)
     ax.axhline(0.0, color="k", lw=0.8)
     ax.set_xticks(range(len(bs)), [f"B = {b:g} um" for b in bs])
@@ -160,7 +162,7 @@ def kappa_panel(ax, kappa: pd.DataFrame) -> None:
 def viscous_step_panel(ax, viscous: pd.DataFrame, tolerance: float = 1e-3) -> None:
     """Force error of each viscoelastic update formula vs the time step."""
     for u, g in viscous.groupby("update", sort=False):
-        ax.loglog(g.step_s, np.maximum(g.error, 1e-16), "o-", ms=3, label=u)
+        ax.loglog(g["step [s]"], np.maximum(g.error, 1e-16), "o-", ms=3, label=u)
     ax.axhline(tolerance, color="r", lw=0.8, label=f"tolerance {tolerance:g}")
     ax.set_ylim(1e-10, 10)
     ax.set_xlabel("time step h (s)  [tau = 200 s, ramp 0.2 s]")
@@ -197,7 +199,7 @@ def compression_panel(ax, compression: pd.DataFrame | None, seed_depth: float = 
     """Static compression depth: plate force vs total approach / diameter, how the push ended."""
     if compression is not None and len(compression):
         ok = compression.converged.astype(bool)
-        ax.plot(100 * compression.fraction[ok], compression.force_N[ok] * 1e6, "o-", label="converged")
+        ax.plot(100 * compression.fraction[ok], compression["force [N]"][ok] * 1e6, "o-", label="converged")
         for _, r in compression[~ok].iterrows():
             ax.plot(100 * r.fraction, 0.0, "rx", ms=10, ls="none")
             ax.annotate(

@@ -18,7 +18,7 @@ def section(*, quick: bool = False) -> Section:
             df,
             title="Blastula (alpha = 0.2, B = 75 um, p = 200/500/1000 Pa): error vs exact",
             note="FE labels: n_radial x n_circ Q2/P1 elements (kappa = 2.2 GPa); diffrax labels: Dopri8 relative "
-            "tolerance; reduced paths jitted, timed after compile (compile time: first_s in the table).",
+            "tolerance; reduced paths jitted, timed after compile (compile time: 'first call [s]' in the table).",
         ),
         "accuracy_blastula.png",
     )
@@ -27,9 +27,9 @@ def section(*, quick: bool = False) -> Section:
         fe_errors=fe.error.tolist(),
         fe_stretch_errors=fe.stretch_error.tolist(),
         fe_settings=fe.setting.tolist(),
-        fe_wall_s=fe.wall_s.tolist(),
+        fe_wall_s=fe["wall_time [s]"].tolist(),
         quadrature_error=float(df.error.iloc[0]),
-        quadrature_wall_s=float(df.wall_s.iloc[0]),
+        quadrature_wall_s=float(df["wall_time [s]"].iloc[0]),
         ode_errors=df[df.method.str.contains("diffrax")].error.tolist(),
         pareto=df[df.pareto].apply(lambda r: f"{r.method} {r.setting}", axis=1).tolist(),
     )
@@ -42,9 +42,9 @@ def section(*, quick: bool = False) -> Section:
         "",
         "error = max over p in {200, 500, 1000} Pa of |p_exact(lambda_a)/p - 1| for the state each method returns "
         "(reduced quadrature: lambda_a from p; diffrax: p from the exact lambda_a; FE: load control, kappa = 2.2 GPa). "
-        "wall_s: the median of repeated calls after a warm-up (21 for the jitted reduced paths, 3 for FE), "
-        "wall_min_s..wall_max_s their spread (a row is Pareto-dominated only by one faster beyond that spread, "
-        "so the flags do not move with timing noise inside it); first_s: the first call (compile / mesh set-up). "
+        "wall_time [s]: the median of repeated calls after a warm-up (21 for the jitted reduced paths, 3 for FE), "
+        "wall_time min [s]..wall_time max [s] their spread (a row is Pareto-dominated only by one faster beyond that spread, "
+        "so the flags do not move with timing noise inside it); first call [s]: the first call (compile / mesh set-up). "
         "The FE error stops falling at ~5e-6 in stretch: that is the compressibility of "
         "kappa/C = 1.1e7 (kappa = 2.2 GPa), not the mesh (see the kappa stability panel).",
         "",
@@ -53,10 +53,10 @@ def section(*, quick: bool = False) -> Section:
             cols=[
                 "method",
                 "setting",
-                "wall_s",
-                "wall_min_s",
-                "wall_max_s",
-                "first_s",
+                "wall_time [s]",
+                "wall_time min [s]",
+                "wall_time max [s]",
+                "first call [s]",
                 "error",
                 "stretch_error",
                 "pareto",

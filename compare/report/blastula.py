@@ -123,7 +123,14 @@ def section(traces: dict, *, quick: bool = False, progress: Callable[[str], None
                 wall_s=s["wall"],
             )
         )
-    df = pd.DataFrame(rows)
+    df = pd.DataFrame(rows).rename(
+        columns={
+            "B_um": "B [um]",
+            "final_pressure_Pa": "final pressure [Pa]",
+            "limit_p_Pa": "limit pressure [Pa]",
+            "wall_s": "wall_time [s]",
+        }
+    )
     sec.table(df, "blastula_sets.csv")
     sec.summary["blastula_sets_max_err"] = float(df.max_rel_pressure_err.max())
     lim75 = bl.limit_point(inner_radius=A, outer_radius=cases.FIG4_OUTER_RADIUS, C=C_BL, alpha=cases.NEO_HOOKEAN_ALPHA)
@@ -166,15 +173,15 @@ def section(traces: dict, *, quick: bool = False, progress: Callable[[str], None
             cols=[
                 "figure",
                 "alpha",
-                "B_um",
+                "B [um]",
                 "method",
                 "steps",
-                "final_pressure_Pa",
+                "final pressure [Pa]",
                 "final_inner_stretch",
                 "max_rel_pressure_err",
-                "limit_p_Pa",
+                "limit pressure [Pa]",
                 "limit_stretch",
-                "wall_s",
+                "wall_time [s]",
             ],
         ),
         "",

@@ -18,12 +18,12 @@ def section(lim: pd.DataFrame, summary: dict[str, Any], *, quick: bool = False) 
     """
     sec = Section("seed comparison", quick)
     spheroid_ok = "spheroid" in summary
-    ex = lim[lim.method == "reduced (exact)"].set_index("B_um")
-    lc = lim[lim.method == "FE load control"].set_index("B_um")
+    ex = lim[lim.method == "reduced (exact)"].set_index("B [um]")
+    lc = lim[lim.method == "FE load control"].set_index("B [um]")
     s = summary
     rows = []
     for b in cases.FIG5_OUTER_UM:
-        p = ex.loc[b, "p_max_exact_Pa"]
+        p = ex.loc[b, "p max exact [Pa]"]
         rows.append(
             dict(
                 claim=f"neo-Hookean burst pressure, B = {b:g} um",
@@ -31,7 +31,7 @@ def section(lim: pd.DataFrame, summary: dict[str, Any], *, quick: bool = False) 
                 if b == 75
                 else "(not stated)",
                 this_work=f"{p:.2f} Pa at lambda_a = {ex.loc[b, 'stretch_limit_exact']:.4f} "
-                f"(FE load control stops at {lc.loc[b, 'p_reached_Pa']:.2f} Pa)",
+                f"(FE load control stops at {lc.loc[b, 'p reached [Pa]']:.2f} Pa)",
                 agrees=("NO" if abs(p / cases.SEED_BURST_PRESSURE - 1) > 0.15 else "yes")
                 if b == 75
                 else ("(0.1 kPa would fit this B)" if abs(p / cases.SEED_BURST_PRESSURE - 1) < 0.15 else "-"),
@@ -73,9 +73,9 @@ def section(lim: pd.DataFrame, summary: dict[str, Any], *, quick: bool = False) 
         "",
         f"* **Neo-Hookean burst pressure: disagrees.** The seed says the blastula (A = 50 um, B = 75 um) bursts for "
         f"p > 0.1 kPa and that its alpha = 1e-5 run crashed near 0.1 kPa. The exact limit point for B = 75 um is "
-        f"**{b75.p_max_exact_Pa:.2f} Pa** at lambda_a = {b75.stretch_limit_exact:.4f}; our FE load control reaches "
-        f"{lc.loc[75.0, 'p_reached_Pa']:.2f} Pa before stopping, and arc-length traces past the maximum. 0.1 kPa matches "
-        f"B = 60 um ({b60.p_max_exact_Pa:.2f} Pa), not B = 75 um (B = 52 um: {ex.loc[52.0, 'p_max_exact_Pa']:.2f} Pa). "
+        f"**{b75['p max exact [Pa]']:.2f} Pa** at lambda_a = {b75.stretch_limit_exact:.4f}; our FE load control reaches "
+        f"{lc.loc[75.0, 'p reached [Pa]']:.2f} Pa before stopping, and arc-length traces past the maximum. 0.1 kPa matches "
+        f"B = 60 um ({b60['p max exact [Pa]']:.2f} Pa), not B = 75 um (B = 52 um: {ex.loc[52.0, 'p max exact [Pa]']:.2f} Pa). "
         "(A guess, not checked: the seed's COMSOL load sweep failed for solver reasons before the true limit.)",
         f"* **Figs 4-5 agree:** FE and exact agree to {s['blastula_sets_max_err']:.1e} (relative pressure) for every "
         "set, as the seed says ('perfectly match'); this work also traces the neo-Hookean curve past its limit.",

@@ -57,18 +57,22 @@ def section(
     k7 = kap[kap.kappa_over_C == kap.kappa_over_C.max()].set_index("formulation")
     sec.summary["stability"] = dict(
         limit={
-            f"{r.method}|{r.B_um:g}": dict(p=r.p_reached_Pa, rel=r.rel_err_p, passed=bool(r.passed_limit))
-            for r in lim.itertuples()
+            f"{r['method']}|{r['B [um]']:g}": dict(
+                p=r["p reached [Pa]"], rel=r["rel_err_p"], passed=bool(r["passed_limit"])
+            )
+            for r in lim.to_dict("records")
         },
         kappa_max=float(kap.kappa_over_C.max()),
         kappa_error_mixed=float(k7.loc["mixed", "error"]),
         kappa_error_displacement=float(k7.loc["displacement", "error"]),
         kappa_displacement_failed=bool(k7.loc["displacement", "failed"]),
         viscous={
-            r.update: dict(
-                step=r.largest_ok_step_s, error=r.error_at_boundary, limited_by_range=bool(r.limited_by_range)
+            r["update"]: dict(
+                step=r["largest ok step [s]"],
+                error=r["error_at_boundary"],
+                limited_by_range=bool(r["limited_by_range"]),
             )
-            for r in bounds.itertuples()
+            for r in bounds.to_dict("records")
         },
         stiff={
             f"{r.solver}|{r.tau_over_ramp:g}": dict(
@@ -103,15 +107,15 @@ def section(
         md_table(
             lim,
             cols=[
-                "B_um",
+                "B [um]",
                 "method",
-                "p_reached_Pa",
+                "p reached [Pa]",
                 "stretch_reached",
-                "p_max_exact_Pa",
+                "p max exact [Pa]",
                 "stretch_limit_exact",
                 "rel_err_p",
                 "passed_limit",
-                "wall_s",
+                "wall_time [s]",
             ],
             floatfmt=".6g",
         ),
@@ -121,7 +125,7 @@ def section(
         "Error = max |lambda_a,FE / lambda_a,exact - 1| at p = 250, 500 Pa against the INCOMPRESSIBLE exact shell, "
         "so it includes the true compressibility effect (~C/kappa, shared by both) plus locking.",
         "",
-        md_table(kap, cols=["formulation", "kappa_over_C", "error", "failed", "wall_s"]),
+        md_table(kap, cols=["formulation", "kappa_over_C", "error", "failed", "wall_time [s]"]),
         "",
         "### Viscoelastic update formulas (lumped Maxwell branch, beta = 1.2, tau = 200 s, ramp 0.2 s, hold to 1500 s)",
         "",
@@ -146,7 +150,7 @@ def section(
         ]
     else:
         sec.md += [f"### Static compression depth: not available ({spheroid_reason})", ""]
-    sec.summary["limit_load_control_Pa"] = {f"{r.B_um:g}": r.p_reached_Pa for r in lc.itertuples()}
+    sec.summary["limit_load_control_Pa"] = {f"{r['B [um]']:g}": r["p reached [Pa]"] for r in lc.to_dict("records")}
     sec.data.update(limit=lim, traces=traces)
     return sec
 

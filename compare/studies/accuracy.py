@@ -15,9 +15,9 @@ pressure residual of that state against the exact incompressible shell,
   tolerance set to rtol in {1e-3 .. 1e-10} (its ``rtol=`` argument);
 * FE: ``fem.blastula.inflate`` (load control, kappa = 2.2 GPa) on 4 mesh levels (n_radial, n_circ).
 
-Wall times: the median of ``repeats`` calls after one warm-up call (``wall_s``; 21 calls for the
-jitted reduced paths), with their spread ``wall_min_s`` .. ``wall_max_s``; JIT compile and mesh
-set-up of the warm-up call are in ``first_s``. The machine is shared: times are pessimistic, and
+Wall times: the median of ``repeats`` calls after one warm-up call (``wall_time [s]``; 21 calls for
+the jitted reduced paths), with their spread ``wall_time min [s]`` .. ``wall_time max [s]``; JIT
+compile and mesh set-up of the warm-up call are in ``first call [s]``. The machine is shared: times are pessimistic, and
 ``pareto`` only lets a row dominate another when it is faster beyond the spread.
 
 Spheroid (``spheroid_accuracy``, needs ``fem.spheroid`` and ``reduced.spheroid``): the seed's Fig. 10
@@ -69,15 +69,19 @@ def timed_stats(fn: Callable[[], _T], repeats: int = 5) -> tuple[float, np.ndarr
     return first, np.asarray(walls), out
 
 
+WALL = "wall_time [s]"  # the table headers of the timing columns
+WALL_MIN, WALL_MAX, FIRST = "wall_time min [s]", "wall_time max [s]", "first call [s]"
+
+
 def _wall_columns(first: float, walls: np.ndarray) -> dict:
-    """wall_s (median of the repeats), wall_min_s / wall_max_s (their spread), first_s, repeats."""
-    return dict(
-        wall_s=float(np.median(walls)),
-        wall_min_s=float(np.min(walls)),
-        wall_max_s=float(np.max(walls)),
-        first_s=first,
-        repeats=int(walls.size),
-    )
+    """wall_time (median of the repeats), its min / max (the spread), the first call, repeats."""
+    return {
+        WALL: float(np.median(walls)),
+        WALL_MIN: float(np.min(walls)),
+        WALL_MAX: float(np.max(walls)),
+        FIRST: first,
+        "repeats": int(walls.size),
+    }
 
 
 def timed(fn: Callable[[], _T], repeats: int = 3) -> tuple[float, float, _T]:
@@ -105,9 +109,9 @@ def _pressure_error(stretch: Any, pressure: Any, alpha: float = ALPHA) -> float:
 def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
     """Error against wall time for the reduced (quadrature, diffrax) and FE blastula paths.
 
-    Returns a DataFrame with columns method, setting, wall_s (median of ``repeats`` calls after a
-    warm-up), wall_min_s, wall_max_s (their spread), first_s (first call, includes JIT compile / mesh
-    set-up), repeats, error (see the module docstring),
+    Returns a DataFrame with columns method, setting, ``wall_time [s]`` (median of ``repeats`` calls
+    after a warm-up), ``wall_time min [s]``, ``wall_time max [s]`` (their spread), ``first call [s]``
+    (first call, includes JIT compile / mesh set-up), repeats, error (see the module docstring),
     stretch_error (max |lambda_a / lambda_exact - 1|) and pareto (bool).
     """
     import jax
@@ -164,17 +168,17 @@ def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
     return df
 
 
-def pareto(df: pd.DataFrame, x: str = "wall_s", y: str = "error") -> np.ndarray:
+def pareto(df: pd.DataFrame, x: str = WALL, y: str = "error") -> np.ndarray:
     """Boolean mask of rows on the Pareto front: no other row is both faster and more accurate.
 
-    With ``wall_min_s`` / ``wall_max_s`` columns (the spread of the repeated timings), row j
+    With ``wall_time min [s]`` / ``wall_time max [s]`` columns (the spread of the repeated timings), row j
     dominates row i when it is more accurate and not slower beyond the spread (j's fastest call no
     slower than i's slowest), or as accurate and faster beyond the spread (j's slowest call faster
     than i's fastest). Timing noise inside the measured spreads cannot change the flags.
     """
     xs, ys = df[x].to_numpy(float), df[y].to_numpy(float)
-    lo = df["wall_min_s"].to_numpy(float) if "wall_min_s" in df else xs
-    hi = df["wall_max_s"].to_numpy(float) if "wall_max_s" in df else xs
+    lo = df[WALL_MIN].to_numpy(float) if WALL_MIN in df else xs
+    hi = df[WALL_MAX].to_numpy(float) if WALL_MAX in df else xs
     ok = np.isfinite(xs) & np.isfinite(ys)
     mask = np.zeros(len(df), bool)
     for i in np.flatnonzero(ok):
@@ -192,6 +196,14 @@ def pareto(df: pd.DataFrame, x: str = "wall_s", y: str = "error") -> np.ndarray:
 
 FIG10 = cases.FIG10
 SPHEROID_TIMES = cases.FIG10_TIMES
+
+
+_SPHEROID_COLUMNS = {
+    "wall_s": WALL,
+    "first_s": FIRST,
+    "sigma_0_2s": "sigma 0.2 s [Pa]",
+    "sigma_1500s": "sigma 1500 s [Pa]",
+}
 
 
 def spheroid_available() -> str | None:
@@ -212,7 +224,9 @@ def spheroid_accuracy(
     ``meshes``: FE mesh levels from coarsest to finest (>= 3; the three finest give the Richardson
     reference); default (0, 1, 2, 3) (quick: (0, 1, 2)). ``equilibria``: name -> keyword arguments of
     ``reduced.spheroid.nominal_stress`` (e.g. ``{"hertz": dict(equilibrium="hertz")}``, the default, or
-    ``dict(equilibrium="fem")``). Returns (table, {mesh: FE result}).
+    ``dict(equilibrium="fem")``). Returns (table, {mesh: FE result}); table columns: method, setting,
+    ``wall_time [s]``, ``first call [s]``, error, ``sigma 0.2 s [Pa]``, ``sigma 1500 s [Pa]``
+    (sigma~ at those times), pareto.
     """
     import jax
 
@@ -274,6 +288,6 @@ def spheroid_accuracy(
                 sigma_1500s=s[1],
             )
         )
-    df = pd.DataFrame(rows)
+    df = pd.DataFrame(rows).rename(columns=_SPHEROID_COLUMNS)
     df["pareto"] = pareto(df)
     return df, {m: r for m, (_, r) in fe.items()}

@@ -61,6 +61,24 @@ __all__ = [
 
 TOLERANCE = 1e-3  # the accuracy a viscoelastic step must keep
 
+# the rows are built with identifier keys; the tables carry ``name [unit]`` headers
+_COLUMNS = {
+    "B_um": "B [um]",
+    "p_reached_Pa": "p reached [Pa]",
+    "p_max_exact_Pa": "p max exact [Pa]",
+    "wall_s": "wall_time [s]",
+    "force_N": "force [N]",
+    "approach_um": "approach [um]",
+    "step_s": "step [s]",
+    "largest_ok_step_s": "largest ok step [s]",
+    "tau_s": "tau [s]",
+}
+
+
+def _table(rows: list[dict]) -> pd.DataFrame:
+    """The rows as a DataFrame with ``name [unit]`` column headers."""
+    return pd.DataFrame(rows).rename(columns=_COLUMNS)
+
 
 # ---------------------------------------------------------------------------------------------
 # Blastula: limit point
@@ -80,11 +98,11 @@ def limit_point_map(
     converged load and its stretch_reached the FE inner stretch there (both from the FE alone); the
     exact columns are only compared with afterwards.
 
-    Returns (table, arc-length results keyed by B in um). Table columns: B_um, method, p_reached_Pa
-    (largest converged pressure; for arc-length the maximum along the trace), stretch_reached
-    (FE inner stretch at p_reached for load control; the last traced stretch for arc-length; NaN for
-    the closed form, which has no "reached"), p_max_exact_Pa, stretch_limit_exact, rel_err_p (p_reached /
-    p_max - 1), passed_limit (bool), wall_s, note.
+    Returns (table, arc-length results keyed by B in um). Table columns: ``B [um]``, method,
+    ``p reached [Pa]`` (largest converged pressure; for arc-length the maximum along the trace),
+    stretch_reached (FE inner stretch at p_reached for load control; the last traced stretch for
+    arc-length; NaN for the closed form, which has no "reached"), ``p max exact [Pa]``,
+    stretch_limit_exact, rel_err_p (p_reached / p_max - 1), passed_limit (bool), ``wall_time [s]``, note.
     """
     from tissuemech.fem.blastula import LimitPointError, inflate
     from tissuemech.reduced import blastula as bl
@@ -168,7 +186,7 @@ def limit_point_map(
                 f"at inner stretch {l_top:.4f}",
             )
         )
-    return pd.DataFrame(rows), traces
+    return _table(rows), traces
 
 
 def _parabolic_max(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
@@ -195,7 +213,8 @@ def kappa_map(
 
     error = max_p |lambda_a,FE / lambda_a,exact - 1| against the incompressible exact shell (so it
     contains the physical compressibility error ~ C/kappa as well as locking). A Newton failure is
-    recorded (error NaN, failed True, the message).
+    recorded (error NaN, failed True, the message). Columns: formulation, kappa_over_C, error, failed,
+    ``wall_time [s]``, note.
     """
     from tissuemech.fem.blastula import inflate
     from tissuemech.fem.newton import NewtonError
@@ -234,7 +253,7 @@ def kappa_map(
                     note=note,
                 )
             )
-    return pd.DataFrame(rows)
+    return _table(rows)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -255,10 +274,10 @@ def compression_map(
 ) -> pd.DataFrame:
     """Static elastic compression to increasing total approach (fraction of the diameter) until it fails.
 
-    Needs ``fem.spheroid``. Columns: fraction, approach_um, converged, force_N, steps,
+    Needs ``fem.spheroid``. Columns: fraction, ``approach [um]``, converged, ``force [N]``, steps,
     newton_iterations, nodal_contact_states (states beyond the fitted-contact range),
     failure (how it failed: "Newton", "contact check", "refused (cap)", ...),
-    wall_s, note. Stops at the first failure. With ``probe_cap`` and no failure below it, one more
+    ``wall_time [s]``, note. Stops at the first failure. With ``probe_cap`` and no failure below it, one more
     attempt at ``CAP_FRACTION`` records that ``fem.spheroid.compress`` refuses it up front (the
     model's stated cap: the ball squeezed below 20 % of its height), so a reader sees whether the
     method or the cap ended the push.
@@ -325,7 +344,7 @@ def compression_map(
                 )
             )
             break
-    return pd.DataFrame(rows)
+    return _table(rows)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -374,8 +393,8 @@ def viscous_step_map(
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Error of each update formula vs the step h; returns (all rows, boundary per update).
 
-    Rows: update, step_s, error, n_steps, ok (error <= TOLERANCE and finite). Boundary: update,
-    largest_ok_step_s (largest h such that every tested h' <= h keeps the tolerance), its error,
+    Rows: update, ``step [s]``, error, n_steps, ok (error <= TOLERANCE and finite). Boundary: update,
+    ``largest ok step [s]`` (largest h such that every tested h' <= h keeps the tolerance), its error,
     and whether that is simply the largest step tried (then the true boundary lies beyond).
     """
     for name, v, unit in (
@@ -407,11 +426,11 @@ def viscous_step_map(
                     ok=bool(np.isfinite(err) and err <= TOLERANCE),
                 )
             )
-    df = pd.DataFrame(rows)
+    df = _table(rows)
     bounds = []
     for u in updates:
-        d = df[df["update"] == u].sort_values("step_s")
-        bad = np.flatnonzero(~d.ok.to_numpy())
+        d = df[df["update"] == u].sort_values("step [s]")
+        bad = np.flatnonzero(~d["ok"].to_numpy())
         last = (bad[0] - 1) if bad.size else len(d) - 1
         if last < 0:
             bounds.append(
@@ -428,13 +447,13 @@ def viscous_step_map(
         bounds.append(
             dict(
                 update=u,
-                largest_ok_step_s=row.step_s,
-                error_at_boundary=row.error,
-                step_over_tau=row.step_s / tau,
+                largest_ok_step_s=row["step [s]"],
+                error_at_boundary=row["error"],
+                step_over_tau=row["step [s]"] / tau,
                 limited_by_range=not bad.size,
             )
         )
-    return df, pd.DataFrame(bounds)
+    return df, _table(bounds)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -455,8 +474,8 @@ def stiff_solver_map(
     """Steps, rejections and failures of diffrax solvers on dq/dt = -q/tau + beta F_eq'(t), tau << t_r.
 
     The ramp end is a jump time of the step-size controller. Error = max |q - q_exact| / beta at
-    t in {t_r/2, t_r, 2 t_r} (``exact_lumped_force``). Columns: solver, tau_over_ramp, tau_s,
-    steps (accepted), rejected, failed, error, wall_s (after compile), note.
+    t in {t_r/2, t_r, 2 t_r} (``exact_lumped_force``). Columns: solver, implicit, tau_over_ramp,
+    ``tau [s]``, steps (accepted), rejected, failed, error, ``wall_time [s]`` (after compile), note.
     """
     import diffrax
     import equinox as eqx
@@ -530,4 +549,4 @@ def stiff_solver_map(
                     note=note,
                 )
             )
-    return pd.DataFrame(rows)
+    return _table(rows)
