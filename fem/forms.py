@@ -109,6 +109,28 @@ class _Pattern:
         return self._sub[key]
 
 
+_PATTERNS: list = []  # (ndof, element dofs, _Pattern): meshes with one connectivity share their pattern
+
+
+def _element_pattern(alld: np.ndarray, n: int) -> _Pattern:
+    """The element-block pattern of the element dofs ``alld`` (ne, nd) over n dofs, shared between meshes
+    with the same connectivity (the fitted spheroid meshes: one per contact-edge position; issue 14). The
+    pattern depends on the connectivity only, so one object serves them all (and the solver plans keyed on
+    its arrays are found by identity)."""
+    for i, (m, a, pat) in enumerate(_PATTERNS):
+        if m == n and a.shape == alld.shape and np.array_equal(a, alld):
+            if i:
+                _PATTERNS.insert(0, _PATTERNS.pop(i))
+            return pat
+    nd = alld.shape[1]
+    rows = np.repeat(alld[:, :, None], nd, axis=2)
+    cols = np.repeat(alld[:, None, :], nd, axis=1)
+    pat = _Pattern(rows, cols, n)
+    _PATTERNS.insert(0, (n, alld.copy(), pat))
+    del _PATTERNS[4:]
+    return pat
+
+
 class Assembler:
     """Precomputed B matrices, weights and sparsity for one mesh (dimensionless)."""
 
@@ -139,10 +161,7 @@ class Assembler:
             alld = np.concatenate([self.edofs, self.qdofs], axis=1)
         self.ndof = self.n_u + (3 * ne if formulation == "mixed" else 0)
         self.alldofs = alld
-        nd = alld.shape[1]
-        rows = np.repeat(alld[:, :, None], nd, axis=2)
-        cols = np.repeat(alld[:, None, :], nd, axis=1)
-        self._pattern = _Pattern(rows, cols, self.ndof)
+        self._pattern = _element_pattern(alld, self.ndof)
         self._alld_flat = np.ascontiguousarray(alld.ravel())
         self._B2 = np.ascontiguousarray(self.B.reshape(ne, -1, self.B.shape[-1]))  # (ne, nq * 5, nd)
         if formulation == "mixed":
@@ -357,22 +376,25 @@ class Assembler:
     def _follower_values(self, u: np.ndarray, p: float, edges: np.ndarray, tangent: bool = True):
         """(F (ndof,), edge blocks (ned, nn, 2, nn, 2) of dF/du or None) of the follower pressure p."""
         Nl, dNl, wq, dofs, _ = self._edge(edges)
-        X = self.mesh.X
-        x = X[:, edges] + np.stack([u[dofs[..., 0]], u[dofs[..., 1]]])  # (2, ned, nn)
-        r = np.einsum("aq,ea->eq", Nl, x[0])
-        rp, zp = np.einsum("aq,ea->eq", dNl, x[0]), np.einsum("aq,ea->eq", dNl, x[1])
+        x = self.mesh.X[:, edges] + u[dofs].transpose(2, 0, 1)  # (2, ned, nn)
+        # (small matmuls instead of einsum: issue 14, the same sums to round-off)
+        r = x[0] @ Nl
+        rp, zp = x[0] @ dNl, x[1] @ dNl
         c = -2 * np.pi * p * wq
-        fr = np.einsum("aq,eq->ea", Nl, c * r * zp)
-        fz = -np.einsum("aq,eq->ea", Nl, c * r * rp)
-        fe = np.stack([fr, fz], -1)  # (ned, nn, 2)
+        cr = c * r
+        fe = np.empty(edges.shape + (2,))  # (ned, nn, 2)
+        np.matmul(cr * zp, Nl.T, out=fe[..., 0])
+        np.matmul(cr * rp, Nl.T, out=fe[..., 1])
+        fe[..., 1] *= -1.0
         F = np.bincount(dofs.ravel(), weights=fe.ravel(), minlength=self.ndof)
         if not tangent:
             return F, None
         ned, nn = edges.shape
         K = np.zeros((ned, nn, 2, nn, 2))
-        K[:, :, 0, :, 0] = np.einsum("aq,bq,eq->eab", Nl, Nl, c * zp)
-        K[:, :, 0, :, 1] = np.einsum("aq,bq,eq->eab", Nl, dNl, c * r)
-        K[:, :, 1, :, 0] = -np.einsum("aq,bq,eq->eab", Nl, Nl, c * rp) - np.einsum("aq,bq,eq->eab", Nl, dNl, c * r)
+        K[:, :, 0, :, 0] = (Nl * (c * zp)[:, None, :]) @ Nl.T
+        K01 = (Nl * cr[:, None, :]) @ dNl.T
+        K[:, :, 0, :, 1] = K01
+        K[:, :, 1, :, 0] = -((Nl * (c * rp)[:, None, :]) @ Nl.T) - K01
         return F, K
 
     def surface_mean_stretch(self, u: np.ndarray, edges: np.ndarray) -> float:

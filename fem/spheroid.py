@@ -377,9 +377,11 @@ class _EdgeFit:
         # first secant point: a step along the slope dphi/dln(edge) of the previous state (about -2)
         step = float(np.clip(-phi_a / self.slope, -0.1, 0.1)) if self.slope < 0 else 0.03 * np.sign(phi_a)
         e_b = float(np.clip(e_a * (1.0 + step), lo, hi))
+        best = [abs(phi_a)]  # |phi| per pass: a search whose best |phi| stalls is stuck (see below)
         for _ in range(30):
             st_b, it, phi_b = self._state(self.problem(e_b), d, [st_a.x, x0], load, visc)
             its, n = its + it, n + 1
+            best.append(abs(phi_b))
             if abs(phi_b) < tol:
                 if phi_b != phi_a and e_b != e_a:
                     self.slope = (phi_b - phi_a) / np.log(e_b / e_a)
@@ -395,6 +397,12 @@ class _EdgeFit:
                 e_new = 0.5 * (lo + hi) if hi < EDGE_MAX or lo > 1e-4 else e_b * (1.2 if phi_b > 0 else 0.8)
                 e_new = float(np.clip(e_new, 1e-4, EDGE_MAX))
             if hi - lo < 1e-12 * hi:
+                break
+            if n >= 6 and min(best[-3:]) > 0.5 * min(best[:-3]):
+                # stalled (issue 14): the best |phi| of the last 3 passes is not half the earlier best. phi
+                # jumps across the bracket (a spurious state on one side), so the secant only creeps; the
+                # caller cuts the step, as it would after the 30 passes (3 of 4 passes of the fine level 3
+                # static curve were spent here before)
                 break
             e_a, st_a, phi_a, e_b = e_b, st_b, phi_b, float(e_new)
         raise ContactError(

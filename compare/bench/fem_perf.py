@@ -8,11 +8,14 @@ in the same run (interleaved repeats, medians; the machine is shared, so only th
 2. per Newton iteration on both default meshes (blastula 4 x 8, 50-step sweep to 1 kPa; spheroid Fig. 10
    level 1) against the practical floor = a bare sparse factorisation of the same reduced tangent with the
    best ordering among the installed factorisations (SuperLU COLAMD, SuperLU symmetric mode with MMD on
-   K + K^T, qdldl if installed) + the element matmuls B^T A B at the rate numpy reaches. The ratio is
+   K + K^T, qdldl if installed; the floor as issue 14 defined it: the supervariable ordering is compared in
+   section 2c) + the element matmuls B^T A B at the rate numpy reaches. The ratio is
    what issue 14 targets (<= 1.5);
 2b. the blastula 4x8 sweep with the one-pattern tangent (K_int - p K_p on the element pattern, cached
    free-dof gather, lazy tangent in ``newton``) against the separate assembly it replaced, interleaved: the
    speed-up and the largest difference of the answers;
+2c. the fill-reducing orderings of ``symmetric_solve`` side by side (MMD on K + K^T, MMD on the
+   supervariable quotient graph, reverse Cuthill-McKee): fill, flops and factorisation time;
 3. the sparse direct solvers side by side on the default and fine tangents (bare factorisation and the
    ``symmetric_solve`` path, which reuses its ordering / symbolic analysis), pypardiso if installed;
 4. wall time vs dofs (blastula meshes to ~2e4 dofs, 10-step sweep; spheroid levels, static 10 % curve)
@@ -217,36 +220,103 @@ def solvers(repeats: int, quick: bool) -> None:
         print(f"{name:16s} {K.shape[0]:6d} " + "".join(f"{'-' if v is None else f'{1e3 * v:.2f}':>14s}" for v in out))
 
 
+def orderings(repeats: int, quick: bool) -> None:
+    """Fill-reducing orderings of ``symmetric_solve`` (SuperLU symmetric mode, NATURAL on P K P^T, the
+    ordering computed once per pattern): nnz(L + U), the factorisation flop count sum_j |L_j| |U_j| and the
+    factorisation time (median of interleaved repeats) per ordering, on the default and fine tangents."""
+    print("\n## Fill-reducing orderings (SuperLU symmetric mode on P K P^T; ms: median of interleaved repeats)")
+    from scipy.sparse import csgraph
+
+    mats = {
+        "blastula 4x8": lambda: _blastula_state((4, 8))[2],
+        "blastula 16x32": lambda: _blastula_state((16, 32))[2],
+        "spheroid L1": lambda: _spheroid_state(1)[2],
+        "spheroid L2": lambda: _spheroid_state(2)[2],
+    }
+    if not quick:
+        mats["blastula 24x48"] = lambda: _blastula_state((24, 48))[2]
+        mats["spheroid L3"] = lambda: _spheroid_state(3)[2]
+
+    def rcm(K):
+        G = sp.csr_matrix(K, copy=True)
+        G.data[:] = 1.0
+        return np.asarray(csgraph.reverse_cuthill_mckee((G + G.T).tocsr(), symmetric_mode=True))
+
+    orders = {"MMD(K+K^T)": nw._mmd, "supervariable MMD": nw._supervariable_mmd, "RCM": rcm}
+    print(f"{'matrix':16s} {'n':>6s}  " + "".join(f"{k:>36s}" for k in orders))
+    print(f"{'':16s} {'':6s}  " + "".join(f"{'nnz(L+U)  flops  order ms  LU ms':>36s}" for _ in orders))
+    for name, make in mats.items():
+        K = make()
+        rows, Ks = {}, {}
+        for k, order in orders.items():
+            t = time.perf_counter()
+            p = order(K)
+            to = time.perf_counter() - t
+            Ks[k] = sp.csc_matrix(K[p][:, p])
+            lu = spla.splu(Ks[k], permc_spec="NATURAL", diag_pivot_thresh=0.0, options=dict(SymmetricMode=True))
+            fl = float(np.sum(np.diff(lu.L.indptr).astype(float) * np.bincount(lu.U.indices, minlength=K.shape[0])))
+            rows[k] = [lu.L.nnz + lu.U.nnz, fl, to, []]
+        for _ in range(max(repeats, 3) + 2):
+            for k, Kp in Ks.items():
+                t = time.perf_counter()
+                spla.splu(Kp, permc_spec="NATURAL", diag_pivot_thresh=0.0, options=dict(SymmetricMode=True))
+                rows[k][3].append(time.perf_counter() - t)
+        cells = [f"{f:9d} {fl:8.2e} {1e3 * to:7.1f} {1e3 * np.median(ts):7.2f}" for f, fl, to, ts in rows.values()]
+        print(f"{name:16s} {K.shape[0]:6d}  " + "".join(f"{c:>36s}" for c in cells))
+    print("blastula solves with the supervariable ordering, the spheroid with MMD(K+K^T) (fewer flops on each)")
+
+
 def _slope(d, t) -> float:
     return float(np.polyfit(np.log(d), np.log(t), 1)[0])
 
 
+class _CountLU:
+    """Counts the SuperLU factorisations (``scipy.sparse.linalg.splu`` calls) while active: the reported
+    iterations leave out the passes of failed attempts (cut steps, the spheroid's contact-edge search)."""
+
+    def __enter__(self):
+        self.n, self._orig = 0, spla.splu
+
+        def splu(*a, **k):
+            self.n += 1
+            return self._orig(*a, **k)
+
+        spla.splu = splu
+        return self
+
+    def __exit__(self, *exc):
+        spla.splu = self._orig
+
+
 def scaling(quick: bool) -> None:
     print("\n## Wall time vs dofs (blastula: 10 equal steps to 1 kPa; spheroid: static curve to 10 %, 5 steps)")
+    print("(iterations: those of the accepted states; LU: every SuperLU factorisation, failed attempts included)")
     meshes = [(4, 8), (8, 16), (16, 32), (24, 48)] + ([] if quick else [(32, 64)])
     ps = np.linspace(100.0, 1000.0, 10)
     d, t = [], []
     for m in meshes:
         kw = dict(inner_radius=A, outer_radius=B, C=C, alpha=0.2, pressures=ps, mesh=m)
-        t0 = time.perf_counter()
-        r = fb.inflate(**kw)
-        w = time.perf_counter() - t0
+        with _CountLU() as lu:
+            t0 = time.perf_counter()
+            r = fb.inflate(**kw)
+            w = time.perf_counter() - t0
         n = fb._setup(A, B, C, 0.2, 2.2e9, m).free.size
         d.append(n)
         t.append(w)
-        print(f"blastula {str(m):10s} dofs {n:6d}  {w:8.3f} s  {int(r.newton_iterations.sum())} iterations")
+        print(f"blastula {str(m):10s} dofs {n:6d}  {w:8.3f} s  {int(r.newton_iterations.sum())} iterations  {lu.n} LU")
     k = np.array(d) >= 1500
     if k.sum() >= 2:
         print(f"blastula exponent (dofs >= 1.5e3): wall ~ dofs^{_slope(np.array(d)[k], np.array(t)[k]):.2f}")
     d, t = [], []
     for lev in [1, 2, 3] + ([] if quick else [4]):
-        t0 = time.perf_counter()
-        r = fs.compress(**{**FIG10, "mesh": lev, "static": True, "displacement": 100e-6, "n_static": 5})
-        w = time.perf_counter() - t0
+        with _CountLU() as lu:
+            t0 = time.perf_counter()
+            r = fs.compress(**{**FIG10, "mesh": lev, "static": True, "displacement": 100e-6, "n_static": 5})
+            w = time.perf_counter() - t0
         n = 2 * r.mesh.basis.N + 3 * r.mesh.mesh.nelements
         d.append(n)
         t.append(w)
-        print(f"spheroid level {lev}  dofs {n:6d}  {w:8.3f} s  {int(r.newton_iterations.sum())} iterations")
+        print(f"spheroid level {lev}  dofs {n:6d}  {w:8.3f} s  {int(r.newton_iterations.sum())} iterations  {lu.n} LU")
     print(f"spheroid exponent (levels {1}-{len(d)}): wall ~ dofs^{_slope(np.array(d), np.array(t)):.2f}")
 
 
@@ -269,6 +339,7 @@ def main(argv: list[str] | None = None) -> None:
     try:
         per_iteration(repeats)
         one_pattern(repeats)
+        orderings(repeats, a.quick)
         solvers(repeats, a.quick)
         scaling(a.quick)
     finally:
