@@ -70,6 +70,7 @@ import numpy as np
 from tissuemech.reduced.material import dW_dI1
 from tissuemech.reduced.validation import (
     is_traced,
+    scalar_values,
     validate_choice,
     validate_finite,
     validate_int,
@@ -332,13 +333,38 @@ def _pack(*values):
     return values
 
 
+_NO_X = object()  # marks a one-point call without per-point values (limit_point)
+
+
+def _one_point(x, params, stretch: bool = True):
+    """Fast path of a one-point eager call: ``(x, parameter vector, output shape)`` when ``x`` (or
+    ``_NO_X``) and the shell and material ``params`` (A, B[, C, alpha]) are all Python numbers or size-1
+    arrays that pass every input check (x > 0 for a stretch, else finite; 0 < A < B; C > 0;
+    alpha >= 0, all finite); None otherwise, and then the full checks run (and raise their messages)."""
+    got = scalar_values(*params) if x is _NO_X else scalar_values(x, *params)
+    if got is None:
+        return None
+    vals, nd = got
+    if not all(map(math.isfinite, vals)):
+        return None
+    if x is not _NO_X:
+        xv = vals.pop(0)
+        if stretch and not xv > 0.0:
+            return None
+    A, B = vals[0], vals[1]
+    if not (0.0 < A < B) or (len(vals) > 2 and not (vals[2] > 0.0 and vals[3] >= 0.0)):
+        return None
+    return (None if x is _NO_X else np.array(xv)), np.array(vals), (1,) * nd
+
+
 _BUCKET_MAX = 1024  # concrete calls with at most this many points run padded to a power-of-two size
 
 
 def _call(core, x, params, *static):
     """Run a compiled core on ``x`` (per-point values, or None) and ``params`` (A, B, C, alpha, ...).
 
-    Concrete calls with at most ``_BUCKET_MAX`` points are flattened and padded (with their first
+    A concrete call with one point runs 0-d (one program per core for every size-1 shape). Concrete
+    calls with 2 to ``_BUCKET_MAX`` points are flattened and padded (with their first
     entry, always a valid input) to a power-of-two size of at least 16, so that one compiled program
     serves every small shape (a command line that calls with scalars, 2, 11 and 600 points compiles
     each core once or twice, not once per shape); their outputs come back as NumPy arrays. Traced or
@@ -350,7 +376,11 @@ def _call(core, x, params, *static):
         return core(*(() if x is None else (x,)), _pack(*params), *static)
     shape = np.broadcast_shapes(*(v.shape for v in values))
     n = math.prod(shape)
-    if n > _BUCKET_MAX or (x is None and n == 1):
+    if n == 1:  # one point (Python floats or size-1 arrays): 0-d inputs, parameters in one vector
+        ps = np.array([float(v.reshape(())) for v in params])
+        out = core(*(() if x is None else (x.reshape(()),)), ps, *static)
+        return jax.tree_util.tree_map(lambda o: np.asarray(o).reshape(shape + o.shape), out)
+    if n > _BUCKET_MAX:
         return jax.tree_util.tree_map(np.asarray, core(*(() if x is None else (x,)), _pack(*params), *static))
     size = max(16, 1 << (n - 1).bit_length())
 
@@ -413,6 +443,12 @@ def pressure(
     one-panel rule is used and entries it cannot resolve (large alpha lambda_a^2) are NaN.
     Eager calls run one compiled program (the same one a user's ``jax.jit`` runs), after the input checks.
     """
+    if method == "quadrature":
+        fast = _one_point(inner_stretch, (inner_radius, outer_radius, C, alpha))
+        if fast is not None:
+            p1 = np.asarray(_pressure_core(fast[0], fast[1]))
+            if not np.isnan(p1):
+                return p1.reshape(fast[2])
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
     A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
     validate_choice("method", method, ("quadrature", "ode"))
@@ -464,6 +500,9 @@ def pressure_derivative(
     Arguments as :func:`pressure` (inner_stretch > 0; A < B in m; C > 0 in Pa; alpha >= 0), broadcast.
     Returns dp/d lambda_a in Pa. Raises ``ValueError`` for bad inputs in eager calls.
     """
+    fast = _one_point(inner_stretch, (inner_radius, outer_radius, C, alpha))
+    if fast is not None:
+        return np.asarray(_pressure_derivative_core(fast[0], fast[1])).reshape(fast[2])
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
     A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
     return _call(_pressure_derivative_core, la, (A, B, C_, al))
@@ -483,6 +522,9 @@ def outer_stretch(inner_stretch: Array, *, inner_radius: Array, outer_radius: Ar
     lambda_b^3 = 1 + (lambda_a^3 - 1)(A/B)^3,  A = inner_radius, B = outer_radius (m).
     Raises ``ValueError`` for bad inputs in eager calls.
     """
+    fast = _one_point(inner_stretch, (inner_radius, outer_radius))
+    if fast is not None:
+        return np.asarray(_outer_stretch_core(fast[0], fast[1])).reshape(fast[2])
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
     A, B = validate_radii(inner_radius, outer_radius)
     return _call(_outer_stretch_core, la, (_concrete(A, inner_radius), _concrete(B, outer_radius)))
@@ -619,6 +661,13 @@ def limit_point(*, inner_radius: Array, outer_radius: Array, C: Array, alpha: Ar
     The scan runs in blocks of lanes: memory does not grow with the 256-node grid. Raises
     ``ValueError`` for bad inputs in eager calls.
     """
+    fast = _one_point(_NO_X, (inner_radius, outer_radius, C, alpha))
+    if fast is not None:
+        pm1, la1, redo1 = (np.asarray(v) for v in _limit_core(fast[1]))
+        if not redo1:
+            if not fast[2]:
+                return None if np.isnan(pm1) else LimitPoint(float(pm1), float(la1))
+            return LimitPoint(pm1.reshape(fast[2]), la1.reshape(fast[2]))
     A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
     pmax, la, redo = _call(_limit_core, None, (A, B, C_, al))
     if is_traced(pmax):
@@ -934,6 +983,11 @@ def inner_stretch(pressure: Array, *, inner_radius: Array, outer_radius: Array, 
     Inside ``jit``/``vmap`` no exception can be raised: those entries are NaN (NaN convention; use
     :func:`inner_stretch_solve` for the explicit ``converged`` flag).
     """
+    fast = _one_point(pressure, (inner_radius, outer_radius, C, alpha), stretch=False)
+    if fast is not None:
+        la1, conv1, ok1 = (np.asarray(v) for v in _inverse_core(fast[0], fast[1]))
+        if conv1 and ok1:
+            return la1.reshape(fast[2])
     p = _concrete(validate_finite("pressure", pressure, "Pa"), pressure)
     A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
     if is_traced(pressure, inner_radius, outer_radius, C, alpha):  # differentiable path (implicit function)
@@ -1063,6 +1117,11 @@ def profiles(
     sigma_theta = sigma_r + 2 W'(I1)(l^2 - l^-4), I1 = 2 l^2 + l^-4; von Mises |sigma_theta - sigma_r|.
     Inputs broadcast; the profile axis is appended last.
     """
+    fast = _one_point(inner_stretch, (inner_radius, outer_radius, C, alpha)) if type(n) is int and n >= 2 else None
+    if fast is not None:
+        prof, redo1 = _profiles_core(fast[0], fast[1], n)
+        if not np.asarray(redo1).any():
+            return Profiles(*(np.asarray(v).reshape(fast[2] + (n,)) for v in prof))
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
     A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
     n = validate_int("n (number of points through the wall)", n, minimum=2)
