@@ -37,8 +37,9 @@ values raise ``ValueError`` in eager calls (inside ``jit`` no check can run: res
 for ``lambda_a <= 0``).
 
 Eager calls check their inputs with NumPy, then run one compiled program per public function (the
-same core a user's ``jax.jit`` runs); calls with up to 1024 points run padded to a power-of-two size,
-so that every small shape shares one compiled program. Eager results are NumPy float64 arrays
+same core a user's ``jax.jit`` runs); one-point calls (Python numbers or size-1 arrays) take a fast
+path (plain-float checks, the program on 0-d values), calls with 2 to 1024 points run padded to a
+power-of-two size, so that every small shape shares one compiled program. Eager results are NumPy float64 arrays
 (``limit_point``: Python floats for scalar input); traced calls return JAX arrays.
 
 Error control of the quadrature
@@ -70,6 +71,7 @@ import numpy as np
 from tissuemech.reduced.material import dW_dI1
 from tissuemech.reduced.validation import (
     is_traced,
+    scalar_values,
     validate_choice,
     validate_finite,
     validate_int,
@@ -332,13 +334,38 @@ def _pack(*values):
     return values
 
 
+_NO_X = object()  # marks a one-point call without per-point values (limit_point)
+
+
+def _one_point(x, params, stretch: bool = True):
+    """Fast path of a one-point eager call: ``(x, parameter vector, output shape)`` when ``x`` (or
+    ``_NO_X``) and the shell and material ``params`` (A, B[, C, alpha]) are all Python numbers or size-1
+    arrays that pass every input check (x > 0 for a stretch, else finite; 0 < A < B; C > 0;
+    alpha >= 0, all finite); None otherwise, and then the full checks run (and raise their messages)."""
+    got = scalar_values(*params) if x is _NO_X else scalar_values(x, *params)
+    if got is None:
+        return None
+    vals, nd = got
+    if not all(map(math.isfinite, vals)):
+        return None
+    if x is not _NO_X:
+        xv = vals.pop(0)
+        if stretch and not xv > 0.0:
+            return None
+    A, B = vals[0], vals[1]
+    if not (0.0 < A < B) or (len(vals) > 2 and not (vals[2] > 0.0 and vals[3] >= 0.0)):
+        return None
+    return (None if x is _NO_X else np.array(xv)), np.array(vals), (1,) * nd
+
+
 _BUCKET_MAX = 1024  # concrete calls with at most this many points run padded to a power-of-two size
 
 
 def _call(core, x, params, *static):
     """Run a compiled core on ``x`` (per-point values, or None) and ``params`` (A, B, C, alpha, ...).
 
-    Concrete calls with at most ``_BUCKET_MAX`` points are flattened and padded (with their first
+    A concrete call with one point runs 0-d (one program per core for every size-1 shape). Concrete
+    calls with 2 to ``_BUCKET_MAX`` points are flattened and padded (with their first
     entry, always a valid input) to a power-of-two size of at least 16, so that one compiled program
     serves every small shape (a command line that calls with scalars, 2, 11 and 600 points compiles
     each core once or twice, not once per shape); their outputs come back as NumPy arrays. Traced or
@@ -350,7 +377,11 @@ def _call(core, x, params, *static):
         return core(*(() if x is None else (x,)), _pack(*params), *static)
     shape = np.broadcast_shapes(*(v.shape for v in values))
     n = math.prod(shape)
-    if n > _BUCKET_MAX or (x is None and n == 1):
+    if n == 1:  # one point (Python floats or size-1 arrays): 0-d inputs, parameters in one vector
+        ps = np.array([float(v.reshape(())) for v in params])
+        out = core(*(() if x is None else (x.reshape(()),)), ps, *static)
+        return jax.tree_util.tree_map(lambda o: np.asarray(o).reshape(shape + o.shape), out)
+    if n > _BUCKET_MAX:
         return jax.tree_util.tree_map(np.asarray, core(*(() if x is None else (x,)), _pack(*params), *static))
     size = max(16, 1 << (n - 1).bit_length())
 
@@ -413,6 +444,12 @@ def pressure(
     one-panel rule is used and entries it cannot resolve (large alpha lambda_a^2) are NaN.
     Eager calls run one compiled program (the same one a user's ``jax.jit`` runs), after the input checks.
     """
+    if method == "quadrature":
+        fast = _one_point(inner_stretch, (inner_radius, outer_radius, C, alpha))
+        if fast is not None:
+            p1 = np.asarray(_pressure_core(fast[0], fast[1]))
+            if not np.isnan(p1):
+                return p1.reshape(fast[2])
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
     A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
     validate_choice("method", method, ("quadrature", "ode"))
@@ -464,6 +501,9 @@ def pressure_derivative(
     Arguments as :func:`pressure` (inner_stretch > 0; A < B in m; C > 0 in Pa; alpha >= 0), broadcast.
     Returns dp/d lambda_a in Pa. Raises ``ValueError`` for bad inputs in eager calls.
     """
+    fast = _one_point(inner_stretch, (inner_radius, outer_radius, C, alpha))
+    if fast is not None:
+        return np.asarray(_pressure_derivative_core(fast[0], fast[1])).reshape(fast[2])
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
     A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
     return _call(_pressure_derivative_core, la, (A, B, C_, al))
@@ -483,6 +523,9 @@ def outer_stretch(inner_stretch: Array, *, inner_radius: Array, outer_radius: Ar
     lambda_b^3 = 1 + (lambda_a^3 - 1)(A/B)^3,  A = inner_radius, B = outer_radius (m).
     Raises ``ValueError`` for bad inputs in eager calls.
     """
+    fast = _one_point(inner_stretch, (inner_radius, outer_radius))
+    if fast is not None:
+        return np.asarray(_outer_stretch_core(fast[0], fast[1])).reshape(fast[2])
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
     A, B = validate_radii(inner_radius, outer_radius)
     return _call(_outer_stretch_core, la, (_concrete(A, inner_radius), _concrete(B, outer_radius)))
@@ -619,6 +662,13 @@ def limit_point(*, inner_radius: Array, outer_radius: Array, C: Array, alpha: Ar
     The scan runs in blocks of lanes: memory does not grow with the 256-node grid. Raises
     ``ValueError`` for bad inputs in eager calls.
     """
+    fast = _one_point(_NO_X, (inner_radius, outer_radius, C, alpha))
+    if fast is not None:
+        pm1, la1, redo1 = (np.asarray(v) for v in _limit_core(fast[1]))
+        if not redo1:
+            if not fast[2]:
+                return None if np.isnan(pm1) else LimitPoint(float(pm1), float(la1))
+            return LimitPoint(pm1.reshape(fast[2]), la1.reshape(fast[2]))
     A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
     pmax, la, redo = _call(_limit_core, None, (A, B, C_, al))
     if is_traced(pmax):
@@ -646,58 +696,98 @@ _COARSE_ITER = 60
 _FINE_ITER = 30  # stage 2: polish with the full 20-point rule (typically 2-3 steps)
 
 
-def _newton(pt, k, omk, alpha, x0, lo, hi, rule, max_iter, tol):
+def _rule_residual(x, k, omk, alpha, xr, wr, curvature=False):
+    """(P, dP/dx[, d2P/dx2]): p/C at lambda_a = exp(x) by the Gauss rule (xr, wr) in s = log l and
+    its exact x-derivatives (Leibniz in s): dP/dx = G(x) - G(s_b) q with q = d s_b/dx =
+    k exp(3 (x - s_b)); d2P/dx2 = G(x) D(x) - G(s_b) q (D(s_b) q + 3 (1 - q)), D = d log G/ds."""
+    e = jnp.expm1(3.0 * x)
+    sb = jnp.log1p(e * k) / 3.0
+    h = jnp.log1p(e * omk / (1.0 + e * k)) / 3.0
+    # the nodes apart from the two ends and the weighted sum as a product with the weights: half the
+    # time of one (.., 22) array of nodes on XLA CPU
+    s = sb[..., None] + (0.5 * h)[..., None] * (jnp.asarray(xr) + 1.0)
+    P = 0.5 * h * (_G(s, alpha[..., None]) @ jnp.asarray(wr))
+    Ga, Gb = _G(x, alpha), _G(sb, alpha)
+    q = k * jnp.exp(3.0 * (x - sb))
+    d = Ga - Gb * q
+    if not curvature:
+        return P, d
+    Da, Db = _slope_D(jnp.exp(x), alpha), _slope_D(jnp.exp(sb), alpha)
+    return P, d, Ga * Da - Gb * q * (Db * q + 3.0 * (1.0 - q))
+
+
+def _slope_D(l, alpha):
+    """D = d log G/ds at l = e^s (closed form, as in :func:`_log_G_and_slope`)."""
+    l2 = l * l
+    l3 = l2 * l
+    return alpha * (4.0 * l2 - 4.0 / (l2 * l2)) + 3.0 * l3 / (1.0 + l3) - 4.0
+
+
+def _resolved(r, d, pt):
+    """The convergence test of the inverse: positive slope and residual r = p/C - pt within 1e-11
+    relative, or what a 2e-13 change of log(lambda_a) makes (near lambda_a = 1 only absolute
+    resolution exists)."""
+    return (d > 0.0) & (jnp.abs(r) <= 1e-11 * jnp.abs(pt) + 2e-13 * jnp.abs(d))
+
+
+def _newton_update(x, lo, hi, pt, target, k, omk, alpha, xr, wr, tol, stop_when_resolved):
+    """One safeguarded Newton step of :func:`_newton` (all lanes): (x, lo, hi after it, stop, r, d)."""
+    if stop_when_resolved:
+        P, d, d2 = _rule_residual(x, k, omk, alpha, xr, wr, curvature=True)
+    else:
+        P, d = _rule_residual(x, k, omk, alpha, xr, wr)
+    r = P - pt
+    past = (d <= 0.0) | (r > 0.0)
+    lo_n = jnp.where(past, lo, x)
+    hi_n = jnp.where(past, x, hi)
+    dF = d / jnp.sqrt(1.0 + P * P)
+    newton = x - (jnp.arcsinh(P) - target) / jnp.where(d > 0.0, dF, 1.0)
+    # a Newton step below tol in x is the last one needed (quadratic convergence)
+    small = (d > 0.0) & (jnp.abs(newton - x) <= tol)
+    if stop_when_resolved:
+        q2 = 1.0 + P * P
+        d2F = (d2 - P * d * d / q2) / jnp.sqrt(q2)
+        step = newton - x
+        small = small | (_resolved(r, d, pt) & (jnp.abs(d2F) * step * step <= 2e-15 * dF))
+    ok = small | ((d > 0.0) & (newton > lo_n) & (newton < hi_n))
+    x_n = jnp.where(ok, newton, 0.5 * (lo_n + hi_n))
+    x_n = jnp.where(r == 0.0, x, x_n)
+    stop = small | (r == 0.0) | (hi_n - lo_n <= tol)
+    return x_n, lo_n, hi_n, stop, r, d
+
+
+def _newton(pt, k, omk, alpha, x0, lo, hi, rule, max_iter, tol, stop_when_resolved=False):
     """Safeguarded Newton for p/C(exp(x)) = pt on the rising branch, bracket [lo, hi] in x.
 
     Newton is applied to asinh(p/C): linear for |p| << C, logarithmic for the exponentially
     stiffening Fung branch, so that few steps are needed from far away. The bracket is kept by
     the rule "x is past the root if p(x) > pt or dp/dx <= 0 (beyond the limit point)"; a step that
-    leaves the bracket, or a non-positive slope, is replaced by bisection.
+    leaves the bracket, or a non-positive slope, is replaced by bisection. A lane stops after a
+    Newton step below ``tol`` in x or, with ``stop_when_resolved``, after the step from a point that
+    passes :func:`_resolved` where the error that step leaves, |F''/(2 F')| step^2 (quadratic
+    convergence, F = asinh(p/C) and its closed-form derivatives in x), is below 1e-15.
     Returns (x, r, d): the final x and the residual p/C - pt and slope dP/dx at the last point
-    evaluated (the one before the final, sub-``tol`` Newton step), for the convergence check.
+    evaluated (the one before the final Newton step), for the convergence check.
     """
     target = jnp.arcsinh(pt)
-
     xr = jnp.asarray(rule[0])
     wr = jnp.asarray(rule[1])
-
-    def residual(x):
-        # p/C by the rule and its exact x-derivative (Leibniz in s = log l):
-        # dP/dx = G(x) - G(s_b) k exp(3 (x - s_b)),  since d s_b/dx = k lambda_a^3 / lambda_b^3
-        e = jnp.expm1(3.0 * x)
-        sb = jnp.log1p(e * k) / 3.0
-        h = jnp.log1p(e * omk / (1.0 + e * k)) / 3.0
-        s = jnp.stack([x, sb], axis=-1)
-        s = jnp.concatenate([s, sb[..., None] + 0.5 * h[..., None] * (xr + 1.0)], axis=-1)
-        vals = _G(s, alpha[..., None])
-        P = 0.5 * h * jnp.sum(wr * vals[..., 2:], axis=-1)
-        d = vals[..., 0] - vals[..., 1] * k * jnp.exp(3.0 * (x - sb))
-        return P - pt, d, P
 
     def cond(state):
         return (state[3] < max_iter) & ~jnp.all(state[4])
 
     def body(state):
         x, lo, hi, it, done, r_old, d_old = state
-        r, d, P = residual(x)
-        past = (d <= 0.0) | (r > 0.0)
-        lo_n = jnp.where(past, lo, x)
-        hi_n = jnp.where(past, x, hi)
-        dF = d / jnp.sqrt(1.0 + P * P)
-        newton = x - (jnp.arcsinh(P) - target) / jnp.where(d > 0.0, dF, 1.0)
-        # a Newton step below tol in x is the last one needed (quadratic convergence)
-        small = (d > 0.0) & (jnp.abs(newton - x) <= tol)
-        ok = small | ((d > 0.0) & (newton > lo_n) & (newton < hi_n))
-        x_n = jnp.where(ok, newton, 0.5 * (lo_n + hi_n))
-        x_n = jnp.where(r == 0.0, x, x_n)
-        done_n = done | small | (r == 0.0) | (hi_n - lo_n <= tol)
+        x_n, lo_n, hi_n, stop, r, d = _newton_update(
+            x, lo, hi, pt, target, k, omk, alpha, xr, wr, tol, stop_when_resolved
+        )
         keep = done
         return (
             jnp.where(keep, x, x_n),
             jnp.where(keep, lo, lo_n),
             jnp.where(keep, hi, hi_n),
             it + 1,
-            done_n,
+            done | stop,
             jnp.where(keep, r_old, r),
             jnp.where(keep, d_old, d),
         )
@@ -709,6 +799,45 @@ def _newton(pt, k, omk, alpha, x0, lo, hi, rule, max_iter, tol):
 
 
 _CHUNK = 1024  # large inputs are solved chunk by chunk: each chunk stops when its own lanes converge
+_TABLE_NODES = 8192  # start table of one shell (scalar k, alpha): nodes in x = log lambda_a on [log 0.5, log 10]
+
+
+def _start_table(k, omk, alpha):
+    """Start table for the inverse of ONE shell (0-d k, 1 - k, alpha): F = asinh(p/C) and dF/dx at
+    ``_TABLE_NODES`` equally spaced x = log lambda_a on the search range, by the 20-point rule.
+    Nodes past the first one where the curve stops rising (limit point, overflow) get F = inf, so
+    that a search finds only the rising branch. Costs ~1e5 integrand values (~1 ms): used for
+    large calls only."""
+    xs = jnp.linspace(np.log(INVERSE_STRETCH_RANGE[0]), np.log(INVERSE_STRETCH_RANGE[1]), _TABLE_NODES)
+    shape = xs.shape
+    P, d = _rule_residual(
+        xs, jnp.broadcast_to(k, shape), jnp.broadcast_to(omk, shape), jnp.broadcast_to(alpha, shape), _X, _W
+    )
+    F = jnp.arcsinh(P)
+    dF = d / jnp.sqrt(1.0 + P * P)
+    good = (dF > 0.0) & jnp.isfinite(F) & jnp.isfinite(dF)
+    rising = jnp.cumprod(good.astype(jnp.int32)) > 0
+    rising = rising & jnp.concatenate([jnp.ones((1,), bool), F[1:] > F[:-1]])
+    rising = jnp.cumprod(rising.astype(jnp.int32)) > 0
+    return xs, jnp.where(rising, F, jnp.inf), jnp.where(rising, dF, 1.0)
+
+
+def _table_start(pt, table, fallback):
+    """x0 by cubic Hermite interpolation of the inverse x(F) between the two table nodes around
+    F = asinh(pt) (``fallback`` where the target is outside the rising part of the table)."""
+    xs, F, dF = table
+    target = jnp.arcsinh(pt)
+    j = jnp.clip(jnp.searchsorted(F, target, side="right", method="scan_unrolled") - 1, 0, F.size - 2)
+    F0, F1 = F[j], F[j + 1]
+    x0, x1 = xs[j], xs[j + 1]
+    HF = F1 - F0
+    t = (target - F0) / HF
+    m0, m1 = HF / dF[j], HF / dF[j + 1]
+    t2 = t * t
+    t3 = t2 * t
+    x = (2 * t3 - 3 * t2 + 1) * x0 + (t3 - 2 * t2 + t) * m0 + (-2 * t3 + 3 * t2) * x1 + (t3 - t2) * m1
+    inside = (target >= F0) & (target <= F1) & jnp.isfinite(HF) & jnp.isfinite(x)
+    return jnp.where(inside, x, fallback)
 
 
 @jax.jit
@@ -717,12 +846,18 @@ def _solve_stretch(p_over_C, k, omk, alpha, max_stretch=INVERSE_STRETCH_RANGE[1]
     lambda_a <= ``max_stretch`` (per lane; e.g. the limit stretch, so that the far, re-stiffening
     branch of a Fung shell is never returned).
 
+    Large calls (more than 2 chunks) for one shell (0-d k, 1 - k, alpha) start from a table of the
+    curve (:func:`_start_table`), so that one or two 20-point Newton steps finish each lane;
+    otherwise a 6-point Newton stage comes first.
+
     Returns (lambda_a, converged, rule_ok): ``rule_ok`` is False where the 20-point rule cannot be
     trusted to 1e-10 at the solution (quadrature indicator above PANEL_INDICATOR)."""
+    one_shell = all(jnp.ndim(v) == 0 for v in (k, omk, alpha))
     pt, k, omk, alpha, mx = jnp.broadcast_arrays(p_over_C, k, omk, alpha, jnp.asarray(max_stretch, jnp.float64))
     pt, k, omk, alpha, mx = (jax.lax.stop_gradient(v) for v in (pt, k, omk, alpha, mx))
     if pt.size <= 2 * _CHUNK:
         return _solve_block(pt, k, omk, alpha, mx)
+    table = _start_table(k.ravel()[0], omk.ravel()[0], alpha.ravel()[0]) if one_shell else None
     n = pt.size
     m = -(-n // _CHUNK)
     pad = m * _CHUNK - n
@@ -732,27 +867,52 @@ def _solve_stretch(p_over_C, k, omk, alpha, max_stretch=INVERSE_STRETCH_RANGE[1]
         jnp.concatenate([v.ravel(), jnp.full((pad,), f, dtype=v.dtype)]).reshape(m, _CHUNK)
         for v, f in zip((pt, k, omk, alpha, mx), fills)
     )
-    outs = jax.lax.map(lambda b: _solve_block(*b), blocks)
+    outs = jax.lax.map(lambda b: _solve_block(*b, table=table), blocks)
     return tuple(o.ravel()[:n].reshape(pt.shape) for o in outs)
 
 
-def _solve_block(pt, k, omk, alpha, max_stretch):
-    """Two-stage safeguarded Newton on one block of lanes (arrays of equal shape)."""
+def _solve_block(pt, k, omk, alpha, max_stretch, table=None):
+    """Safeguarded Newton on one block of lanes (arrays of equal shape): from the table start when
+    given (20-point rule only), else a 6-point stage first."""
     xmin = np.log(INVERSE_STRETCH_RANGE[0])
     xmax = jnp.log(jnp.clip(max_stretch, 1.0, INVERSE_STRETCH_RANGE[1]))
     lo = jnp.where(pt >= 0.0, 0.0, xmin)
     hi = jnp.where(pt >= 0.0, xmax, 0.0)
     # small-strain guess p/C ~ 8 (1 - k)(lambda_a - 1)
     guess = jnp.log(jnp.maximum(1.0 + pt / (8.0 * omk), 1e-300))
+    x_small = jnp.where((guess >= lo) & (guess <= hi), guess, 0.5 * (lo + hi))
+    if table is not None:
+        guess = jnp.where(pt == 0.0, 0.0, _table_start(pt, table, guess))
     x0 = jnp.where((guess >= lo) & (guess <= hi), guess, 0.5 * (lo + hi))
-    coarse = np.polynomial.legendre.leggauss(_COARSE_NODES)
-    x1 = _newton(pt, k, omk, alpha, x0, lo, hi, coarse, _COARSE_ITER, 1e-7)[0]
-    x, r, d = _newton(pt, k, omk, alpha, x1, lo, hi, (_X, _W), _FINE_ITER, 1e-13)
+
+    def two_stage(x0):
+        coarse = np.polynomial.legendre.leggauss(_COARSE_NODES)
+        x1 = _newton(pt, k, omk, alpha, x0, lo, hi, coarse, _COARSE_ITER, 1e-7)[0]
+        return _newton(pt, k, omk, alpha, x1, lo, hi, (_X, _W), _FINE_ITER, 1e-13, stop_when_resolved=True)
+
+    if table is None:
+        x, r, d = two_stage(x0)
+    else:
+        # one Newton step from the table start finishes (nearly) every lane: run it without a loop
+        x1, _, _, stop, r, d = _newton_update(x0, lo, hi, pt, jnp.arcsinh(pt), k, omk, alpha, _X, _W, 1e-13, True)
+        x, r, d = jax.lax.cond(
+            jnp.all(stop & (_resolved(r, d, pt) | (pt == 0.0))),
+            lambda: (x1, r, d),
+            lambda: _newton(pt, k, omk, alpha, x0, lo, hi, (_X, _W), _FINE_ITER, 1e-13, stop_when_resolved=True),
+        )
+        # lanes the table cannot start (no state on the first rising branch: above the limit point,
+        # outside the stretch range) take the two-stage path from the small-strain guess, as without a
+        # table (it may find the far, re-stiffening branch of a Fung shell); rare, so only blocks
+        # that have such lanes pay for it
+        failed = ~(_resolved(r, d, pt) | (pt == 0.0))
+        x, r, d = jax.lax.cond(
+            jnp.any(failed),
+            lambda: tuple(jnp.where(failed, a, b) for a, b in zip(two_stage(x_small), (x, r, d))),
+            lambda: (x, r, d),
+        )
     la = jnp.exp(x)
-    # r, d are taken one (sub-1e-13) Newton step before the returned x. Tolerance: 1e-11 relative,
-    # or what a 2e-13 change of log(lambda_a) makes (near lambda_a = 1 only absolute resolution exists)
-    converged = (d > 0.0) & (jnp.abs(r) <= 1e-11 * jnp.abs(pt) + 2e-13 * jnp.abs(d))
-    converged = converged | (pt == 0.0)
+    # r, d are taken one Newton step before the returned x (see _newton)
+    converged = _resolved(r, d, pt) | (pt == 0.0)
     c, _ = quadrature_indicator(la, k, omk, alpha)
     return la, converged, c <= PANEL_INDICATOR
 
@@ -770,8 +930,10 @@ def inner_stretch_solve(
 
     Solves p(lambda_a) = pressure (Pa) on the stable (rising) branch by safeguarded Newton in
     x = log lambda_a (closed-form slope; bisection whenever a Newton step leaves the bracket or the
-    slope is not positive), searching 0.5 <= lambda_a <= 10. ``converged`` is False where no stable
-    state exists: pressure above the limit point (the shell bursts), or outside that stretch range,
+    slope is not positive), searching 0.5 <= lambda_a <= 10. Calls with more than 2048 pressures for
+    one shell (scalar radii and alpha) start from a table of the curve (8192 nodes, cubic Hermite in
+    asinh(p/C), start error ~1e-13 in log lambda_a), so that one 20-point Newton step finishes a point.
+    ``converged`` is False where no stable state exists: pressure above the limit point (the shell bursts), or outside that stretch range,
     and where the one-panel quadrature cannot resolve the pressure integral at the solution to 1e-10
     (very stiff states, large alpha lambda_a^2: :func:`inner_stretch` solves those eagerly);
     ``lambda_a`` is NaN there. ``pressure = 0`` gives exactly 1. Negative pressures deflate
@@ -824,6 +986,11 @@ def inner_stretch(pressure: Array, *, inner_radius: Array, outer_radius: Array, 
     Inside ``jit``/``vmap`` no exception can be raised: those entries are NaN (NaN convention; use
     :func:`inner_stretch_solve` for the explicit ``converged`` flag).
     """
+    fast = _one_point(pressure, (inner_radius, outer_radius, C, alpha), stretch=False)
+    if fast is not None:
+        la1, conv1, ok1 = (np.asarray(v) for v in _inverse_core(fast[0], fast[1]))
+        if conv1 and ok1:
+            return la1.reshape(fast[2])
     p = _concrete(validate_finite("pressure", pressure, "Pa"), pressure)
     A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
     if is_traced(pressure, inner_radius, outer_radius, C, alpha):  # differentiable path (implicit function)
@@ -953,6 +1120,11 @@ def profiles(
     sigma_theta = sigma_r + 2 W'(I1)(l^2 - l^-4), I1 = 2 l^2 + l^-4; von Mises |sigma_theta - sigma_r|.
     Inputs broadcast; the profile axis is appended last.
     """
+    fast = _one_point(inner_stretch, (inner_radius, outer_radius, C, alpha)) if type(n) is int and n >= 2 else None
+    if fast is not None:
+        prof, redo1 = _profiles_core(fast[0], fast[1], n)
+        if not np.asarray(redo1).any():
+            return Profiles(*(np.asarray(v).reshape(fast[2] + (n,)) for v in prof))
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
     A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
     n = validate_int("n (number of points through the wall)", n, minimum=2)

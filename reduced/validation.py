@@ -42,6 +42,7 @@ __all__ = [
     "validate_int",
     "validate_choice",
     "validate_times",
+    "scalar_values",
 ]
 
 
@@ -118,6 +119,26 @@ def _finite_scalar(value: Any) -> float | None:
     if (t is float or t is int) and math.isfinite(value):
         return float(value)
     return None
+
+
+def scalar_values(*values: Any) -> tuple[list[float], int] | None:
+    """The fast path of one-point calls: ``([floats], ndim)`` if every value is a Python float or int
+    (not a bool), a NumPy float64 scalar or a real NumPy array with one entry (``ndim``: the largest
+    array rank, so the broadcast shape is ``(1,) * ndim``); None otherwise (then the full checks run).
+    No value is checked here: a caller tests the floats and takes the full path if any test fails,
+    so every message stays that of the full checks."""
+    out: list[float] = []
+    nd = 0
+    for v in values:
+        t = type(v)
+        if t is float or t is int or t is np.float64:
+            out.append(float(v))
+        elif t is np.ndarray and v.size == 1 and v.dtype.kind in "fiu":
+            out.append(float(v.item()))
+            nd = max(nd, v.ndim)
+        else:
+            return None
+    return out, nd
 
 
 def validate_finite(name: str, value: Any, unit: str = "") -> np.ndarray | None:

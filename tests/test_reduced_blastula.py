@@ -401,3 +401,73 @@ def test_ode_rtol_reaches_the_integrator():
     for bad in (0.0, -1e-6, float("nan"), "tight"):
         with pytest.raises(ValueError, match="rtol"):
             bl.pressure(la, **GEO, C=C, alpha=0.2, method="ode", rtol=bad)
+
+
+@pytest.mark.parametrize("alpha", [0.0, 0.2, 1.0])
+def test_large_one_shell_inverse_equals_per_lane_path(alpha):
+    """A large call for one shell starts from a table of the curve (one 20-point Newton step per lane);
+    the same pressures with per-lane shell parameters take the two-stage Newton path: same answers
+    (1e-13), same converged pattern, including pressures near 0, exactly 0, negative, beyond the
+    deflation range and (neo-Hookean) above the limit point."""
+    rng = np.random.default_rng(20)
+    n = 3 * 1024 + 17  # more than two chunks, not a multiple of the chunk
+    lim = bl.limit_point(**GEO, C=C, alpha=alpha)
+    top = float(lim.inner_stretch) - 1e-3 if lim is not None else (4.0 if alpha < 1 else 2.5)
+    la = rng.uniform(0.55, top, n)
+    la[:200] = 1.0 + rng.choice([-1.0, 1.0], 200) * 10 ** rng.uniform(-9, -3, 200)
+    p = np.array(bl.pressure(la, **GEO, C=C, alpha=alpha))
+    p[200:210] = 0.0
+    p[210:220] = -1e12 * C  # below the smallest covered stretch: not converged
+    if lim is not None:
+        p[220:230] = 1.01 * float(lim.pressure)  # above the limit point
+    one, ok1 = bl.inner_stretch_solve(p, **GEO, C=C, alpha=alpha)
+    per, ok2 = bl.inner_stretch_solve(p, inner_radius=np.full(n, A), outer_radius=75e-6, C=C, alpha=alpha)
+    one, per, ok1, ok2 = (np.asarray(v) for v in (one, per, ok1, ok2))
+    assert np.array_equal(ok1, ok2)
+    assert not ok1[210:220].any() and ok1[:210].all()
+    if lim is not None:
+        assert not ok1[220:230].any()
+    np.testing.assert_array_equal(one[200:210], 1.0)
+    np.testing.assert_allclose(one[ok1], per[ok1], rtol=1e-13, atol=0)
+    good = ok1.copy()
+    good[:230] = False
+    np.testing.assert_allclose(one[good], la[good], rtol=1e-11, atol=0)
+
+
+def test_one_point_fast_path_equals_array_path():
+    """Python floats and size-1 arrays of any rank take the one-point path: the same values as the
+    same point inside a larger call, the broadcast shape, and bad one-point input still raises."""
+    kw = dict(**GEO, C=C, alpha=0.2)
+    two = np.array([1.5, 2.5])
+    ref = {
+        "pressure": bl.pressure(two, **kw)[0],
+        "pressure_derivative": bl.pressure_derivative(two, **kw)[0],
+        "outer_stretch": bl.outer_stretch(two, **GEO)[0],
+        "inner_stretch": bl.inner_stretch(np.array([150.0, 100.0]), **kw)[0],
+        "profiles": bl.profiles(two, **kw).sigma_theta[0],
+    }
+    for x, shape in ((1.5, ()), (np.float64(1.5), ()), (np.array([1.5]), (1,)), (np.array([[1.5]]), (1, 1))):
+        got = {
+            "pressure": bl.pressure(x, **kw),
+            "pressure_derivative": bl.pressure_derivative(x, **kw),
+            "outer_stretch": bl.outer_stretch(x, **GEO),
+            "inner_stretch": bl.inner_stretch(x * 100.0, **kw),
+            "profiles": bl.profiles(x, **kw).sigma_theta,
+        }
+        for name, v in got.items():
+            assert isinstance(v, np.ndarray)
+            assert v.shape == (shape + (50,) if name == "profiles" else shape), name
+            np.testing.assert_allclose(v.reshape(np.shape(ref[name])), ref[name], rtol=1e-14, atol=0)
+    lim = bl.limit_point(inner_radius=A, outer_radius=75e-6, C=C, alpha=0.01)
+    lim1 = bl.limit_point(inner_radius=A, outer_radius=np.array([75e-6]), C=C, alpha=0.01)
+    assert isinstance(lim.pressure, float) and lim1.pressure.shape == (1,)
+    assert lim.pressure == pytest.approx(float(lim1.pressure[0]), rel=1e-14)
+    assert bl.limit_point(inner_radius=A, outer_radius=75e-6, C=C, alpha=0.2) is None
+    with pytest.raises(ValueError, match="inner_stretch must be positive"):
+        bl.pressure(-1.0, **kw)
+    with pytest.raises(ValueError, match="inner_radius must be smaller than outer_radius"):
+        bl.pressure(1.5, inner_radius=1e-4, outer_radius=5e-5, C=C, alpha=0.2)
+    with pytest.raises(ValueError, match="alpha"):
+        bl.inner_stretch(10.0, **GEO, C=C, alpha=-0.1)
+    with pytest.raises(ValueError, match="limit pressure"):
+        bl.inner_stretch(250.0, **GEO, C=C, alpha=0.0)

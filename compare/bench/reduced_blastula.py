@@ -5,7 +5,9 @@
 Part 1 (:func:`api_rows`, issue 14): every public function called eagerly with NumPy arrays, as a
 user calls it, against the same call under ``jax.jit``, interleaved in one run (median of the
 repeats): the ratio eager/jit at ``n`` points and the per-call cost at N = 1; ``limit_point``'s peak
-memory at 1e4 / 1e5 / 1e6 points (fresh interpreters, ``ru_maxrss``) shows it flat in N.
+memory at 1e4 / 1e5 / 1e6 points (fresh interpreters, ``ru_maxrss``) shows it flat in N. The issue-14
+targets are printed next to each row (``target``: eager/jit <= 1.5, <= 100 us per call at N = 1,
+inner_stretch >= 1e6 and limit_point >= 2e5 points/s; ``met``: yes/NO for each, in that order).
 
 Each row: the path, points per call, compile time, throughput after compile (points/s, best of a
 few calls with ``block_until_ready``), the max relative error against a high-accuracy reference,
@@ -244,10 +246,17 @@ def limit_point_memory(n: int) -> float:
     return float(subprocess.check_output([sys.executable, "-c", code]).decode().strip().splitlines()[-1])
 
 
+# issue 14 targets, printed next to the measurements (``target`` / ``met`` columns of :func:`api_rows`)
+EAGER_OVER_JIT_TARGET = 1.5  # eager time / jitted time at n points
+N1_TARGET_US = 100.0  # eager call with one point, microseconds
+_RATE_TARGETS = {"inner_stretch (alpha=0.2)": 1e6, "limit_point": 2e5}  # eager points/s at n points
+
+
 def api_rows(n: int = 1_000_000, repeats: int = 5, seed: int = 0, memory: bool = True) -> list[dict]:
     """Eager public calls (NumPy in) against the same call under ``jax.jit``, interleaved; see the module
     docstring. Columns: function, points, eager_points_per_s, jit_points_per_s, eager_over_jit, n1_eager_us,
-    n1_jit_us, eager_equals_jit (max relative difference of the results)."""
+    n1_jit_us, eager_vs_jit_max_rel (max relative difference of the results), target (the issue-14
+    targets of the row) and met (yes/NO for each target, in the order printed)."""
     import jax
 
     rng = np.random.default_rng(seed)
@@ -265,6 +274,10 @@ def api_rows(n: int = 1_000_000, repeats: int = 5, seed: int = 0, memory: bool =
             )
         a1 = small[name]
         t1e, t1j = _median_pair(lambda: fn(*a1), lambda: jf(*a1), 15, inner=20)
+        rate_target = _RATE_TARGETS.get(name)
+        met = [te / tj <= EAGER_OVER_JIT_TARGET, t1e * 1e6 <= N1_TARGET_US]
+        if rate_target is not None:
+            met.append(pts / te >= rate_target)
         out.append(
             dict(
                 function=name,
@@ -275,6 +288,9 @@ def api_rows(n: int = 1_000_000, repeats: int = 5, seed: int = 0, memory: bool =
                 n1_eager_us=t1e * 1e6,
                 n1_jit_us=t1j * 1e6,
                 eager_vs_jit_max_rel=diff,
+                target=f"eager/jit <= {EAGER_OVER_JIT_TARGET:g}, N=1 <= {N1_TARGET_US:g} us"
+                + ("" if rate_target is None else f", >= {rate_target:.0e} points/s"),
+                met=" / ".join("yes" if m else "NO" for m in met),
             )
         )
     if memory:
