@@ -26,6 +26,7 @@ import numpy as np
 from tissuemech.fem import constitutive as cm
 from tissuemech.fem import viscoelastic as ve
 from tissuemech.fem.forms import Assembler, Material
+from tissuemech.fem.kinematics import invariants
 from tissuemech.fem.mesh import AxiMesh
 
 __all__ = [
@@ -123,8 +124,8 @@ class SceneProblem:
     def admissible(self, x: np.ndarray) -> str | None:
         """None if the state x can be evaluated, else the reason: J = det F <= 0 (an element turned
         inside out) or hoop stretch F_theta = r / R <= 0 at some quadrature point."""
-        f = self.asm._fields(x)[0]  # (the kinematics of the assembly, J alone: issue 14)
-        J = f[..., 4] * (f[..., 0] * f[..., 3] - f[..., 1] * f[..., 2])  # = invariants(f)[1]
+        f = self.asm.f_at(x)
+        _, J = invariants(f)
         if not np.all(J > 0):
             return "J <= 0 (an element turned inside out)"
         if not np.all(f[..., 4] > 0):
