@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import skfem
+from scipy.spatial import cKDTree
 
 __all__ = ["AxiMesh", "shell_section", "ball_section", "graded_points"]
 
@@ -225,15 +226,15 @@ def ball_section(
 
     P = np.concatenate(pts)
     Q = np.concatenate(quads)
-    key = np.round(P, 12)
-    _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
-    # number the merged points in order of first appearance (not sorted by coordinates), so meshes with
-    # the same divisions share one node numbering whatever their point positions (pole_points ...)
-    seq = np.argsort(first, kind="stable")
-    rank = np.empty_like(seq)
-    rank[seq] = np.arange(seq.size)
-    inv = rank[inv.ravel()]
-    P, Q = P[first[seq]], inv[Q]
+    # merge the blocks' shared points: each point maps to the first point within 1e-10 of it (a distance,
+    # not a rounding of the coordinates: two copies 1e-16 apart that straddle a rounding boundary stayed
+    # apart before and left a seam of unconnected nodes at some pole_points); numbered in order of first
+    # appearance (not sorted by coordinates), so meshes with the same divisions share one node numbering
+    # whatever their point positions (pole_points ...)
+    near = cKDTree(P).query_ball_point(P, r=1e-10)
+    rep = np.fromiter((min(nb) for nb in near), dtype=np.int64, count=P.shape[0])
+    first, inv = np.unique(rep, return_inverse=True)  # first: sorted = order of first appearance
+    P, Q = P[first], inv.ravel()[Q]
     # counterclockwise orientation
     x, y = P[Q, 0], P[Q, 1]
     area = 0.5 * np.sum(x * np.roll(y, -1, 1) - np.roll(x, -1, 1) * y, axis=1)

@@ -320,8 +320,8 @@ class _EdgeFit:
         affine[0 : prob.asm.n_u : 2], affine[1 : prob.asm.n_u : 2] = 0.5 * d * X[0], -d * X[1]
         err = None
         for g in [*guesses, affine]:
-            if g is None:
-                continue
+            if g is None or g.shape[0] != prob.asm.ndof:
+                continue  # none, or a state of a fitted mesh with other dofs (its numbers mean nothing here)
             xg = pl.impose(g, 1.0 - d, act)
             if prob.admissible(xg) is not None:
                 continue

@@ -365,3 +365,20 @@ def test_fig8_9_case_and_default_mesh_fig10():
     f = compress(**FIG10, mesh="fine")
     for t in (0.2, 1500.0):
         assert abs(np.interp(t, d.time, d.force) / np.interp(t, f.time, f.force) - 1) < 5e-3
+
+
+def test_fitted_meshes_have_one_topology_and_no_seam():
+    """Every contact-edge position gives the same nodes (no unmerged copies of a block-interface point:
+    edge 0.0232343... of level 1 left 3 pairs 1e-16 apart unmerged, a seam, with the coordinate rounding
+    the merge used before) and the same numbering, so states carry over between fitted meshes."""
+    from scipy.spatial import cKDTree
+
+    from tissuemech.fem.spheroid import EDGE_MAX, fitted_mesh
+
+    seam = fitted_mesh(1.0, 1, 0.023234318257495955)
+    near = fitted_mesh(1.0, 1, 0.0232)
+    assert seam.basis.N == near.basis.N == 969
+    assert not cKDTree(seam.mesh.p.T).query_pairs(1e-9)
+    assert np.array_equal(seam.mesh.t, near.mesh.t)
+    counts = {fitted_mesh(1.0, 1, e).basis.N for e in np.geomspace(0.005, EDGE_MAX, 200)}
+    assert counts == {969}
