@@ -712,15 +712,8 @@ def _rule_residual(x, k, omk, alpha, xr, wr, curvature=False):
     d = Ga - Gb * q
     if not curvature:
         return P, d
-    Da, Db = _slope_D(jnp.exp(x), alpha), _slope_D(jnp.exp(sb), alpha)
+    Da, Db = _log_G_and_slope(x, alpha, jnp)[1], _log_G_and_slope(sb, alpha, jnp)[1]
     return P, d, Ga * Da - Gb * q * (Db * q + 3.0 * (1.0 - q))
-
-
-def _slope_D(l, alpha):
-    """D = d log G/ds at l = e^s (closed form, as in :func:`_log_G_and_slope`)."""
-    l2 = l * l
-    l3 = l2 * l
-    return alpha * (4.0 * l2 - 4.0 / (l2 * l2)) + 3.0 * l3 / (1.0 + l3) - 4.0
 
 
 def _resolved(r, d, pt):
