@@ -111,7 +111,7 @@ def total_stress(
     iso_scale: float = 1.0,
     extra_S: np.ndarray | None = None,
     weight: np.ndarray | None = None,
-    tangent: bool = True,
+    tangent: bool | str = True,
 ):
     """Weighted total first Piola stress and tangent in one pass (the assembly kernel).
 
@@ -123,10 +123,11 @@ def total_stress(
         iso_scale: factor on the isochoric part (viscoelastic algorithmic stress).
         extra_S: fixed 2nd Piola stress (..., 5) added as P = F S (its tangent d(F S)/dF at fixed S).
         weight: quadrature weights (...,) multiplied into P and A (None: 1).
-        tangent: False skips A.
+        tangent: False skips A; "lazy" returns in its place a zero-argument callable that evaluates A from
+            this pass's intermediates (the same numbers as ``tangent=True``, without recomputing P).
 
     Returns:
-        (P, A, J): w P (..., 5), w A (..., 5, 5) or None, J = det F (...,).
+        (P, A, J): w P (..., 5), w A (..., 5, 5) (None, or the callable), J = det F (...,).
     Equals ``iso_scale * iso_stress + vol_q`` (or ``vol_penalty``) ``+ first_from_second`` to round-off.
     """
     a, b, c, d, e = f[..., 0], f[..., 1], f[..., 2], f[..., 3], f[..., 4]
@@ -154,8 +155,17 @@ def total_stress(
     if extra_S is not None:
         S0 = extra_S if weight is None else extra_S * weight[..., None]
         P = P + first_from_second(f, S0)
+    if tangent == "lazy":
+        return P, lambda: _tangent(f, Ib, C, alpha, sw, s1, Jm23, Jm53, J, I1, gJ, pJ, q, kappa, weight, S0), J
     if not tangent:
         return P, None, J
+    return P, _tangent(f, Ib, C, alpha, sw, s1, Jm23, Jm53, J, I1, gJ, pJ, q, kappa, weight, S0), J
+
+
+def _tangent(f, Ib, C, alpha, sw, s1, Jm23, Jm53, J, I1, gJ, pJ, q, kappa, weight, S0) -> np.ndarray:
+    """w A (..., 5, 5) of ``total_stress`` from its stress pass's intermediates (the fused form in the
+    module docstring)."""
+    a, b, c, d, e = f[..., 0], f[..., 1], f[..., 2], f[..., 3], f[..., 4]
     s2 = sw * d2W_dI1(Ib, C, alpha)
     c_ff = 4.0 * s2 * Jm23 * Jm23
     c_fJ = -(4.0 / 3.0) * Jm53 * (s2 * Jm23 * I1 + s1)
@@ -172,7 +182,7 @@ def total_stress(
     A2[..., _H_POS] += cH * np.stack([e, d, -e, -c, -e, -b, e, a, d, -c, -b, a], axis=-1)
     if S0 is not None:
         A2[..., _T_POS] += S0[..., [0, 2, 1, 3, 0, 2, 1, 3, 4]]
-    return P, A, J
+    return A
 
 
 def cauchy(f: np.ndarray, P: np.ndarray) -> np.ndarray:

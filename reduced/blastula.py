@@ -1115,13 +1115,14 @@ def profiles(
     """
     fast = _one_point(inner_stretch, (inner_radius, outer_radius, C, alpha)) if type(n) is int and n >= 2 else None
     if fast is not None:
-        prof, redo1 = _profiles_core(fast[0], fast[1], n)
-        if not np.asarray(redo1).any():
-            return Profiles(*(np.asarray(v).reshape(fast[2] + (n,)) for v in prof))
+        fields, redo1 = _profiles_core(fast[0], fast[1], n)
+        if not np.asarray(redo1).any():  # one transfer of the (6, n) block, then six views
+            return Profiles(*np.asarray(fields).reshape((6,) + fast[2] + (n,)))
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
     A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
     n = validate_int("n (number of points through the wall)", n, minimum=2)
-    out, redo = _call(_profiles_core, la, (A, B, C_, al), n)
+    fields, redo = _call(_profiles_core, la, (A, B, C_, al), n)
+    out = Profiles(*(fields[..., i, :] for i in range(6)))
     if is_traced(redo) or not np.asarray(redo).any():
         return out
     # stiff states (large alpha l^2): sigma_r by the error-controlled composite rule (eager, rare)
@@ -1149,7 +1150,8 @@ def _hoop_minus_radial(lam, C, alpha):
 
 @functools.partial(jax.jit, static_argnums=(2,))
 def _profiles_core(inner_stretch, params, n):
-    """Profiles by the one-panel rule and ``redo``: True where an eager call must take the composite rule."""
+    """The six ``Profiles`` fields by the one-panel rule, stacked on axis -2 (shape (..., 6, n): one
+    output buffer), and ``redo``: True where an eager call must take the composite rule."""
     inner_radius, outer_radius, C, alpha = params
     A = jnp.asarray(inner_radius, dtype=jnp.float64)[..., None]
     B = jnp.asarray(outer_radius, dtype=jnp.float64)[..., None]
@@ -1163,4 +1165,5 @@ def _profiles_core(inner_stretch, params, n):
     pc, redo = _p_over_C_flagged(lam_b, kR_b, omkR_b, alpha_b)
     sigma_r = -C_b * pc
     diff = _hoop_minus_radial(lam_b, C_b, alpha_b)
-    return Profiles(R_b, lam_b * R_b, lam_b, sigma_r, sigma_r + diff, jnp.abs(diff)), redo
+    fields = (R_b, lam_b * R_b, lam_b, sigma_r, sigma_r + diff, jnp.abs(diff))
+    return jnp.stack(fields, axis=-2), redo

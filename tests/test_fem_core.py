@@ -70,6 +70,18 @@ def test_fung_stress_and_tangent_finite_differences(alpha):
         assert np.abs(A[:, :, k] - An).max() < 1e-6
 
 
+def test_total_stress_lazy_tangent_is_the_eager_one_bitwise():
+    """tangent="lazy" returns the stress pass's P and J and a callable giving the same w A as tangent=True,
+    bit for bit, for the mixed (q), penalty (kappa) and extra-stress variants; tangent=False gives no A."""
+    f = IDENTITY5 + 0.2 * RNG.standard_normal((4, 3, 5))
+    w, q, S0 = RNG.uniform(0.5, 1.5, (4, 3)), RNG.standard_normal((4, 3)), 0.1 * RNG.standard_normal((4, 3, 5))
+    for kw in (dict(q=q), dict(kappa=50.0), dict(q=q, extra_S=S0, iso_scale=1.3), dict(kappa=50.0, extra_S=S0)):
+        P, A, J = cm.total_stress(f, 1.3, 0.3, weight=w, **kw)
+        Pl, Al, Jl = cm.total_stress(f, 1.3, 0.3, weight=w, tangent="lazy", **kw)
+        assert callable(Al) and np.array_equal(Pl, P) and np.array_equal(Jl, J) and np.array_equal(Al(), A)
+        assert cm.total_stress(f, 1.3, 0.3, weight=w, tangent=False, **kw)[1] is None
+
+
 def test_neo_hookean_exact_and_stress_free_reference():
     f = IDENTITY5 + 0.1 * RNG.standard_normal((3, 5))
     I1, J = invariants(f)

@@ -382,3 +382,31 @@ def test_fitted_meshes_have_one_topology_and_no_seam():
     assert np.array_equal(seam.mesh.t, near.mesh.t)
     counts = {fitted_mesh(1.0, 1, e).basis.N for e in np.geomspace(0.005, EDGE_MAX, 200)}
     assert counts == {969}
+
+
+def test_edge_tolerance_leaves_the_force_converged(monkeypatch):
+    """The fitted contact edge is solved to EDGE_TOL in N_edge / F: the static force then agrees with a 100x
+    tighter edge solve to 2e-7 (with the old 1e-4 it was 5.7e-6 off on this curve), and the curve's second
+    step starts from the first one scaled (the reference state x = 0 at d = 0 counted as a state): no step is
+    cut, and each takes at most 5 edge passes."""
+    from tissuemech.fem import spheroid as fs
+
+    passes = []
+    solve = fs._EdgeFit.solve
+
+    def counted(self, d, edge0, x0, load, tol=fs.EDGE_TOL, visc=None):
+        out = solve(self, d, edge0, x0, load, tol, visc)
+        passes.append(out[4])
+        return out
+
+    kw = dict(radius=A0, C=150.0, alpha=0.2, displacement=100e-6, ramp_time=1.0, end_time=1.0, static=True, n_static=5)
+    monkeypatch.setattr(fs._EdgeFit, "solve", counted)
+    f = compress(**kw, mesh=1).force
+    assert len(passes) == 5 and max(passes) <= 5  # no cut step
+    monkeypatch.setattr(
+        fs._EdgeFit,
+        "solve",
+        lambda self, d, e, x, load, tol=0.0, visc=None: solve(self, d, e, x, load, 1e-2 * fs.EDGE_TOL, visc),
+    )
+    f_tight = compress(**kw, mesh=1).force
+    assert np.max(np.abs(f / f_tight - 1)) < 2e-7

@@ -259,6 +259,35 @@ def reference(quick: bool, levels: Sequence[int] | None = None, alphas: Sequence
     return out
 
 
+def write_reference(path: str, out: dict, quick: bool) -> None:
+    """Write the reference table ``out`` of :func:`reference` as JSON: per row the levels, the values
+    (f = F / (C a0^2)), the errors F_level / F_inf - 1, the observed order and the Richardson estimate."""
+    import datetime
+    import json
+
+    from tissuemech.fem.spheroid import EDGE_TOL
+
+    levels = [1, 2, 3] if quick else [1, 2, 3, 4]
+    doc: dict = {
+        "_about": (
+            f"Richardson-extrapolated f = F/(C a0^2) from fem.spheroid fitted levels {levels} (errors = F_level / F_inf"
+            " - 1; static rows: C = 200 Pa, the Fig. 10 rows: C = 150 Pa, a0 = 500 um, time runs on per-step fitted"
+            f" meshes), contact-edge tolerance EDGE_TOL = {EDGE_TOL:g}; written by python -m tissuemech.compare.bench"
+            f" fem-spheroid --reference{' --quick' if quick else ''} --json {path} on"
+            f" {datetime.date.today().isoformat()}"
+        )
+    }
+    for name, row in out.items():
+        v, finf = [float(x) for x in row["values"]], float(row["reference"])
+        doc[name] = dict(
+            levels=levels, errors=[x / finf - 1.0 for x in v], order=float(row["order"]), reference=finf, values=v
+        )
+    with open(path, "w") as fh:
+        json.dump(doc, fh, indent=1)
+        fh.write("\n")
+    print(f"\nwrote {path}")
+
+
 def fig89() -> None:
     print(
         "\n## Figs 8-9 case: C = 200 Pa, alpha = 0.2, beta = 1.2, tau = 200 s, delta = 200 um in 0.2 s, held to 1500 s"
@@ -300,11 +329,14 @@ def figure(path: str, r) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Options: --quick (fewer meshes/repeats), --figure PATH.png (seed Figs 8-9 + VTU)."""
+    """Options: --quick (fewer meshes/repeats), --figure PATH.png (seed Figs 8-9 + VTU), --reference (only
+    the reference table) with --json PATH (also write it, the format of notes/issue10_reference.json)."""
     argv = list(argv or [])
     quick = "--quick" in argv
     if "--reference" in argv:
-        reference(quick)
+        out = reference(quick)
+        if "--json" in argv:
+            write_reference(argv[argv.index("--json") + 1], out, quick)
         return 0
     print(
         "# FE spheroid benchmark (fem.spheroid.compress; a0 = 500 um, kappa = 2.2 GPa, quarter section, "
