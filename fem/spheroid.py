@@ -515,8 +515,13 @@ def _local_coordinates(xe: np.ndarray, ref: np.ndarray, x: np.ndarray, iters: in
     xe (2, 9, n), reference nodes ref (2, 9) (each coordinate 0, 1/2 or 1)."""
     X = np.full(x.shape, 0.5) if start is None else np.array(start, float)
     ia, ib = (np.rint(2.0 * r).astype(int) for r in ref)  # the row of each node's 1D factor
+    # the points still iterating: each stops after its first step below 1e-13, or when it is clipped twice in a
+    # row (a point far outside the element: its coordinates are meaningless and the caller looks elsewhere)
+    act = np.arange(x.shape[1])
+    Xa = X
+    clipped = np.zeros(x.shape[1], bool)
     for _ in range(iters):
-        (v0, d0), (v1, d1) = _lagrange2(X[0]), _lagrange2(X[1])
+        (v0, d0), (v1, d1) = _lagrange2(Xa[0]), _lagrange2(Xa[1])
         va, da, vb, db = v0[ia], d0[ia], v1[ib], d1[ib]
         F = np.einsum("ikn,kn->in", xe, va * vb)
         J0 = np.einsum("ikn,kn->in", xe, da * vb)  # dx/dxi
@@ -524,9 +529,17 @@ def _local_coordinates(xe: np.ndarray, ref: np.ndarray, x: np.ndarray, iters: in
         det = J0[0] * J1[1] - J1[0] * J0[1]
         r = x - F
         dX = np.stack([J1[1] * r[0] - J1[0] * r[1], -J0[1] * r[0] + J0[0] * r[1]]) / det
-        X = np.clip(X + dX, -1.0, 2.0)
-        if np.max(np.abs(dX)) < 1e-13:
+        Xn = Xa + dX
+        Xa = np.clip(Xn, -1.0, 2.0)
+        X[:, act] = Xa
+        now = np.any(Xn != Xa, axis=0)
+        going = (np.max(np.abs(dX), axis=0) >= 1e-13) & ~(now & clipped)
+        if not going.any():
             break
+        if not going.all():
+            act, Xa, xe, x = act[going], Xa[:, going], xe[:, :, going], x[:, going]
+            now = now[going]
+        clipped = now
     return X
 
 
@@ -547,7 +560,9 @@ def _gauss_transfer(old: AxiMesh, new: AxiMesh) -> Callable[[np.ndarray], np.nda
     ref = np.asarray(bo.elem.doflocs, float).T  # (2, 9): the Q2 nodes in [0, 1]^2 (isoparametric geometry)
     xe = bo.doflocs[:, bo.element_dofs]  # (2, 9, n_el)
     own = np.repeat(np.arange(ne), nq)
-    loc = _local_coordinates(xe[:, :, own], ref, pts, start=np.tile(np.asarray(bn.X, float), (1, ne)))
+    # (10 Newton steps: a point inside its old element converges in ~5 from its own reference coordinates;
+    # one that does not has left the element and is looked for in the nearest ones below)
+    loc = _local_coordinates(xe[:, :, own], ref, pts, iters=10, start=np.tile(np.asarray(bn.X, float), (1, ne)))
     excess = np.max(np.maximum(np.maximum(-loc, loc - 1.0), 0.0), axis=0)
     elem = own.copy()
     out = np.flatnonzero(excess > 1e-10)
