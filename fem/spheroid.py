@@ -48,7 +48,8 @@ LEVELS = {
 MESHES = {"coarse": 0, "default": 1, "fine": 2}
 FORCE_CHECK = 1e-6  # |F_contact - F_reaction| / F
 EDGE_TOL = 1e-6  # |N_edge| / F at the fitted contact edge (F is stationary in the edge position there; a
-# tolerance of 1e-4 left force errors up to 7e-6 on levels 1-3, 1e-6 leaves <= 5e-8 for one more secant pass)
+# tolerance of 1e-4 left force errors up to 7e-6 on levels 1-3; 1e-6 leaves <= 5.2e-8 for 4-19 % more Newton
+# iterations: python notes/issue14_edge.py)
 SPLIT = np.radians(55.0)  # the pole block's arc: 0..55 deg from the pole (holds the edge to delta/(2 a0) ~ 0.45)
 EDGE_MAX = 0.92  # largest edge position, as a fraction of the pole block's arc
 _INNER_GRADING = 1.5  # contact-zone elements: first / last (finer at the edge)
