@@ -410,3 +410,26 @@ def test_edge_tolerance_leaves_the_force_converged(monkeypatch):
     )
     f_tight = compress(**kw, mesh=1).force
     assert np.max(np.abs(f / f_tight - 1)) < 2e-7
+
+
+@pytest.mark.slow
+def test_static_curve_on_level_3_needs_no_cut_step(monkeypatch):
+    """Level 3, 10 % in 5 steps: the second step starts from the first state scaled by the approach, so no
+    step is cut (started from the first state itself it took 17 + 15 Newton iterations, met a spurious
+    state and was halved: 6 edge solves instead of 5, 111 factorisations instead of 67)."""
+    from tissuemech.fem import spheroid as fs
+
+    passes = []
+    solve = fs._EdgeFit.solve
+
+    def counted(self, d, edge0, x0, load, tol=fs.EDGE_TOL, visc=None):
+        out = solve(self, d, edge0, x0, load, tol, visc)
+        passes.append(out[4])
+        return out
+
+    monkeypatch.setattr(fs._EdgeFit, "solve", counted)
+    r = compress(
+        radius=A0, C=150.0, alpha=0.2, displacement=100e-6, ramp_time=1.0, end_time=1.0, static=True, n_static=5, mesh=3
+    )
+    assert len(passes) == 5 and max(passes[1:]) <= 4
+    assert np.all(np.diff(r.force) > 0)
