@@ -384,31 +384,40 @@ def test_fitted_meshes_have_one_topology_and_no_seam():
     assert counts == {969}
 
 
+_STATIC_10 = dict(
+    radius=A0, C=150.0, alpha=0.2, displacement=100e-6, ramp_time=1.0, end_time=1.0, static=True, n_static=5
+)
+
+
+def _edge_solves(monkeypatch, tol: float | None = None) -> list:
+    """Record the edge passes of every contact-edge solve (``_EdgeFit.solve``), optionally at another tolerance."""
+    from tissuemech.fem import spheroid as fs
+
+    passes: list = []
+    solve = fs._EdgeFit.solve
+
+    def counted(self, d, edge0, x0, load, _tol=fs.EDGE_TOL, visc=None):
+        out = solve(self, d, edge0, x0, load, _tol if tol is None else tol, visc)
+        passes.append(out[4])
+        return out
+
+    monkeypatch.setattr(fs._EdgeFit, "solve", counted)
+    return passes
+
+
 def test_edge_tolerance_leaves_the_force_converged(monkeypatch):
     """The fitted contact edge is solved to EDGE_TOL in N_edge / F: the static force then agrees with a 100x
     tighter edge solve to 2e-7 (with the old 1e-4 it was 5.7e-6 off on this curve), and the curve's second
     step starts from the first one scaled (the reference state x = 0 at d = 0 counted as a state): no step is
     cut, and each takes at most 5 edge passes."""
-    from tissuemech.fem import spheroid as fs
+    from tissuemech.fem.spheroid import EDGE_TOL
 
-    passes = []
-    solve = fs._EdgeFit.solve
-
-    def counted(self, d, edge0, x0, load, tol=fs.EDGE_TOL, visc=None):
-        out = solve(self, d, edge0, x0, load, tol, visc)
-        passes.append(out[4])
-        return out
-
-    kw = dict(radius=A0, C=150.0, alpha=0.2, displacement=100e-6, ramp_time=1.0, end_time=1.0, static=True, n_static=5)
-    monkeypatch.setattr(fs._EdgeFit, "solve", counted)
-    f = compress(**kw, mesh=1).force
+    passes = _edge_solves(monkeypatch)
+    f = compress(**_STATIC_10, mesh=1).force
     assert len(passes) == 5 and max(passes) <= 5  # no cut step
-    monkeypatch.setattr(
-        fs._EdgeFit,
-        "solve",
-        lambda self, d, e, x, load, tol=0.0, visc=None: solve(self, d, e, x, load, 1e-2 * fs.EDGE_TOL, visc),
-    )
-    f_tight = compress(**kw, mesh=1).force
+    monkeypatch.undo()
+    _edge_solves(monkeypatch, tol=1e-2 * EDGE_TOL)
+    f_tight = compress(**_STATIC_10, mesh=1).force
     assert np.max(np.abs(f / f_tight - 1)) < 2e-7
 
 
@@ -417,19 +426,7 @@ def test_static_curve_on_level_3_needs_no_cut_step(monkeypatch):
     """Level 3, 10 % in 5 steps: the second step starts from the first state scaled by the approach, so no
     step is cut (started from the first state itself it took 17 + 15 Newton iterations, met a spurious
     state and was halved: 6 edge solves instead of 5, 111 factorisations instead of 67)."""
-    from tissuemech.fem import spheroid as fs
-
-    passes = []
-    solve = fs._EdgeFit.solve
-
-    def counted(self, d, edge0, x0, load, tol=fs.EDGE_TOL, visc=None):
-        out = solve(self, d, edge0, x0, load, tol, visc)
-        passes.append(out[4])
-        return out
-
-    monkeypatch.setattr(fs._EdgeFit, "solve", counted)
-    r = compress(
-        radius=A0, C=150.0, alpha=0.2, displacement=100e-6, ramp_time=1.0, end_time=1.0, static=True, n_static=5, mesh=3
-    )
+    passes = _edge_solves(monkeypatch)
+    r = compress(**_STATIC_10, mesh=3)
     assert len(passes) == 5 and max(passes[1:]) <= 4
     assert np.all(np.diff(r.force) > 0)
