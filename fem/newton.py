@@ -460,8 +460,9 @@ def newton(
             xt[free] += step * dx
             why = admissible(xt) if admissible is not None else None
             if why is None:
-                rt, Kt = fun(xt)
-                with np.errstate(over="ignore", invalid="ignore"):  # overflow = exploding: cut the step
+                # a trial state that overflows is an exploding step: it is cut below, so no warning for it
+                with np.errstate(over="ignore", invalid="ignore"):
+                    rt, Kt = fun(xt)
                     rn = float(np.linalg.norm(rt[free]))
                 if np.isfinite(rn) and rn <= growth * max(res[-1], rtol * ref):
                     break

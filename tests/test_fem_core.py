@@ -135,6 +135,19 @@ def test_follower_pressure_tangent_and_resultant():
     assert abs(F[1 : a.n_u : 2].sum() - 0.7 * np.pi * (1 + e) ** 2) < 1e-12
 
 
+def test_newton_cuts_an_overflowing_trial_step_without_runtime_warnings():
+    """r(x) = exp(x) - e from x = -10: the first Newton step lands at x ~ 6e4, where exp overflows; the line
+    search halves it (12 times) and Newton converges to x = 1. The overflow is handled, so it is not
+    reported as a RuntimeWarning."""
+    import warnings
+
+    fun = lambda x: (np.exp(x) - np.e, sp.csr_matrix([[float(np.exp(x[0]))]]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        res = newton(fun, np.array([-10.0]), rtol=1e-14, xtol=1e-14, max_backtracks=20)
+    assert abs(res.x[0] - 1.0) < 1e-13
+
+
 def test_newton_quadratic_convergence_and_clear_error():
     fun = lambda x: (np.array([x[0] ** 3 - 8.0]), sp.csr_matrix([[3 * x[0] ** 2]]))
     res = newton(fun, np.array([3.0]), rtol=1e-14, xtol=1e-14)
