@@ -112,6 +112,19 @@ def test_version_and_bench_help_do_not_run_anything(capsys):
     assert "Benchmark of the FE spheroid" in out and ran_nothing
 
 
+def test_bench_reference_json_needs_its_path_and_reference(capsys):
+    """``--json PATH`` goes with ``--reference``; without the path or the flag the bench stops with exit code 2
+    and says so (before computing anything)."""
+    from tissuemech.compare.bench.__main__ import main as bench
+
+    for argv in (["fem-spheroid", "--reference", "--json"], ["fem-spheroid", "--json", "ref.json"]):
+        assert bench(argv) == 2
+        assert "--json PATH" in capsys.readouterr().err
+        with pytest.raises(SystemExit) as e:  # the same through `tissuemech bench`
+            cli.main(["bench", *argv])
+        assert e.value.code == 2
+
+
 def test_checks_cli_rejects_bad_options(capsys):
     from tissuemech.compare.studies import checks
 

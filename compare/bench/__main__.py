@@ -32,7 +32,9 @@ def main(argv: list[str] | None = None) -> int:
             print(f"== {n} (python -m tissuemech.compare.bench {n} [options]) ==\n{doc}\n")
         return 0
     for n in names:
-        importlib.import_module(SUITES[n]).main(rest)
+        rc = importlib.import_module(SUITES[n]).main(rest) or 0  # a suite's usage error stops the run
+        if rc:
+            return int(rc)
     return 0
 
 

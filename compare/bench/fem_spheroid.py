@@ -15,6 +15,7 @@ is shared: timings are pessimistic. ``--reference`` prints only the reference ta
 
 from __future__ import annotations
 
+import sys
 import time
 from collections.abc import Sequence
 
@@ -333,10 +334,17 @@ def main(argv: list[str] | None = None) -> int:
     the reference table) with --json PATH (also write it, the format of notes/issue10_reference.json)."""
     argv = list(argv or [])
     quick = "--quick" in argv
+    json_path = None
+    if "--json" in argv:
+        i = argv.index("--json") + 1
+        if "--reference" not in argv or i >= len(argv) or argv[i].startswith("--"):
+            print("fem-spheroid: --json PATH (a file name) goes with --reference", file=sys.stderr)
+            return 2
+        json_path = argv[i]
     if "--reference" in argv:
         out = reference(quick)
-        if "--json" in argv:
-            write_reference(argv[argv.index("--json") + 1], out, quick)
+        if json_path is not None:
+            write_reference(json_path, out, quick)
         return 0
     print(
         "# FE spheroid benchmark (fem.spheroid.compress; a0 = 500 um, kappa = 2.2 GPa, quarter section, "
