@@ -165,8 +165,12 @@ class Assembler:
 
     # ---- kinematics at quadrature points ------------------------------------------------
     def f_at(self, u: np.ndarray) -> np.ndarray:
-        """5-comp deformation gradient (ne, nq, 5) for the global displacement u."""
-        return IDENTITY5 + np.matmul(self.B, u[self.edofs][:, None, :, None])[..., 0]
+        """5-comp deformation gradient (ne, nq, 5) for the global displacement u (the displacement dofs or
+        the full vector (u, q)), by one stacked matmul per element."""
+        ne, nq = self.w.shape
+        f = np.matmul(self._B2, u[self.edofs][:, :, None]).reshape(ne, nq, 5)
+        f += IDENTITY5
+        return f
 
     def q_at(self, x: np.ndarray) -> np.ndarray:
         """The mixed field q (mean Cauchy stress, scaled) at the points (ne, nq)."""
@@ -219,17 +223,9 @@ class Assembler:
             return r, None
         return r, self._pattern.matrix(self._tangent_values(f, A, mat))
 
-    def _f(self, u: np.ndarray) -> np.ndarray:
-        """5-comp F (ne, nq, 5) by one stacked matmul (what the assembly uses; ``f_at`` to round-off, 2-3x
-        faster); u the displacement dofs or the full vector (u, q)."""
-        ne, nq = self.w.shape
-        f = np.matmul(self._B2, u[self.edofs][:, :, None]).reshape(ne, nq, 5)
-        f += IDENTITY5
-        return f
-
     def _fields(self, u: np.ndarray):
         """(f, q) at the points: 5-comp F (ne, nq, 5) and the mixed field (ne, nq) or None."""
-        f = self._f(u)
+        f = self.f_at(u)
         q = np.matmul(self.psi, u[self.qdofs][:, :, None])[..., 0] if self.formulation == "mixed" else None
         return f, q
 

@@ -123,9 +123,8 @@ class SceneProblem:
     # ---- admissibility ------------------------------------------------------------------------
     def admissible(self, x: np.ndarray) -> str | None:
         """None if the state x can be evaluated, else the reason: J = det F <= 0 (an element turned
-        inside out) or hoop stretch F_theta = r / R <= 0 at some quadrature point (F as the assembly
-        forms it)."""
-        f = self.asm._f(x)
+        inside out) or hoop stretch F_theta = r / R <= 0 at some quadrature point."""
+        f = self.asm.f_at(x)
         _, J = invariants(f)
         if not np.all(J > 0):
             return "J <= 0 (an element turned inside out)"
