@@ -18,7 +18,7 @@ from tissuemech.fem import viscoelastic as ve
 from tissuemech.fem.continuation import LimitPointError, arc_length, load_control
 from tissuemech.fem.forms import Material
 from tissuemech.fem.mesh import AxiMesh, shell_section
-from tissuemech.fem.newton import NewtonError, newton, sparse_solve, symmetric_solve
+from tissuemech.fem.newton import NewtonError, newton, sparse_solve, symmetric_factor
 from tissuemech.fem.output import BlastulaField, BlastulaResult
 from tissuemech.fem.problem import BLASTULA_MARGIN, SceneProblem, check_mesh, mesh_spec, roundoff_floor, secant
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
@@ -35,11 +35,12 @@ class LockingWarning(UserWarning):
     """formulation='displacement' with a nearly incompressible material: the answer is locked (too stiff)."""
 
 
-def _solve(K, b):
+def _factor(K):
     """The blastula's linear solver: SuperLU in symmetric mode (issue 14: 2x fewer fill-ins than COLAMD) with
     the supervariable minimum-degree ordering (20-45 % fewer factorisation flops than MMD on the fine shells:
-    ``python -m tissuemech.compare.bench fem-perf``), the same answer to round-off."""
-    return symmetric_solve(K, b, ordering="supervariable")
+    ``python -m tissuemech.compare.bench fem-perf``), the same answer to round-off; returns solve(b) -> x
+    (``newton`` keeps it for the corrections after the residual has converged)."""
+    return symmetric_factor(K, ordering="supervariable")
 
 
 def _make_mesh(mesh, A: float, B: float) -> AxiMesh:
@@ -94,7 +95,7 @@ class _Problem(SceneProblem):
             atol=self.floor * (1 + lam),
             admissible=self.admissible,
             load=load,
-            solver=_solve,
+            factor=_factor,
         )
 
     def admissible(self, uf):

@@ -1,7 +1,7 @@
 r"""One Newton-Raphson solver for every FE scene.
 
 ``newton(fun, x0, *, free=None, ref_norm=1.0, rtol=1e-9, xtol=1e-9, max_iter=30, admissible=None,
-load=None, max_backtracks=8, growth=1e3, atol=0.0, solver=None)`` solves r(x) = 0 with ``fun(x) -> (r, K)`` (r ndarray, K scipy
+load=None, max_backtracks=8, growth=1e3, atol=0.0, solver=None, factor=None)`` solves r(x) = 0 with ``fun(x) -> (r, K)`` (r ndarray, K scipy
 sparse). Hooks:
 
 * ``free``: indices of the unknowns (condensation of Dirichlet dofs: the others keep x0's values).
@@ -15,7 +15,12 @@ sparse). Hooks:
   (``atol``: the round-off floor of the residual, e.g. ~10 eps kappa/C for nearly incompressible).
 
 Sparse direct solves (SuperLU via ``scipy.sparse.linalg.splu``); ``solver(K, b) -> x`` replaces it
-(e.g. :func:`symmetric_solve`, fast for the symmetric saddle-point systems of the mixed u-p form). On failure ``NewtonError`` carries
+(e.g. :func:`symmetric_solve`, fast for the symmetric saddle-point systems of the mixed u-p form).
+``factor(K) -> solve`` (e.g. :func:`symmetric_factor`) instead of ``solver`` lets newton keep the last
+factorisation: once the residual has converged (only the step test |dx| <= xtol (1 + |x|) is pending) the
+remaining corrections use it (a chord step with the tangent one iterate back, whose error is the product of
+two converged increments) instead of a new tangent and factorisation; a correction that fails (residual
+up 10-fold, inadmissible state) falls back to a full iteration. The convergence test is the same. On failure ``NewtonError`` carries
 ``load`` (the load level being solved), ``residuals`` (history) and a ``hint``; no NaN is returned.
 Returns ``NewtonResult(x, iterations, residuals)``.
 
@@ -49,6 +54,8 @@ __all__ = [
     "newton",
     "sparse_solve",
     "symmetric_solve",
+    "symmetric_factor",
+    "StaleFactorisation",
     "set_backend",
     "backend",
     "available_backends",
@@ -261,6 +268,7 @@ class _SymPlan:
         self.perm = _gather_plan(K, self.p, self.p, "csc")
         self.upper = None
         self.ldl = None
+        self.generation = 0  # qdldl refactorisations so far (a kept solve checks its own is still current)
         self.n = n
         self.format, self.indptr, self.indices = K.format, K.indptr, K.indices
         self.keys = _keys(K)
@@ -340,7 +348,7 @@ def _refine(K, b, x, solve, refine: int, rtol: float):
 def symmetric_solve(
     K: sp.spmatrix, b: np.ndarray, *, refine: int = 4, rtol: float = 1e-13, ordering: str = "mmd"
 ) -> np.ndarray:
-    """Direct solve for structurally symmetric (saddle-point) matrices.
+    """Direct solve for structurally symmetric (saddle-point) matrices: ``symmetric_factor(K, ...)(b)``.
 
     Args:
         K: square sparse matrix (n, n), structurally symmetric (values may be slightly unsymmetric,
@@ -362,17 +370,43 @@ def symmetric_solve(
     pattern. Backend "qdldl": LDL^T of the upper triangle with refactorisation on the stored analysis.
     Both are followed by iterative refinement; when the diagonal pivots fail or refinement stalls above
     1e-8 |b|, the pivoted :func:`sparse_solve` (COLAMD) answers instead."""
+    return symmetric_factor(K, refine=refine, rtol=rtol, ordering=ordering)(b)
+
+
+class StaleFactorisation(RuntimeError):
+    """A kept qdldl factorisation was refactored in place for another matrix since (it no longer holds K)."""
+
+
+def symmetric_factor(
+    K: sp.spmatrix, *, refine: int = 4, rtol: float = 1e-13, ordering: str = "mmd"
+) -> Callable[[np.ndarray], np.ndarray]:
+    """Factor K once (see :func:`symmetric_solve` for the arguments and backends); returns ``solve(b) -> x``,
+    which can be called for many right-hand sides (``newton`` keeps it for the final corrections of a step).
+
+    Raises:
+        ValueError: an unknown ``ordering``.
+    ``solve`` raises np.linalg.LinAlgError for a singular K (the pivoted fallback) and
+    :class:`StaleFactorisation` when the qdldl backend's factors (kept per pattern and refactored in place)
+    were overwritten by a later factorisation of another matrix with the same pattern."""
     if ordering not in ORDERINGS:
         raise ValueError(f"ordering must be one of {ORDERINGS}, got {ordering!r}")
     K = _canonical(K)
-    b = np.asarray(b, dtype=float)
-    nb = np.linalg.norm(b)
+    fallback: list = []
+
+    def pivoted(b: np.ndarray) -> np.ndarray:
+        if not fallback:
+            try:
+                fallback.append(spla.splu(sp.csc_matrix(K)))
+            except RuntimeError as e:  # SuperLU: "Factor is exactly singular"
+                raise np.linalg.LinAlgError(str(e)) from e
+        return fallback[0].solve(b)
+
     try:
         plan, data = _sym_plan(K, ordering)
     except RuntimeError:
-        return sparse_solve(K, b)
+        return pivoted
     which = backend()
-    x = None
+    solve_p = None
     try:
         if which == "qdldl":
             if plan.upper is None:
@@ -387,21 +421,62 @@ def symmetric_solve(
                 plan.ldl = _qdldl.Solver(U, upper=True)  # AMD ordering + symbolic analysis, kept
             else:
                 plan.ldl.update(U, upper=True)
-            solve_p = plan.ldl.solve
+            plan.generation += 1
+            ldl, gen = plan.ldl, plan.generation
+
+            def solve_p(v):
+                if plan.ldl is not ldl or plan.generation != gen:
+                    raise StaleFactorisation("the qdldl factors were refactored for another matrix since")
+                return ldl.solve(v)
         else:
             src, ind, ptr = plan.perm
             Kp = sp.csc_matrix((data[src], ind, ptr), shape=K.shape)
             lu = spla.splu(Kp, permc_spec="NATURAL", diag_pivot_thresh=0.0, options=dict(SymmetricMode=True))
             solve_p = lambda v: lu.solve(v[plan.p])[plan.pinv]
-        x = solve_p(b)
-        x, rn = _refine(K, b, x, solve_p, refine, rtol)
     except (RuntimeError, ValueError):
         if which == "qdldl":
             plan.ldl = None
+        return pivoted
+
+    def solve(b: np.ndarray) -> np.ndarray:
+        b = np.asarray(b, dtype=float)
+        nb = np.linalg.norm(b)
         x = None
-    if x is None or not (np.all(np.isfinite(x)) and rn <= 1e-8 * max(float(nb), 1e-300)):
-        return sparse_solve(K, b)
-    return x
+        try:
+            x = solve_p(b)
+            x, rn = _refine(K, b, x, solve_p, refine, rtol)
+        except StaleFactorisation:
+            raise
+        except (RuntimeError, ValueError):
+            x = None
+        if x is None or not (np.all(np.isfinite(x)) and rn <= 1e-8 * max(float(nb), 1e-300)):
+            return pivoted(b)
+        return x
+
+    return solve
+
+
+def _chord_step(fun, x, r, free, solve, admissible, rn0: float, tol: float, max_dx: float):
+    """One correction x + dx with dx = -K_kept^-1 r (a kept factorisation): (x, r, K, |r|, |dx|) of the
+    new state, or None when the kept factors are gone, |dx| > ``max_dx`` (no contraction), the state is
+    inadmissible or its residual is not finite or no longer within max(10 |r0|, tol) (newton then takes a
+    full iteration instead)."""
+    try:
+        dx = solve(-r[free])
+    except (StaleFactorisation, np.linalg.LinAlgError):
+        return None
+    if not float(np.linalg.norm(dx)) <= max_dx:
+        return None
+    xt = x.copy()
+    xt[free] += dx
+    if admissible is not None and admissible(xt) is not None:
+        return None
+    with np.errstate(over="ignore", invalid="ignore"):
+        rt, Kt = fun(xt)
+        rn = float(np.linalg.norm(rt[free]))
+    if not (np.isfinite(rn) and rn <= max(10.0 * rn0, tol)):
+        return None
+    return xt, rt, Kt, rn, float(np.linalg.norm(dx))
 
 
 def newton(
@@ -419,8 +494,11 @@ def newton(
     growth: float = 1e3,
     atol: float = 0.0,
     solver: Callable | None = None,
+    factor: Callable | None = None,
 ) -> NewtonResult:
     """Solve fun(x)[0] = 0 from x0 (see the module docstring)."""
+    if solver is not None and factor is not None:
+        raise ValueError("give newton a solver or a factor, not both")
     x = np.array(x0, dtype=float)
     sub = None if free is None else np.asarray(free)
     free = np.arange(x.size) if free is None else np.asarray(free)
@@ -443,9 +521,28 @@ def newton(
             residuals=res,
             hint="check the inputs and the initial state",
         )
+    kept = None  # factor's solve of the last factored tangent
+    tol = rtol * ref + atol
+    last_dx = np.inf  # |x_k - x_(k-1)|: a kept correction must be at most half of it (contraction)
     for it in range(1, max_iter + 1):
+        if kept is not None and res[-1] <= tol:
+            # the residual has converged, only the step test is pending: a correction with the kept
+            # factorisation (the tangent one iterate back) instead of a new tangent + factorisation
+            chord = _chord_step(fun, x, r, free, kept, admissible, res[-1], tol, 0.5 * last_dx)
+            if chord is not None:
+                x, r, K, rn, last_dx = chord
+                res.append(rn)
+                if rn <= tol and last_dx <= xtol * (1.0 + np.linalg.norm(x[free])):
+                    return NewtonResult(x, it, res)
+                continue
+            kept = None
         try:
-            dx = (solver or sparse_solve)(_submatrix(_tangent(K), sub), -r[free])
+            Kf = _submatrix(_tangent(K), sub)
+            if factor is not None:
+                kept = factor(Kf)
+                dx = kept(-r[free])
+            else:
+                dx = (solver or sparse_solve)(Kf, -r[free])
         except np.linalg.LinAlgError:
             raise NewtonError(
                 "singular tangent matrix",
@@ -477,7 +574,10 @@ def newton(
             )
         x, r, K = xt, rt, Kt
         res.append(rn)
-        if rn <= rtol * ref + atol and step * np.linalg.norm(dx) <= xtol * (1.0 + np.linalg.norm(x[free])):
+        last_dx = step * float(np.linalg.norm(dx))
+        if step != 1.0:
+            kept = None  # a cut step: keep full Newton iterations until the residual has converged again
+        if rn <= tol and last_dx <= xtol * (1.0 + np.linalg.norm(x[free])):
             return NewtonResult(x, it, res)
     raise NewtonError(
         f"no convergence in {max_iter} iterations",

@@ -22,7 +22,7 @@ from tissuemech.fem.contact import ContactError, RigidPlane
 from tissuemech.fem.forms import Material
 from tissuemech.fem.kinematics import invariants
 from tissuemech.fem.mesh import AxiMesh, ball_section, graded_points
-from tissuemech.fem.newton import NewtonError, newton, symmetric_solve
+from tissuemech.fem.newton import NewtonError, newton, symmetric_factor
 from tissuemech.fem.output import SpheroidField, SpheroidResult
 from tissuemech.fem.problem import SPHEROID_MARGIN, SceneProblem, check_mesh, mesh_spec, roundoff_floor, secant
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
@@ -225,7 +225,7 @@ class _Problem(SceneProblem):
             atol=self.floor,
             admissible=self.admissible,
             max_iter=25,
-            solver=symmetric_solve,
+            factor=symmetric_factor,
         )
         return sol
 
@@ -339,7 +339,7 @@ class _EdgeFit:
                     atol=prob.floor,
                     admissible=prob.admissible,
                     max_iter=25,
-                    solver=symmetric_solve,
+                    factor=symmetric_factor,
                 )
             except NewtonError as e:
                 err = e

@@ -391,3 +391,85 @@ def test_meshes_with_one_connectivity_share_the_pattern():
     K0.sum_duplicates()
     assert abs(K - K0).max() <= 1e-14 * abs(K0).max()
     assert Assembler(shell_section(50e-6, 75e-6, 4, 6))._pattern is not a1._pattern
+
+
+def test_newton_keeps_the_factorisation_once_the_residual_has_converged():
+    """With ``factor`` newton corrects a converged residual with the kept factorisation (no new tangent or
+    factorisation) until the step test passes: the same states to 1e-12 as full Newton with ``solver``, about
+    one factorisation fewer per solve, the convergence test unchanged."""
+    from tissuemech.fem import blastula as fb
+    from tissuemech.fem.newton import symmetric_factor, symmetric_solve
+
+    prob = fb._setup(50e-6, 75e-6, 200.0, 0.2, 2.2e9, (3, 6))
+    counts = {"solver": 0, "factor": 0}
+
+    def solver(K, b):
+        counts["solver"] += 1
+        return symmetric_solve(K, b, ordering="supervariable")
+
+    def factor(K):
+        counts["factor"] += 1
+        return symmetric_factor(K, ordering="supervariable")
+
+    opts = dict(ref_norm=prob.ref, rtol=1e-10, xtol=1e-9, atol=prob.floor * 2, admissible=prob.admissible)
+    x_s = x_f = np.zeros(prob.free.size)
+    for lam in (0.5, 1.0, 2.0, 3.0):
+        fun = lambda x, lam=lam: prob.rk(x, lam, tangent="lazy")[:2]
+        s = newton(fun, x_s, solver=solver, **opts)
+        f = newton(fun, x_f, factor=factor, **opts)
+        assert np.abs(f.x - s.x).max() <= 1e-12 * np.abs(s.x).max()
+        assert f.residuals[-1] <= opts["rtol"] * prob.ref + opts["atol"]
+        x_s, x_f = s.x, f.x
+    assert counts["factor"] <= counts["solver"] - 4  # at least one factorisation saved per solve
+    with pytest.raises(ValueError, match="not both"):
+        newton(fun, x_f, solver=solver, factor=factor, **opts)
+
+
+def test_newton_falls_back_to_full_iterations_when_a_kept_factorisation_fails():
+    """A kept factorisation that is stale (qdldl refactored in place) or gives a bad correction is not used:
+    newton takes full iterations instead and converges to the same state."""
+    from tissuemech.fem import blastula as fb
+    from tissuemech.fem.newton import StaleFactorisation, symmetric_factor
+
+    prob = fb._setup(50e-6, 75e-6, 200.0, 0.2, 2.2e9, (3, 6))
+    opts = dict(ref_norm=prob.ref, rtol=1e-10, xtol=1e-9, atol=prob.floor * 2, admissible=prob.admissible)
+    fun = lambda x: prob.rk(x, 1.0, tangent="lazy")[:2]
+    ref = newton(fun, np.zeros(prob.free.size), factor=symmetric_factor, **opts)
+    for bad in ("stale", "wild"):
+        n = {"factor": 0}
+
+        def factor(K, bad=bad):
+            n["factor"] += 1
+            solve, used = symmetric_factor(K), [0]
+
+            def once(b):  # the first call is the full iteration's; later ones are the kept corrections
+                used[0] += 1
+                if used[0] > 1:
+                    if bad == "stale":
+                        raise StaleFactorisation("refactored")
+                    return solve(b) + 1e-2  # a correction far larger than the converging increments
+                return solve(b)
+
+            return once
+
+        res = newton(fun, np.zeros(prob.free.size), factor=factor, **opts)
+        assert np.abs(res.x - ref.x).max() <= 1e-12 * np.abs(ref.x).max()
+        assert n["factor"] == res.iterations  # every iteration factored: no kept correction was accepted
+
+
+def test_symmetric_factor_solves_many_right_hand_sides():
+    """One factorisation answers several right-hand sides as symmetric_solve does (to round-off)."""
+    from tissuemech.fem import blastula as fb
+    from tissuemech.fem.newton import symmetric_factor, symmetric_solve
+
+    prob = fb._setup(50e-6, 75e-6, 200.0, 0.2, 2.2e9, (3, 6))
+    x = prob.solve(1.0, np.zeros(prob.free.size), 1e-10, "test").x
+    _, K, _ = prob.rk(x, 1.0)
+    solve = symmetric_factor(K, ordering="supervariable")
+    for k in range(3):
+        b = np.cos((k + 1) * np.arange(K.shape[0]))
+        x = solve(b)
+        assert np.linalg.norm(K @ x - b) <= 1e-12 * np.linalg.norm(b)
+        assert np.abs(x - symmetric_solve(K, b, ordering="supervariable")).max() <= 1e-12 * np.abs(x).max()
+    with pytest.raises(ValueError, match="ordering"):
+        symmetric_factor(K, ordering="amd")
