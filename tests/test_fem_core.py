@@ -473,3 +473,46 @@ def test_symmetric_factor_solves_many_right_hand_sides():
         assert np.abs(x - symmetric_solve(K, b, ordering="supervariable")).max() <= 1e-12 * np.abs(x).max()
     with pytest.raises(ValueError, match="ordering"):
         symmetric_factor(K, ordering="amd")
+
+
+class _FakeLDL:
+    """A stand-in for ``qdldl.Solver`` (upper triangle in, refactored in place by ``update``): SuperLU of
+    the symmetric matrix it describes. qdldl itself is an optional extra that CI does not install."""
+
+    def __init__(self, U, upper=True):
+        self.update(U, upper=upper)
+
+    def update(self, U, upper=True):
+        import scipy.sparse as sp
+        import scipy.sparse.linalg as spla
+
+        A = (U + sp.triu(U, 1).T).tocsc()
+        self.lu = spla.splu(A)
+
+    def solve(self, b):
+        return self.lu.solve(b)
+
+
+def test_a_kept_qdldl_factorisation_refactored_for_another_matrix_is_stale(monkeypatch):
+    """qdldl refactors one solver per pattern in place: a solve kept from before refuses to answer for
+    the new factors (StaleFactorisation) instead of silently solving the other matrix; newton then takes
+    a full iteration."""
+    from types import SimpleNamespace
+
+    from tissuemech.fem import blastula as fb
+    from tissuemech.fem import newton as nw
+
+    monkeypatch.setattr(nw, "_qdldl", SimpleNamespace(Solver=_FakeLDL))
+    monkeypatch.setattr(nw, "_BACKEND", ["qdldl"])
+    prob = fb._setup(50e-6, 75e-6, 200.0, 0.2, 2.2e9, (3, 6))
+    x = prob.solve(1.0, np.zeros(prob.free.size), 1e-10, "test").x
+    K1 = prob.rk(x, 1.0)[1]
+    K2 = prob.rk(x, 2.0)[1]  # the same pattern, other values
+    b = np.cos(np.arange(K1.shape[0]))
+    s1 = nw.symmetric_factor(K1)
+    x1 = s1(b)
+    assert np.linalg.norm(K1 @ x1 - b) <= 1e-12 * np.linalg.norm(b)
+    s2 = nw.symmetric_factor(K2)
+    assert np.linalg.norm(K2 @ s2(b) - b) <= 1e-12 * np.linalg.norm(b)
+    with pytest.raises(nw.StaleFactorisation):
+        s1(b)
