@@ -19,8 +19,9 @@ Sparse direct solves (SuperLU via ``scipy.sparse.linalg.splu``); ``solver(K, b) 
 ``factor(K) -> solve`` (e.g. :func:`symmetric_factor`) instead of ``solver`` lets newton keep the last
 factorisation: once the residual has converged (only the step test |dx| <= xtol (1 + |x|) is pending) the
 remaining corrections use it (a chord step with the tangent one iterate back, whose error is the product of
-two converged increments) instead of a new tangent and factorisation; a correction that fails (residual
-up 10-fold, inadmissible state) falls back to a full iteration. The convergence test is the same. On failure ``NewtonError`` carries
+two converged increments) instead of a new tangent and factorisation; a correction that fails (not at
+most half the step before, residual up 10-fold, inadmissible state, factors gone) falls back to a full
+iteration. The convergence test is the same. On failure ``NewtonError`` carries
 ``load`` (the load level being solved), ``residuals`` (history) and a ``hint``; no NaN is returned.
 Returns ``NewtonResult(x, iterations, residuals)``.
 
