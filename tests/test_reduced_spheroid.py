@@ -409,9 +409,35 @@ def _reference_cases():
     return cases
 
 
+def _hertz_exact_force(times, branches, *, radius, C, displacement, ramp_time):
+    """Closed-form lumped force (N) for the Hertz law and a linear ramp: F_eq + sum_m beta_m
+    int_0^t e^{-(t-s)/tau_m} dF_eq/ds ds with int_0^T e^{-(T-s)/tau} sqrt(s) ds = tau^1.5 (sqrt(X) - D(sqrt(X))),
+    X = T/tau, D Dawson's integral (adaptive quadrature where that form cancels, X < 0.1)."""
+    from scipy.integrate import quad
+    from scipy.special import dawsn
+
+    x = displacement / (2 * radius)
+    k = C * radius**2 * 16.0 * np.sqrt(x / ramp_time) * x / ramp_time  # dF_eq/ds = k sqrt(s)
+    out = []
+    for t in times:
+        te = min(t, ramp_time)
+        F = C * radius**2 * (32.0 / 3.0) * (x * te / ramp_time) ** 1.5
+        for beta, tau in branches:
+            X = te / tau
+            if X >= 0.1:
+                integral = tau**1.5 * (np.sqrt(X) - dawsn(np.sqrt(X)))
+            else:
+                integral = quad(lambda s: np.exp(-(te - s) / tau) * np.sqrt(s), 0.0, te, epsabs=0, epsrel=1e-13)[0]
+            F += beta * k * integral * np.exp(-(t - te) / tau)
+        out.append(F)
+    return np.array(out)
+
+
 def test_quadrature_eager_and_jit_equal_the_results_before_issue_14():
     """The chunked quadrature (cost set by the ramp points at run time, also under jit) against the eager
-    results of the former one (static count of ramp points), saved in tests/data: 1e-12 relative."""
+    results of the former one (static count of ramp points), saved in tests/data: 1e-12 relative. The stiff
+    case (tau = 0.01 ramps) is held to the closed form instead, since the nodes were graded into a stiff
+    interval's boundary layer: 9.9e-13 of the largest force now (the saved results: 7.1e-12)."""
     ref = np.load(Path(__file__).parent / "data" / "spheroid_quadrature_ref.npz")
     times = ref["times"]
     for name, case in _reference_cases().items():
@@ -419,11 +445,18 @@ def test_quadrature_eager_and_jit_equal_the_results_before_issue_14():
         kw.update(case)
         for fn, suffix in ((sp.force, "_force"), (sp.nominal_stress, "_stress")):
             r = ref[name + suffix]
+            if name == "stiff":
+                exact = _hertz_exact_force(times, case["branches"], radius=A0, C=150.0, displacement=D, ramp_time=TR)
+                if suffix == "_stress":  # the saved stress / force: 1 / the midplane area, untouched by the rule
+                    f0 = ref["stiff_force"]
+                    exact = exact * np.divide(r, f0, out=np.zeros_like(r), where=f0 != 0)
+                r = exact
             eager = np.asarray(fn(times, **kw))
             jitted = np.asarray(jax.jit(lambda t: fn(t, **kw))(jnp.asarray(times)))
             scale = np.max(np.abs(r), axis=-1, keepdims=True)
-            assert np.max(np.abs(eager - r) / scale) < 1e-12, name + suffix
-            assert np.max(np.abs(jitted - r) / scale) < 1e-12, name + suffix
+            tol = 2e-12 if name == "stiff" else 1e-12
+            assert np.max(np.abs(eager - r) / scale) < tol, name + suffix
+            assert np.max(np.abs(jitted - r) / scale) < tol, name + suffix
 
 
 def test_no_recompile_for_equal_tables_or_other_ramp_counts():
