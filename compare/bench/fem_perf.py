@@ -1,6 +1,7 @@
 """FE close to the machine (issue 14): per-iteration time vs the practical floor, solvers, scaling.
 
-``python -m tissuemech.compare.bench fem-perf [--quick] [--repeats N]`` prints, every figure measured
+``python -m tissuemech.compare.bench fem-perf [--quick] [--repeats N] [--only SECTION,...]`` prints (sections
+per-iteration, one-pattern, orderings, solvers, scaling; all by default), every figure measured
 in the same run (interleaved repeats, medians; the machine is shared, so only the ratios mean much):
 
 1. the load (``os.getloadavg``) and the BLAS thread setting (threadpoolctl: limited to 1 thread, the FE
@@ -366,11 +367,24 @@ def scaling(quick: bool, repeats: int = 2) -> None:
     _exponents("spheroid", d, cold, warm)
 
 
+SECTIONS = ("per-iteration", "one-pattern", "orderings", "solvers", "scaling")
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(prog="python -m tissuemech.compare.bench fem-perf")
     ap.add_argument("--quick", action="store_true", help="fewer repeats, no finest meshes")
     ap.add_argument("--repeats", type=int, default=None, help="interleaved repeats (default 3, quick 1)")
+    ap.add_argument(
+        "--only",
+        default="",
+        help=f"comma-separated sections to run (default all): {', '.join(SECTIONS)}",
+    )
     a = ap.parse_args(argv)
+    only = [x for x in a.only.split(",") if x]
+    bad = [x for x in only if x not in SECTIONS]
+    if bad:
+        ap.error(f"unknown section(s) {bad}; choose from {', '.join(SECTIONS)}")
+    run = set(only or SECTIONS)
     repeats = a.repeats or (1 if a.quick else 3)
     print("# fem-perf (issue 14)")
     print(f"load average (1, 5, 15 min): {', '.join(f'{v:.2f}' for v in os.getloadavg())} on {os.cpu_count()} CPUs")
@@ -383,11 +397,16 @@ def main(argv: list[str] | None = None) -> None:
         limiter = None
         print("BLAS threads: threadpoolctl not installed; set OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 yourself")
     try:
-        per_iteration(repeats)
-        one_pattern(repeats)
-        orderings(repeats, a.quick)
-        solvers(repeats, a.quick)
-        scaling(a.quick, max(repeats, 2))
+        if "per-iteration" in run:
+            per_iteration(repeats)
+        if "one-pattern" in run:
+            one_pattern(repeats)
+        if "orderings" in run:
+            orderings(repeats, a.quick)
+        if "solvers" in run:
+            solvers(repeats, a.quick)
+        if "scaling" in run:
+            scaling(a.quick, max(repeats, 2))
     finally:
         if limiter is not None:
             limiter.restore_original_limits()
