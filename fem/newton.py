@@ -20,7 +20,7 @@ Sparse direct solves (SuperLU via ``scipy.sparse.linalg.splu``); ``solver(K, b) 
 factorisation: once the residual has converged (only the step test |dx| <= xtol (1 + |x|) is pending) the
 remaining corrections use it (a chord step with the tangent one iterate back, whose error is the product of
 two converged increments) instead of a new tangent and factorisation; a correction that fails (not at
-most half the step before, residual up 10-fold, inadmissible state, factors gone) falls back to a full
+most half the step before, residual up 10-fold, inadmissible state, a failed solve) falls back to a full
 iteration. The convergence test is the same. On failure ``NewtonError`` carries
 ``load`` (the load level being solved), ``residuals`` (history) and a ``hint``; no NaN is returned.
 Returns ``NewtonResult(x, iterations, residuals)``.
@@ -56,7 +56,6 @@ __all__ = [
     "sparse_solve",
     "symmetric_solve",
     "symmetric_factor",
-    "StaleFactorisation",
     "set_backend",
     "backend",
     "available_backends",
@@ -374,10 +373,6 @@ def symmetric_solve(
     return symmetric_factor(K, refine=refine, rtol=rtol, ordering=ordering)(b)
 
 
-class StaleFactorisation(RuntimeError):
-    """A kept qdldl factorisation was refactored in place for another matrix since (it no longer holds K)."""
-
-
 def symmetric_factor(
     K: sp.spmatrix, *, refine: int = 4, rtol: float = 1e-13, ordering: str = "mmd"
 ) -> Callable[[np.ndarray], np.ndarray]:
@@ -386,9 +381,10 @@ def symmetric_factor(
 
     Raises:
         ValueError: an unknown ``ordering``.
-    ``solve`` raises np.linalg.LinAlgError for a singular K (the pivoted fallback) and
-    :class:`StaleFactorisation` when the qdldl backend's factors (kept per pattern and refactored in place)
-    were overwritten by a later factorisation of another matrix with the same pattern."""
+    ``solve`` raises np.linalg.LinAlgError for a singular K (the pivoted fallback). The qdldl backend keeps
+    one solver per pattern and refactors it in place: a ``solve`` whose factors were overwritten by a later
+    factorisation of another matrix with the same pattern refactors its own K first (correct, at the cost of
+    one numeric factorisation)."""
     if ordering not in ORDERINGS:
         raise ValueError(f"ordering must be one of {ORDERINGS}, got {ordering!r}")
     K = _canonical(K)
@@ -418,17 +414,22 @@ def symmetric_factor(
                 plan.upper = _gather_plan(T, ar, ar, "csc", upper=True)
             src, ind, ptr = plan.upper
             U = sp.csc_matrix((data[src], ind, ptr), shape=K.shape)
-            if plan.ldl is None:
-                plan.ldl = _qdldl.Solver(U, upper=True)  # AMD ordering + symbolic analysis, kept
-            else:
-                plan.ldl.update(U, upper=True)
-            plan.generation += 1
-            ldl, gen = plan.ldl, plan.generation
+            mine = [0]  # the plan's generation that holds this U's factors
+
+            def refactor():
+                if plan.ldl is None:
+                    plan.ldl = _qdldl.Solver(U, upper=True)  # AMD ordering + symbolic analysis, kept
+                else:
+                    plan.ldl.update(U, upper=True)
+                plan.generation += 1
+                mine[0] = plan.generation
+
+            refactor()
 
             def solve_p(v):
-                if plan.ldl is not ldl or plan.generation != gen:
-                    raise StaleFactorisation("the qdldl factors were refactored for another matrix since")
-                return ldl.solve(v)
+                if plan.ldl is None or plan.generation != mine[0]:  # overwritten since: factor U again
+                    refactor()
+                return plan.ldl.solve(v)
         else:
             src, ind, ptr = plan.perm
             Kp = sp.csc_matrix((data[src], ind, ptr), shape=K.shape)
@@ -446,8 +447,6 @@ def symmetric_factor(
         try:
             x = solve_p(b)
             x, rn = _refine(K, b, x, solve_p, refine, rtol)
-        except StaleFactorisation:
-            raise
         except (RuntimeError, ValueError):
             x = None
         if x is None or not (np.all(np.isfinite(x)) and rn <= 1e-8 * max(float(nb), 1e-300)):
@@ -459,12 +458,12 @@ def symmetric_factor(
 
 def _chord_step(fun, x, r, free, solve, admissible, rn0: float, tol: float, max_dx: float):
     """One correction x + dx with dx = -K_kept^-1 r (a kept factorisation): (x, r, K, |r|, |dx|) of the
-    new state, or None when the kept factors are gone, |dx| > ``max_dx`` (no contraction), the state is
+    new state, or None when the solve fails, |dx| > ``max_dx`` (no contraction), the state is
     inadmissible or its residual is not finite or no longer within max(10 |r0|, tol) (newton then takes a
     full iteration instead)."""
     try:
         dx = solve(-r[free])
-    except (StaleFactorisation, np.linalg.LinAlgError):
+    except np.linalg.LinAlgError:
         return None
     if not float(np.linalg.norm(dx)) <= max_dx:
         return None
