@@ -18,7 +18,7 @@ The store survives corruption and concurrency:
 * a store that cannot be written raises :class:`StoreError` before any point is computed.
 
 Executors: local processes by default (``ProcessPoolExecutor``, 2 workers, "spawn" start so JAX
-state is never forked); any ``concurrent.futures.Executor``; a ``dask.distributed.Client`` (its
+state is never forked, one BLAS thread per worker: threadpoolctl); any ``concurrent.futures.Executor``; a ``dask.distributed.Client`` (its
 ``get_executor()`` is used; results come back to this process, which writes the store, so workers
 need no shared disk); or ``"serial"`` (in-process, for debugging).
 
@@ -46,7 +46,17 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["run", "point_key", "load", "Stored", "BatchError", "StoreError", "StoreWarning", "STORE_FORMAT"]
+__all__ = [
+    "run",
+    "point_key",
+    "load",
+    "worker_init",
+    "Stored",
+    "BatchError",
+    "StoreError",
+    "StoreWarning",
+    "STORE_FORMAT",
+]
 
 STORE_FORMAT = 2  # version of the file layout (fields + __point__ + __meta__ with the checksum)
 
@@ -321,10 +331,27 @@ class _Lazy:
         return fn(*args, **kwargs)
 
 
+_BLAS_LIMIT: list = []  # the worker's threadpoolctl limit, kept alive for the worker's life
+
+
+def worker_init() -> None:
+    """Worker start-up of the process pools of ``run`` (default executor) and ``tissuemech batch``: one
+    BLAS thread per worker (pass it as ``initializer=`` to a pool of your own). The FE gains nothing from a
+    second BLAS thread on its small dense blocks, and 2 workers x 2 OpenBLAS threads on 2 cores made a
+    6-run Fig. 10 batch 1.4-2.0x slower (13.0-14.3 s vs 7.1-9.1 s with one thread each:
+    ``python notes/batch_blas_threads.py``)."""
+    from threadpoolctl import threadpool_limits
+
+    _BLAS_LIMIT.append(threadpool_limits(limits=1, user_api="blas"))
+
+
 def _executor(executor: Any) -> tuple[Any, bool]:
     """(executor, owned): owned ones are shut down by run()."""
     if executor is None:
-        return cf.ProcessPoolExecutor(max_workers=2, mp_context=multiprocessing.get_context("spawn")), True
+        pool = cf.ProcessPoolExecutor(
+            max_workers=2, mp_context=multiprocessing.get_context("spawn"), initializer=worker_init
+        )
+        return pool, True
     if executor == "serial":
         return _Serial(), True
     if hasattr(executor, "get_executor"):  # dask.distributed.Client

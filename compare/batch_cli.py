@@ -324,7 +324,9 @@ def run(args: argparse.Namespace) -> int:
         import concurrent.futures as cf
         import multiprocessing
 
-        executor = cf.ProcessPoolExecutor(args.workers, mp_context=multiprocessing.get_context("spawn"))
+        executor = cf.ProcessPoolExecutor(
+            args.workers, mp_context=multiprocessing.get_context("spawn"), initializer=batch.worker_init
+        )
     log.info("chunk %d of %d: %d of %d points into %s", index, args.chunks, len(mine), len(points), args.store)
     try:
         res = batch.run(

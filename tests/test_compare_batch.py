@@ -77,6 +77,20 @@ def test_process_pool_default(tmp_path):
     assert str(os.getpid()) not in pids
 
 
+def blas_threads(*, a: float) -> dict:
+    """The BLAS thread counts this process runs with (threadpoolctl), one per loaded BLAS library."""
+    from threadpoolctl import threadpool_info
+
+    return dict(threads=np.array([i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]))
+
+
+def test_default_pool_workers_run_one_blas_thread(tmp_path):
+    """The default process pool limits every worker to one BLAS thread (2 workers x 2 OpenBLAS threads on
+    2 cores oversubscribe the machine)."""
+    res = batch.run(blas_threads, [dict(a=float(a)) for a in range(2)], store=tmp_path / "s", progress=False)
+    assert all(r.threads.size >= 1 and np.all(r.threads == 1) for r in res)
+
+
 @pytest.mark.parametrize("executor", ["serial", "processes"])
 def test_resume_after_kill(tmp_path, executor):
     """Kill a running batch (its whole process group) mid-way; the rerun computes only the missing
