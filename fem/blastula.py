@@ -18,7 +18,7 @@ from tissuemech.fem import viscoelastic as ve
 from tissuemech.fem.continuation import LimitPointError, arc_length, load_control
 from tissuemech.fem.forms import Material
 from tissuemech.fem.mesh import AxiMesh, shell_section
-from tissuemech.fem.newton import NewtonError, newton, sparse_solve, symmetric_factor
+from tissuemech.fem.newton import KeptFactor, NewtonError, newton, sparse_solve, symmetric_factor
 from tissuemech.fem.output import BlastulaField, BlastulaResult
 from tissuemech.fem.problem import BLASTULA_MARGIN, SceneProblem, check_mesh, mesh_spec, roundoff_floor, secant
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
@@ -76,6 +76,7 @@ class _Problem(SceneProblem):
         self.inner = m.edges["inner"]
         self.ref = float(np.linalg.norm(self.rk(np.zeros(self.free.size), 0.0, tangent=False)[2]))
         self.floor = roundoff_floor(mat.kappa, self.ref, BLASTULA_MARGIN)
+        self.keep = KeptFactor()  # the factorisation kept across the steps of a run (chord steps first)
 
     def rk(self, uf, p, tangent=True, iso_scale: float = 1.0, extra_S=None):
         u = self.full(uf)
@@ -96,6 +97,7 @@ class _Problem(SceneProblem):
             admissible=self.admissible,
             load=load,
             factor=_factor,
+            keep=self.keep,
         )
 
     def admissible(self, uf):

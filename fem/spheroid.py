@@ -22,7 +22,7 @@ from tissuemech.fem.contact import ContactError, RigidPlane
 from tissuemech.fem.forms import Material
 from tissuemech.fem.kinematics import invariants
 from tissuemech.fem.mesh import AxiMesh, ball_section, graded_points
-from tissuemech.fem.newton import NewtonError, newton, symmetric_factor
+from tissuemech.fem.newton import KeptFactor, NewtonError, newton, symmetric_factor
 from tissuemech.fem.output import SpheroidField, SpheroidResult
 from tissuemech.fem.problem import SPHEROID_MARGIN, SceneProblem, check_mesh, mesh_spec, roundoff_floor, secant
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
@@ -203,6 +203,7 @@ class _Problem(SceneProblem):
         self.equator = int(eq[0])
         self.rtol = rtol
         self.floor = roundoff_floor(mat.kappa, 1.0, SPHEROID_MARGIN)
+        self.keep = KeptFactor()  # the factorisation kept across this mesh's solves (quasi-Newton first)
 
     def solve(self, s0: _State, d1: float, iso_scale, extra, guess, load):
         """Equilibrium with exact contact under the plate at h = 1 - d1 (scaled), from ``guess``, with the
@@ -226,6 +227,7 @@ class _Problem(SceneProblem):
             admissible=self.admissible,
             max_iter=25,
             factor=symmetric_factor,
+            keep=self.keep,
         )
         return sol
 
@@ -301,6 +303,7 @@ class _EdgeFit:
         self.k = int(LEVELS[level][3])
         self.slope = 0.0
         self._cache: dict = {}
+        self.keep = KeptFactor()  # one factorisation kept across the fitted meshes (same size and pattern)
 
     def problem(self, edge: float) -> _Problem:
         key = float(edge)
@@ -340,6 +343,7 @@ class _EdgeFit:
                     admissible=prob.admissible,
                     max_iter=25,
                     factor=symmetric_factor,
+                    keep=self.keep,
                 )
             except NewtonError as e:
                 err = e

@@ -523,3 +523,63 @@ def test_a_kept_qdldl_factorisation_refactored_for_another_matrix_refactors_its_
     for s, K in ((s2, K2), (s1, K1), (s1, K1), (s2, K2)):
         assert np.linalg.norm(K @ s(b) - b) <= 1e-12 * np.linalg.norm(b)
     assert updates[0] == n + 2  # s1 refactored once (then current), s2 once when it was stale again
+
+
+def test_newton_keeps_a_factorisation_across_solves_with_quasi_newton_steps():
+    """``keep=KeptFactor()``: the solves of a load sweep start with Broyden steps on the factorisation of an
+    earlier solve and factor a new tangent only when those do not contract: the same states as Newton that
+    factors every tangent, to the convergence tolerance (xtol = 1e-9 of |x|), the residual converged, and
+    fewer than half the factorisations."""
+    from tissuemech.fem import blastula as fb
+    from tissuemech.fem.newton import KeptFactor, symmetric_factor
+
+    prob = fb._setup(50e-6, 75e-6, 200.0, 0.2, 2.2e9, (3, 6))
+    counts = {"full": 0, "keep": 0}
+
+    def counted(which):
+        def factor(K):
+            counts[which] += 1
+            return symmetric_factor(K, ordering="supervariable")
+
+        return factor
+
+    opts = dict(ref_norm=prob.ref, rtol=1e-10, xtol=1e-9, atol=prob.floor * 2, admissible=prob.admissible)
+    keep = KeptFactor()
+    x_s = x_k = x_old = np.zeros(prob.free.size)
+    for lam in np.linspace(0.1, 2.0, 20):
+        fun = lambda x, lam=lam: prob.rk(x, lam, tangent="lazy")[:2]
+        s = newton(fun, 2 * x_s - x_old, factor=counted("full"), **opts)  # secant predictor (equal steps)
+        k = newton(fun, 2 * x_k - x_old, factor=counted("keep"), keep=keep, **opts)
+        assert np.abs(k.x - s.x).max() <= 1e-8 * np.abs(s.x).max()
+        assert k.residuals[-1] <= opts["rtol"] * prob.ref + opts["atol"]
+        x_old, x_s, x_k = x_s, s.x, k.x
+    assert keep.chord_steps > 0
+    assert counts["keep"] < 0.5 * counts["full"]
+
+
+def test_a_kept_factorisation_that_does_not_contract_or_does_not_fit_is_not_used():
+    """A kept factorisation whose first quasi-Newton step does not reduce the residual is refused (newton
+    factors anew and reaches the same state); one of another size is not tried; bad arguments raise."""
+    from tissuemech.fem import blastula as fb
+    from tissuemech.fem.newton import KeptFactor, symmetric_factor
+
+    prob = fb._setup(50e-6, 75e-6, 200.0, 0.2, 2.2e9, (3, 6))
+    opts = dict(ref_norm=prob.ref, rtol=1e-10, xtol=1e-9, atol=prob.floor * 2, admissible=prob.admissible)
+    fun = lambda x: prob.rk(x, 1.0, tangent="lazy")[:2]
+    x0 = np.zeros(prob.free.size)
+    ref = newton(fun, x0, factor=symmetric_factor, **opts)
+    _, K0, _ = prob.rk(x0, 0.0)
+    solve0 = symmetric_factor(K0)
+    wild, small = KeptFactor(), KeptFactor()
+    bad = lambda b: -30.0 * solve0(b)  # steps backwards, 30x too long
+    wild.store(bad, prob.free.size)
+    small.store(solve0, prob.free.size - 1)
+    for keep in (wild, small):
+        res = newton(fun, x0, factor=symmetric_factor, keep=keep, **opts)
+        assert np.abs(res.x - ref.x).max() <= 1e-8 * np.abs(ref.x).max()
+    assert wild.refused == 1 and wild.solve is not bad  # refused, replaced by this solve's factorisation
+    assert small.refused == 0 and small.n == prob.free.size  # not tried; replaced by this solve's factor
+    with pytest.raises(ValueError, match="rate"):
+        KeptFactor(rate=1.0)
+    with pytest.raises(ValueError, match="only with a factor"):
+        newton(fun, x0, keep=KeptFactor(), **opts)
