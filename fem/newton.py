@@ -482,7 +482,8 @@ class KeptFactor:
         rate: the largest accepted contraction per chord step (0 < rate < 1; default 0.25).
     Attributes:
         solve: the kept ``solve(b) -> x`` (None: nothing kept yet); ``n``: its size.
-        chord_steps, refused: chord steps accepted / chord phases ended by a slow step (diagnostics).
+        chord_steps, refused, retried: Broyden steps accepted / phases ended by a slow step / solves that
+            failed after Broyden steps and were solved again by Newton alone from the guess (diagnostics).
     """
 
     def __init__(self, rate: float = 0.25):
@@ -493,6 +494,7 @@ class KeptFactor:
         self.n = -1
         self.chord_steps = 0
         self.refused = 0
+        self.retried = 0
 
     def store(self, solve: Callable | None, n: int) -> None:
         """Keep ``solve`` (a factorisation of size n) for the next newton call."""
@@ -586,6 +588,25 @@ def newton(
         raise ValueError("give newton a solver or a factor, not both")
     if keep is not None and factor is None:
         raise ValueError("newton keeps a factorisation across calls (keep=) only with a factor")
+    opts = dict(free=free, ref_norm=ref_norm, rtol=rtol, xtol=xtol, max_iter=max_iter, admissible=admissible)
+    opts.update(load=load, max_backtracks=max_backtracks, growth=growth, atol=atol, solver=solver, factor=factor)
+    if keep is None:
+        return _newton(fun, x0, keep=None, **opts)
+    steps = keep.chord_steps
+    try:
+        return _newton(fun, x0, keep=keep, **opts)
+    except NewtonError:
+        if keep.chord_steps == steps:
+            raise
+        # the quasi-Newton steps may have led it astray: Newton alone from x0 (no worse than without keep)
+        keep.retried += 1
+        res = _newton(fun, x0, keep=None, **opts)
+        keep.store(None, -1)
+        return res
+
+
+def _newton(fun, x0, *, free, ref_norm, rtol, xtol, max_iter, admissible, load, max_backtracks, growth, atol,
+            solver, factor, keep) -> NewtonResult:  # fmt: skip
     x = np.array(x0, dtype=float)
     sub = None if free is None else np.asarray(free)
     free = np.arange(x.size) if free is None else np.asarray(free)
@@ -682,7 +703,8 @@ def newton(
             kept = None  # a cut step: keep full Newton iterations until the residual has converged again
         if rn <= tol and last_dx <= xtol * (1.0 + np.linalg.norm(x[free])):
             return NewtonResult(x, it, res)
-        if fresh and kept is not None and keep is not None and rn > tol:
+        if fresh and kept is not None and keep is not None and rn > tol and step == 1.0 and rn <= 0.5 * res[-2]:
+            # (only in Newton's convergent regime: a full step that halved the residual)
             fresh = False
             h0 = getattr(kept, "unrefined", kept)
             x1, r1, K1, k, done = _broyden(fun, x, r, free, h0, admissible, res, tol, xtol, keep.rate, max_iter - it)

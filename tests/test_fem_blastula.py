@@ -151,3 +151,15 @@ def test_mixed_kappa_error_scales_as_one_over_kappa():
         for k in (2e5, 2e6)
     ]
     assert 8 < errs[0] / errs[1] < 12
+
+
+@pytest.mark.slow
+def test_the_felupe_benchmark_blastula_reference_is_the_limit_of_mesh_refinement():
+    """LAMBDA_RICHARDSON (the reference of ``bench felupe``'s blastula errors) is where the uniform meshes
+    converge: 8x16 within 2.4e-6 and 16x32 within 1.5e-7 of it, the ratio of the two errors that of a
+    fourth-order method (16 for a halved mesh, within 12-20)."""
+    from tissuemech.compare.bench import felupe_side as fs
+
+    e1, e2 = (np.max(np.abs(fs.blastula_ours(m)[2] - fs.LAMBDA_RICHARDSON)) for m in ((8, 16), (16, 32)))
+    assert e1 <= 2.4e-6 and e2 <= 1.5e-7
+    assert 12.0 <= e1 / e2 <= 20.0

@@ -583,3 +583,31 @@ def test_a_kept_factorisation_that_does_not_contract_or_does_not_fit_is_not_used
         KeptFactor(rate=1.0)
     with pytest.raises(ValueError, match="only with a factor"):
         newton(fun, x0, keep=KeptFactor(), **opts)
+
+
+def test_newton_with_a_kept_factorisation_converges_wherever_newton_alone_does():
+    """A solve that fails after Broyden steps (here: they use up a tight ``max_iter``) is solved again by
+    Newton alone from the guess: the same state, counted in ``keep.retried``; the 10-step blastula sweep
+    without a predictor (large steps, Newton's residual rising 100-fold in the first iteration) converges
+    with a kept factorisation as it does without."""
+    from tissuemech.fem import blastula as fb
+    from tissuemech.fem.newton import KeptFactor, symmetric_factor
+
+    prob = fb._setup(50e-6, 75e-6, 200.0, 0.2, 2.2e9, (4, 8))
+    opts = dict(ref_norm=prob.ref, rtol=1e-10, xtol=1e-9, atol=prob.floor * 2, admissible=prob.admissible)
+    fun = lambda lam: lambda x: prob.rk(x, lam, tangent="lazy")[:2]
+    x1 = newton(fun(1.0), np.zeros(prob.free.size), factor=symmetric_factor, **opts).x
+    alone = newton(fun(1.1), x1, factor=symmetric_factor, **opts)
+    keep = KeptFactor()
+    _, K0, _ = prob.rk(np.zeros(prob.free.size), 0.5)
+    keep.store(symmetric_factor(K0), prob.free.size)  # an old tangent: slow but contracting Broyden steps
+    res = newton(fun(1.1), x1, factor=symmetric_factor, keep=keep, **{**opts, "max_iter": alone.iterations})
+    assert keep.retried == 1 and keep.chord_steps > 0
+    assert np.abs(res.x - alone.x).max() <= 1e-12 * np.abs(alone.x).max()
+    for kept in (None, KeptFactor()):
+        prob.keep, x = kept, np.zeros(prob.free.size)
+        for lam in np.linspace(0.25, 2.5, 10):
+            x = prob.solve(lam, x, 1e-10, f"lam = {lam}").x
+        if kept is None:
+            x_alone = x
+    assert np.abs(x - x_alone).max() <= 1e-8 * np.abs(x_alone).max()
