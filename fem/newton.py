@@ -201,6 +201,10 @@ class NewtonError(RuntimeError):
         super().__init__(f"{message} (load level {where}; residual history [{hist}]). Hint: {hint}")
 
 
+class _Astray(NewtonError):
+    """Internal: Newton diverges from a state quasi-Newton steps led to (``newton`` retries without them)."""
+
+
 class NewtonResult(NamedTuple):
     x: np.ndarray
     iterations: int
@@ -643,6 +647,7 @@ def _newton(fun, x0, *, free, ref_norm, rtol, xtol, max_iter, admissible, load, 
         if done:
             return NewtonResult(x, it0, res)
         keep.refused += 1
+    astray = it0 > 0  # Broyden steps were taken: a full Newton step that raises the residual ends this try
     fresh = keep is not None  # one quasi-Newton phase on the first new factorisation of this solve
     it = it0
     while it < max_iter:
@@ -696,6 +701,8 @@ def _newton(fun, x0, *, free, ref_norm, rtol, xtol, max_iter, admissible, load, 
                 residuals=res,
                 hint="reduce the load step; the state may be beyond a limit point",
             )
+        if astray and rn > res[-1]:
+            raise _Astray("the residual rose after quasi-Newton steps", load=load, residuals=res + [rn])
         x, r, K = xt, rt, Kt
         res.append(rn)
         last_dx = step * float(np.linalg.norm(dx))
@@ -713,6 +720,7 @@ def _newton(fun, x0, *, free, ref_norm, rtol, xtol, max_iter, admissible, load, 
             if k:
                 x, r, K = x1, r1, K1
                 last_dx = np.inf
+                astray = True
             if done:
                 return NewtonResult(x, it, res)
     raise NewtonError(
