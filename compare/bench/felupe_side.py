@@ -39,7 +39,7 @@ A0 = 500e-6
 VERBOSE = 0
 PRESSURES = np.linspace(20.0, 1000.0, 50)
 # the inner stretch a/A at PRESSURES in the limit of mesh refinement (kappa = 2.2 GPa): Richardson over the
-# uniform meshes 8x16, 16x32, 32x64 with the observed order 4.02 (pointwise orders 4.0-4.8), written by
+# uniform meshes 8x16, 16x32, 32x64 with the observed order 4.02 (pointwise orders 3.8-4.8), written by
 # `python -m tissuemech.compare.bench felupe --blastula-reference` (2026-12-02); 32x64 is within 8.9e-9 of it,
 # 16x32 within 1.4e-7, 8x16 within 2.3e-6
 LAMBDA_RICHARDSON = np.array([
