@@ -473,21 +473,23 @@ def symmetric_factor(
 
 
 class KeptFactor:
-    """A factorisation kept ACROSS ``newton`` calls (modified Newton between load or time steps).
+    """A factorisation kept ACROSS ``newton`` calls (quasi-Newton between load or time steps).
 
     The caller makes one per run and passes it to every ``newton(..., factor=..., keep=...)`` of the run:
-    a solve then starts with chord steps dx = -K_kept^-1 r on the factorisation of an earlier step, and
-    newton factors a new tangent only when a chord step does not contract fast enough:
-    |r_1| <= ``rate`` |r_0| for the first step, |dx_k| <= ``rate`` |dx_(k-1)| after it (with the residual
-    not growing). The convergence test is newton's own; with a contraction rate q <= ``rate`` the error left
-    at |dx| is at most q / (1 - q) |dx|. A kept factorisation of another size is not used.
+    a solve then starts with Broyden steps whose H0 is the factorisation of an earlier step, and newton
+    factors a new tangent only when a step does not contract: |r_1| <= ``rate`` |r_0| for the first step;
+    after it the residual must not grow and each step must be at most half the one before. The convergence
+    test is newton's own. A kept factorisation of another size is not used; a solve that fails after
+    Broyden steps is solved again by Newton alone from its guess.
 
     Args:
-        rate: the largest accepted contraction per chord step (0 < rate < 1; default 0.25).
+        rate: the residual reduction the first Broyden step of a solve must reach (0 < rate < 1; default 0.25).
     Attributes:
         solve: the kept ``solve(b) -> x`` (None: nothing kept yet); ``n``: its size.
-        chord_steps, refused, retried: Broyden steps accepted / phases ended by a slow step / solves that
-            failed after Broyden steps and were solved again by Newton alone from the guess (diagnostics).
+        broyden_steps, refused, retried: Broyden steps accepted / phases ended by a step that did not
+            contract / solves that failed after Broyden steps and were solved again by Newton alone.
+    Raises:
+        ValueError: ``rate`` outside (0, 1).
     """
 
     def __init__(self, rate: float = 0.25):
@@ -496,7 +498,7 @@ class KeptFactor:
         self.rate = float(rate)
         self.solve: Callable | None = None
         self.n = -1
-        self.chord_steps = 0
+        self.broyden_steps = 0
         self.refused = 0
         self.retried = 0
 
@@ -546,11 +548,11 @@ def _broyden(fun, x, r, free, h0, admissible, res: list, tol: float, xtol: float
     return x, r, K, max_iter, False
 
 
-def _chord_step(fun, x, r, free, solve, admissible, rn0: float, tol: float, max_dx: float, max_rn: float | None = None):
+def _chord_step(fun, x, r, free, solve, admissible, rn0: float, tol: float, max_dx: float):
     """One correction x + dx with dx = -K_kept^-1 r (a kept factorisation): (x, r, K, |r|, |dx|) of the
     new state, or None when the solve fails, |dx| > ``max_dx`` (no contraction), the state is
-    inadmissible or its residual is not finite or no longer within ``max_rn`` (default max(10 |r0|, tol);
-    newton then takes a full iteration instead)."""
+    inadmissible or its residual is not finite or no longer within max(10 |r0|, tol) (newton then takes a
+    full iteration instead)."""
     try:
         dx = solve(-r[free])
     except (np.linalg.LinAlgError, ValueError):
@@ -564,7 +566,7 @@ def _chord_step(fun, x, r, free, solve, admissible, rn0: float, tol: float, max_
     with np.errstate(over="ignore", invalid="ignore"):
         rt, Kt = fun(xt)
         rn = float(np.linalg.norm(rt[free]))
-    if not (np.isfinite(rn) and rn <= (max(10.0 * rn0, tol) if max_rn is None else max_rn)):
+    if not (np.isfinite(rn) and rn <= max(10.0 * rn0, tol)):
         return None
     return xt, rt, Kt, rn, float(np.linalg.norm(dx))
 
@@ -596,11 +598,11 @@ def newton(
     opts.update(load=load, max_backtracks=max_backtracks, growth=growth, atol=atol, solver=solver, factor=factor)
     if keep is None:
         return _newton(fun, x0, keep=None, **opts)
-    steps = keep.chord_steps
+    steps = keep.broyden_steps
     try:
         return _newton(fun, x0, keep=keep, **opts)
     except NewtonError:
-        if keep.chord_steps == steps:
+        if keep.broyden_steps == steps:
             raise
         # the quasi-Newton steps may have led it astray: Newton alone from x0 (no worse than without keep)
         keep.retried += 1
@@ -641,7 +643,7 @@ def _newton(fun, x0, *, free, ref_norm, rtol, xtol, max_iter, admissible, load, 
         # quasi-Newton (Broyden) steps on the factorisation of an earlier step, while they contract
         h0 = getattr(keep.solve, "unrefined", keep.solve)
         x1, r1, K1, it0, done = _broyden(fun, x, r, free, h0, admissible, res, tol, xtol, keep.rate, max_iter)
-        keep.chord_steps += it0
+        keep.broyden_steps += it0
         if it0:
             x, r, K = x1, r1, K1
         if done:
@@ -715,7 +717,7 @@ def _newton(fun, x0, *, free, ref_norm, rtol, xtol, max_iter, admissible, load, 
             fresh = False
             h0 = getattr(kept, "unrefined", kept)
             x1, r1, K1, k, done = _broyden(fun, x, r, free, h0, admissible, res, tol, xtol, keep.rate, max_iter - it)
-            keep.chord_steps += k
+            keep.broyden_steps += k
             it += k
             if k:
                 x, r, K = x1, r1, K1

@@ -553,7 +553,7 @@ def test_newton_keeps_a_factorisation_across_solves_with_quasi_newton_steps():
         assert np.abs(k.x - s.x).max() <= 1e-8 * np.abs(s.x).max()
         assert k.residuals[-1] <= opts["rtol"] * prob.ref + opts["atol"]
         x_old, x_s, x_k = x_s, s.x, k.x
-    assert keep.chord_steps > 0
+    assert keep.broyden_steps > 0
     assert counts["keep"] < 0.5 * counts["full"]
 
 
@@ -602,7 +602,7 @@ def test_newton_with_a_kept_factorisation_converges_wherever_newton_alone_does()
     _, K0, _ = prob.rk(np.zeros(prob.free.size), 0.5)
     keep.store(symmetric_factor(K0), prob.free.size)  # an old tangent: slow but contracting Broyden steps
     res = newton(fun(1.1), x1, factor=symmetric_factor, keep=keep, **{**opts, "max_iter": alone.iterations})
-    assert keep.retried == 1 and keep.chord_steps > 0
+    assert keep.retried == 1 and keep.broyden_steps > 0
     assert np.abs(res.x - alone.x).max() <= 1e-12 * np.abs(alone.x).max()
     for kept in (None, KeptFactor()):
         prob.keep, x = kept, np.zeros(prob.free.size)
