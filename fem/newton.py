@@ -531,21 +531,30 @@ def _broyden(fun, x, r, free, h0, admissible, res: list, tol: float, xtol: float
         dxn = float(np.linalg.norm(z))
         if not np.isfinite(dxn) or (steps and dxn > 0.5 * float(np.linalg.norm(steps[-1]))):
             return x, r, K, k - 1, False
-        xt = x.copy()
-        xt[free] += z
-        if admissible is not None and admissible(xt) is not None:
+        t = _trial(fun, x, z, free, admissible, max((rate if k == 1 else 1.0) * res[-1], tol))
+        if t is None:
             return x, r, K, k - 1, False
-        with np.errstate(over="ignore", invalid="ignore"):
-            rt, Kt = fun(xt)
-            rn = float(np.linalg.norm(rt[free]))
-        if not (np.isfinite(rn) and rn <= max((rate if k == 1 else 1.0) * res[-1], tol)):
-            return x, r, K, k - 1, False
-        x, r, K = xt, rt, Kt
+        x, r, K, rn = t
         res.append(rn)
         steps.append(z)
         if rn <= tol and dxn <= xtol * (1.0 + np.linalg.norm(x[free])):
             return x, r, K, k, True
     return x, r, K, max_iter, False
+
+
+def _trial(fun, x, dx, free, admissible, max_rn: float):
+    """The state x + dx (on ``free``) as (x, r, K, |r|), or None when it is inadmissible or its residual is
+    not finite or above ``max_rn`` (the acceptance test of a correction on a kept factorisation)."""
+    xt = x.copy()
+    xt[free] += dx
+    if admissible is not None and admissible(xt) is not None:
+        return None
+    with np.errstate(over="ignore", invalid="ignore"):
+        rt, Kt = fun(xt)
+        rn = float(np.linalg.norm(rt[free]))
+    if not (np.isfinite(rn) and rn <= max_rn):
+        return None
+    return xt, rt, Kt, rn
 
 
 def _chord_step(fun, x, r, free, solve, admissible, rn0: float, tol: float, max_dx: float):
@@ -559,16 +568,8 @@ def _chord_step(fun, x, r, free, solve, admissible, rn0: float, tol: float, max_
         return None
     if not float(np.linalg.norm(dx)) <= max_dx:
         return None
-    xt = x.copy()
-    xt[free] += dx
-    if admissible is not None and admissible(xt) is not None:
-        return None
-    with np.errstate(over="ignore", invalid="ignore"):
-        rt, Kt = fun(xt)
-        rn = float(np.linalg.norm(rt[free]))
-    if not (np.isfinite(rn) and rn <= max(10.0 * rn0, tol)):
-        return None
-    return xt, rt, Kt, rn, float(np.linalg.norm(dx))
+    t = _trial(fun, x, dx, free, admissible, max(10.0 * rn0, tol))
+    return None if t is None else (*t, float(np.linalg.norm(dx)))
 
 
 def newton(
