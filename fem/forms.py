@@ -162,14 +162,24 @@ class Assembler:
         if formulation == "mixed":
             self._psiT = np.ascontiguousarray(self.psi.transpose(0, 2, 1))
         self._edge_cache: dict = {}
+        self._f_last: tuple[np.ndarray, np.ndarray] | None = None  # (u, F(u)): see f_at
 
     # ---- kinematics at quadrature points ------------------------------------------------
     def f_at(self, u: np.ndarray) -> np.ndarray:
         """5-comp deformation gradient (ne, nq, 5) for the global displacement u (the displacement dofs or
-        the full vector (u, q)), by one stacked matmul per element."""
+        the full vector (u, q)), by one stacked matmul per element; READ-ONLY.
+
+        The last (u, F) is kept: a call with equal u returns the same array (newton checks a trial state's
+        admissibility, then evaluates its residual: one F for both). The array is read-only, so no caller
+        can change the kept value."""
+        last = self._f_last
+        if last is not None and last[0].shape == u.shape and np.array_equal(last[0], u):
+            return last[1]
         ne, nq = self.w.shape
         f = np.matmul(self._B2, u[self.edofs][:, :, None]).reshape(ne, nq, 5)
         f += IDENTITY5
+        f.flags.writeable = False
+        self._f_last = (np.array(u, dtype=float), f)
         return f
 
     def q_at(self, x: np.ndarray) -> np.ndarray:

@@ -23,6 +23,7 @@ __all__ = [
     "IDENTITY5",
     "b_matrix",
     "invariants",
+    "det",
     "dI1",
     "dJ",
     "d2J",
@@ -54,9 +55,12 @@ def b_matrix(N: np.ndarray, dN: np.ndarray, R: np.ndarray) -> np.ndarray:
 
 def invariants(f: np.ndarray):
     """I1 = tr(F^T F) = sum f_i^2 and J = det F = F_tt (F_rR F_zZ - F_rZ F_zR)."""
-    I1 = np.sum(f * f, axis=-1)
-    J = f[..., 4] * (f[..., 0] * f[..., 3] - f[..., 1] * f[..., 2])
-    return I1, J
+    return np.sum(f * f, axis=-1), det(f)
+
+
+def det(f: np.ndarray) -> np.ndarray:
+    """J = det F = F_tt (F_rR F_zZ - F_rZ F_zR) of 5-comp deformation gradients (..., 5) -> (...)."""
+    return f[..., 4] * (f[..., 0] * f[..., 3] - f[..., 1] * f[..., 2])
 
 
 def dI1(f: np.ndarray) -> np.ndarray:

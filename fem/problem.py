@@ -26,7 +26,7 @@ import numpy as np
 from tissuemech.fem import constitutive as cm
 from tissuemech.fem import viscoelastic as ve
 from tissuemech.fem.forms import Assembler, Material
-from tissuemech.fem.kinematics import invariants
+from tissuemech.fem.kinematics import det
 from tissuemech.fem.mesh import AxiMesh
 
 __all__ = [
@@ -125,8 +125,7 @@ class SceneProblem:
         """None if the state x can be evaluated, else the reason: J = det F <= 0 (an element turned
         inside out) or hoop stretch F_theta = r / R <= 0 at some quadrature point."""
         f = self.asm.f_at(x)
-        _, J = invariants(f)
-        if not np.all(J > 0):
+        if not np.all(det(f) > 0):
             return "J <= 0 (an element turned inside out)"
         if not np.all(f[..., 4] > 0):
             return "hoop stretch <= 0"

@@ -4,7 +4,8 @@ and its plain-SciPy baseline, in one run and one table.
 Rows come from ``compare.bench.reduced_blastula.rows()`` and ``compare.bench.reduced_spheroid.rows()``;
 this module adds the ``import tissuemech.reduced`` time (measured in a fresh interpreter) and prints them.
 A first table (issue 14) sets the eager public blastula calls against their jitted form, in one run
-(``reduced_blastula.api_rows``), and times the whole ``tissuemech blastula`` process (``cli_rows``).
+(``reduced_blastula.api_rows``), times the whole ``tissuemech blastula`` process (``cli_rows``) and the
+one-point calls with asynchronous and with inline JAX dispatch (``dispatch_rows``).
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ def main(argv: Sequence[str] | None = None) -> list[dict]:
     ).parse_args(list(argv or []))
     print(f"import tissuemech.reduced: {import_time():.2f} s (fresh interpreter, best of 3)")
     print_rows(reduced_blastula.api_rows() + reduced_blastula.cli_rows())
+    print_rows(reduced_blastula.dispatch_rows())
     rows = list(reduced_blastula.rows()) + list(reduced_spheroid.rows())
     print_rows(rows)
     return rows

@@ -8,6 +8,8 @@ repeats): the ratio eager/jit at ``n`` points and the per-call cost at N = 1; ``
 memory at 1e4 / 1e5 / 1e6 points (fresh interpreters, ``ru_maxrss``) shows it flat in N. The issue-14
 targets are printed next to each row (``target``: eager/jit <= 1.5, <= 100 us per call at N = 1,
 inner_stretch >= 1e6 and limit_point >= 2e5 points/s; ``met``: yes/NO for each, in that order).
+:func:`dispatch_rows` times the one-point calls again in fresh interpreters, with JAX's default
+asynchronous CPU dispatch and with inline dispatch (``JAX_CPU_ENABLE_ASYNC_DISPATCH=0``), alternated.
 
 Each row: the path, points per call, compile time, throughput after compile (points/s, best of a
 few calls with ``block_until_ready``), the max relative error against a high-accuracy reference,
@@ -305,6 +307,61 @@ def api_rows(n: int = 1_000_000, repeats: int = 5, seed: int = 0, memory: bool =
     return out
 
 
+def one_point_costs(repeats: int = 15, inner: int = 20) -> dict[str, float]:
+    """Median seconds of an eager one-point call of each public function (the ``N = 1`` column of
+    :func:`api_rows`), in this process as JAX is configured here."""
+    import jax
+
+    out = {}
+    for name, fn, args, _ in _api_cases(1, np.random.default_rng(1)):
+        jax.block_until_ready(fn(*args))
+        samples = []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            for _ in range(inner):
+                res = fn(*args)
+            jax.block_until_ready(res)
+            samples.append((time.perf_counter() - t0) / inner)
+        out[name] = float(np.median(samples))
+    return out
+
+
+def dispatch_rows(rounds: int = 3) -> list[dict]:
+    """One-point eager calls with JAX's default asynchronous CPU dispatch against inline dispatch
+    (``jax.config.update("jax_cpu_enable_async_dispatch", False)`` before the first JAX call; here the
+    environment variable ``JAX_CPU_ENABLE_ASYNC_DISPATCH=0``): fresh interpreters, alternated, median
+    over ``rounds``. The flag is process-wide and read once, when JAX starts its CPU backend, so
+    tissuemech never sets it; a script of many one-point calls may."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    code = (
+        "import json, tissuemech.reduced\n"
+        "from tissuemech.compare.bench.reduced_blastula import one_point_costs\n"
+        "print(json.dumps(one_point_costs()))\n"
+    )
+    got: dict[str, list[dict]] = {"1": [], "0": []}
+    for _ in range(rounds):
+        for flag, acc in got.items():
+            env = dict(os.environ, JAX_CPU_ENABLE_ASYNC_DISPATCH=flag)
+            text = subprocess.check_output([sys.executable, "-c", code], env=env).decode()
+            acc.append(json.loads(text.strip().splitlines()[-1]))
+    rows = []
+    for name in got["1"][0]:
+        a, s = (float(np.median([r[name] for r in got[f]])) * 1e6 for f in ("1", "0"))
+        rows.append(
+            dict(
+                function=f"{name}, one point",
+                n1_eager_us=a,
+                n1_inline_dispatch_us=s,
+                inline_over_async=s / a,
+            )
+        )
+    return rows
+
+
 def cli_rows(repeats: int = 3) -> list[dict]:
     """Wall time of the whole ``tissuemech blastula`` process (its defaults, the PNG into a temporary
     folder): cold (an empty compilation cache), warm (the cache the cold run wrote) and with the cache
@@ -356,6 +413,8 @@ def main(argv: Sequence[str] | None = None) -> list[dict]:
     args = ap.parse_args(list(argv) if argv is not None else None)
     api = api_rows(args.n) + ([] if args.no_cli else cli_rows())
     print_rows(api)
+    api += dispatch_rows()
+    print_rows(api[-len(_api_cases(1, np.random.default_rng(1))) :])
     if args.api_only:
         return api
     r = rows(args.n, args.baseline)
