@@ -74,8 +74,9 @@ def graded_points(n: int, ratio: float = 1.0) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(h) / h.sum()])
 
 
-def _finish(mesh1: skfem.Mesh, order: int, mapper, scale: float, tagger) -> AxiMesh:
-    """Make the Q1 mesh quadratic (if order 2), map all geometry nodes, build basis and tags."""
+def _finish(mesh1: skfem.Mesh, order: int, mapper, scale: float, tagger, intorder: int | None = None) -> AxiMesh:
+    """Make the Q1 mesh quadratic (if order 2), map all geometry nodes, build basis (Gauss rule exact to
+    degree ``intorder``, default 2 order + 2) and tags."""
     if order == 2:
         m = skfem.MeshQuad2.from_mesh(mesh1)
         m = skfem.MeshQuad2(mapper(m.doflocs), m.t)
@@ -85,7 +86,7 @@ def _finish(mesh1: skfem.Mesh, order: int, mapper, scale: float, tagger) -> AxiM
         elem = skfem.ElementQuad1()
     else:
         raise ValueError(f"element order must be 1 or 2, got {order}")
-    basis = skfem.CellBasis(m, elem, intorder=2 * order + 2)
+    basis = skfem.CellBasis(m, elem, intorder=2 * order + 2 if intorder is None else intorder)
     X = basis.doflocs
     bf = m.boundary_facets()
     v = m.facets[:, bf]  # (2, nbf) vertex (= nodal dof) indices
@@ -168,6 +169,7 @@ def ball_section(
     radial_points: np.ndarray | None = None,
     n_equator: int | None = None,
     split_angle: float = 0.25 * np.pi,
+    intorder: int | None = None,
 ) -> AxiMesh:
     """O-grid quarter disk of a solid ball (lengths scaled by ``radius``).
 
@@ -182,6 +184,7 @@ def ball_section(
     divisions of the equator block's arc and of the core in Z (the core is n_core x n_equator).
     ``split_angle`` (rad from the pole, default pi/4): where the pole block's arc ends and the equator
     block's begins; the core is the rectangle [0, c sqrt2 sin(split)] x [0, c sqrt2 cos(split)].
+    ``intorder``: polynomial degree the basis's Gauss rule integrates exactly (default 2 order + 2).
     """
     if not (radius > 0 and np.isfinite(radius)):
         raise ValueError(f"ball radius must be positive, got {radius}")
@@ -266,4 +269,4 @@ def ball_section(
         "symmetry": lambda P: np.abs(P[1]) < tol,
         "outer": lambda P: np.abs(np.hypot(P[0], P[1]) - 1.0) < 1e-9,
     }
-    return _finish(m1, order, mapper, radius, tags)
+    return _finish(m1, order, mapper, radius, tags, intorder)

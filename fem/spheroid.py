@@ -15,7 +15,6 @@ from collections.abc import Callable, Sequence
 from typing import NamedTuple
 
 import numpy as np
-import skfem
 
 from tissuemech.fem import viscoelastic as ve
 from tissuemech.fem.contact import ContactError, RigidPlane
@@ -92,12 +91,10 @@ def fitted_mesh(radius: float, level: int, edge: float) -> AxiMesh:
     hc = _DEPTH * edge * SPLIT / k
     if hc < c_thick * (v[-1] - v[-2]):
         v = 1.0 - _geometric(nr, 1.0, hc / c_thick)[::-1]
-    m = ball_section(
-        radius, nc, nr, pole_points=np.r_[inner, outer[1:]], radial_points=v, n_equator=neq, split_angle=SPLIT
-    )
-    return AxiMesh(
-        m.mesh, skfem.CellBasis(m.mesh, skfem.ElementQuad2(), intorder=4), 2, m.length_scale, m.nodes, m.edges
-    )
+    return ball_section(
+        radius, nc, nr, pole_points=np.r_[inner, outer[1:]], radial_points=v, n_equator=neq, split_angle=SPLIT,
+        intorder=4,
+    )  # fmt: skip
 
 
 def hertz_force(approach, radius: float, C: float):

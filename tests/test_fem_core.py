@@ -242,6 +242,27 @@ def test_fast_assembly_equals_reference(formulation, which):
         assert np.abs(K.data - K0.data).max() <= 1e-14 * np.abs(K0.data).max()
 
 
+def test_deformation_gradient_is_kept_only_for_an_equal_state_and_is_read_only():
+    """Assembler.f_at keeps the last (u, F): an equal u (another array, same values) gets the kept F, a
+    changed u (also changed in place) a new one equal to a fresh assembler's, and nobody can write into it."""
+    m = shell_section(50e-6, 75e-6, 2, 4)
+    a, fresh = Assembler(m), Assembler(m)
+    rng = np.random.default_rng(5)
+    u = 1e-2 * rng.standard_normal(a.ndof)
+    f1 = a.f_at(u)
+    assert a.f_at(u.copy()) is f1
+    np.testing.assert_array_equal(f1, fresh.f_at(u.copy()))
+    with pytest.raises(ValueError, match="read-only"):
+        f1[0, 0, 0] = 2.0
+    u[a.edofs[0, 0]] += 1e-3  # in place: the kept copy must not follow
+    f2 = a.f_at(u)
+    assert f2 is not f1 and not np.array_equal(f2, f1)
+    np.testing.assert_array_equal(f2, Assembler(m).f_at(u))
+    np.testing.assert_array_equal(a.f_at(u[: a.n_u].copy()), f2)  # the displacement dofs alone: the same F
+    _, J = invariants(f2)
+    np.testing.assert_allclose(J, f2[..., 4] * (f2[..., 0] * f2[..., 3] - f2[..., 1] * f2[..., 2]), rtol=0, atol=0)
+
+
 def test_solver_backends_and_submatrix_cache():
     """Every symmetric_solve backend and the cached K[free][:, free] gather give the same answer."""
     from tissuemech.fem import newton as nw
