@@ -7,6 +7,8 @@ fit:    noise-free and 0.5 %-noise fits of (C, alpha, beta, tau) to two-level de
 speed:  default-mesh Fig. 10 run and static curve to 30 % (min of 3 after a warm-up).
 ramp:   reduced/FE - 1 per step (ramp and hold) of the fit case's two FE records (mesh: optional arg, default 1).
 push:   static compression to x = 0.79 (default mesh): which states used fitted / node-by-node contact.
+references A.json B.json: two Richardson references row by row (B / A - 1 and both observed orders), e.g.
+        notes/issue10_reference.json (levels 1-3) against notes/issue10_reference_l4.json (levels 1-4, so 2-4).
 """
 
 import json
@@ -55,6 +57,22 @@ def table(path: str) -> None:
         worst = max(worst, abs(e))
         print(f"table vs reference {name}: {e:+.2e}")
     print(f"table: max |f_table / f_ref - 1| = {worst:.2e}; metadata: {mc.metadata}")
+
+
+def references(path_a: str, path_b: str) -> None:
+    a, b = json.load(open(path_a)), json.load(open(path_b))
+    rows = [k for k in a if not k.startswith("_") and k in b]
+    worst: dict[str, float] = {}
+    for k in rows:
+        d = b[k]["reference"] / a[k]["reference"] - 1
+        print(f"{k:20s} B/A - 1 {d:+.2e}   order A {a[k]['order']:5.2f}   order B {b[k]['order']:5.2f}")
+        band = (
+            "x <= 0.01"
+            if "x 0.0" in k and float(k.split()[-1]) <= 0.01
+            else ("x = 0.02" if k.endswith("x 0.02") else "rest")
+        )
+        worst[band] = max(worst.get(band, 0.0), abs(d))
+    print("largest |B/A - 1|: " + ", ".join(f"{band} {v:.2e}" for band, v in worst.items()))
 
 
 def fit_case() -> None:
@@ -145,3 +163,6 @@ if __name__ == "__main__":
             ramp(int(sys.argv[i]) if i < len(sys.argv) and sys.argv[i].isdigit() else 1)
         elif w == "push":
             push()
+        elif w == "references":
+            i = sys.argv.index("references")
+            references(sys.argv[i + 1], sys.argv[i + 2])

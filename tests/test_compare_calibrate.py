@@ -66,18 +66,20 @@ def test_short_run_and_bad_input_raise():
         calibrate.tabulate(x_max=0.7, executor="serial", curve=fake_curve)
 
 
-# sha256 of the shipped table's arrays before its metadata got model_error_rel (commit e85ba2f)
+# sha256 of the shipped table's arrays: the level-3 table of 2026-12-02 (static runs with the contact edge solved to
+# 1e-6, checked against level 4); regenerate with the command in its metadata and update these
 SHIPPED_SHA256 = {
     "x": "9e019baea9874eafae66126ac205eb7de7edfad85f575e7d9bd2840bfae9661f",
     "alpha": "b04a7bb20bf42160ef8ff9fc5ae3a9828e63c7519a69112b8aae22673af1f2ea",
-    "f": "ed42097e16648512b43eb2b0dafbe3f75caa3e08eeaba7607d0772f3e7bd7fd3",
-    "g": "767366978ba3da0bec5cf76afe88ea81e90bab9a1958c06675de0e93b204972d",
-    "f_over_hertz": "5ab250956051d87f59fae89e41a2421e6341d7202b9464bfbde29951598b7dd2",
+    "f": "d8d45bcec542d6b5370f5f3a61b814fa170b267775ed712263220efdb4623d36",
+    "g": "055bb1acaade2386ee48f4d7b28cc5fe9cf2ef89dbc481bbf590165998b22830",
+    "f_over_hertz": "e9941988039f0f29092c214cd29d5a1fadab3a03269baaa473013237861904cf",
 }
 
 
-def test_shipped_table_arrays_unchanged_and_model_error_in_metadata():
-    """The metadata edit left every array bit-identical; the fits read the table's own error estimate."""
+def test_shipped_table_arrays_and_its_model_error():
+    """The shipped table is the one its metadata's command makes (level 3, checked against level 4); the fits
+    read its own error estimate: half its largest error against the converged reference in the notes."""
     import hashlib
     import json
     from pathlib import Path
@@ -89,13 +91,25 @@ def test_shipped_table_arrays_unchanged_and_model_error_in_metadata():
         for k, digest in SHIPPED_SHA256.items():
             assert hashlib.sha256(np.ascontiguousarray(z[k]).tobytes()).hexdigest() == digest, k
         meta = json.loads(str(z["metadata"]))
-    assert meta["model_error_rel"] == pytest.approx(3.8e-5)
+    assert meta["mesh"] == 3 and meta["error_mesh"] == 4 and "--mesh 3 --error-mesh 4" in meta["command"]
+    assert meta["discretisation_error_f"] < 2e-5  # level 3 against level 4
+    assert meta["model_error_rel"] == pytest.approx(1.486e-5, rel=1e-3)
     assert model_error_of("fem") == meta["model_error_rel"]
-    # it is half the table's largest error against the converged reference shipped in the notes
     ref = Path(__file__).resolve().parent.parent / "notes" / "issue10_reference.json"
     if ref.exists():
         err, at = calibrate.reference_error(calibrate.DEFAULT_OUT, json.loads(ref.read_text()))
         assert err / 2 == pytest.approx(meta["model_error_rel"], rel=0.02) and at == "alpha 0 x 0.35"
+
+
+@pytest.mark.slow
+def test_shipped_table_is_the_level_3_static_force():
+    """At a table node (x = 0.1, alpha = 0.2) the shipped f equals a fresh static run on level 3 (the contact edge
+    solved to 1e-6 either way: only the solver tolerances differ), not the level-2 value 1.2e-5 below it."""
+    from tissuemech.compare.bench.fem_spheroid import static_force
+    from tissuemech.reduced.spheroid import master_curve
+
+    table = float(master_curve().f(0.1, 0.2))
+    assert table / static_force(0.1, 0.2, 3) - 1 == pytest.approx(0.0, abs=2e-8)
 
 
 def test_reference_error_of_a_written_table(tmp_path):

@@ -47,7 +47,8 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
     eq10, mid10, _ = _calibrated_tables(x10, fig10["alpha"], ref_level)
     calib_wall = time.perf_counter() - t0
     # the calibrated law comes from a static run on the REFERENCE mesh itself: its row measures the lumped-
-    # relaxation assumption alone, not an independent prediction (labelled so); the shipped table is independent
+    # relaxation assumption alone, not an independent prediction (labelled so); the shipped table comes from static
+    # runs on level 3 (the full report's reference mesh, not the quick one's) interpolated in x and alpha
     laws = {
         "hertz": dict(equilibrium="hertz"),
         "calibrated on the reference mesh": dict(equilibrium=eq10, midplane=mid10),
@@ -297,7 +298,8 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
         "the reference mesh' uses "
         f"an equilibrium table from one static FE run on the reference mesh ({calib_wall:.1f} s, not counted "
         "in its wall time), so its error measures the lumped-relaxation assumption alone; 'shipped FE table' "
-        "uses the package's master curves (reduced/data, their own mesh and alpha interpolation) when present.",
+        "uses the package's master curves (reduced/data: static runs on level 3, checked against level 4, and "
+        "interpolated in x and alpha) when present.",
         "",
         md_table(df.drop(columns=["reference"], errors="ignore")),
         "",

@@ -23,7 +23,7 @@ compile and mesh set-up of the warm-up call are in ``first call [s]``. The machi
 Spheroid (``spheroid_accuracy``, needs ``fem.spheroid`` and ``reduced.spheroid``): the seed's Fig. 10
 case; the reference is the converged FE value: the Richardson extrapolation of sigma~ over the three
 finest contact-edge-fitted levels run (observed order; ``compare.bench.fem_spheroid.richardson``), so no
-method (not the finest level, not the table calibrated on level 2) is compared with itself; error = max
+method (not the finest level, not a table calibrated on one level) is compared with itself; error = max
 over t in {0.2 s, 1500 s} of |sigma~(t) / sigma~_ref(t) - 1| (sigma~ = F / A_mid, Pa). Methods: the
 reduced lumped model (jitted) with the Hertz law and with an FE-calibrated law (tables passed by the
 caller), FE on every level.
