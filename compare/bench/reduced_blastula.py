@@ -9,7 +9,7 @@ memory at 1e4 / 1e5 / 1e6 points (fresh interpreters, ``ru_maxrss``) shows it fl
 targets are printed next to each row (``target``: eager/jit <= 1.5, <= 100 us per call at N = 1,
 inner_stretch >= 1e6 and limit_point >= 2e5 points/s; ``met``: yes/NO for each, in that order).
 :func:`dispatch_rows` times the one-point calls again in fresh interpreters, with JAX's default
-asynchronous CPU dispatch and with inline dispatch (``JAX_CPU_ENABLE_ASYNC_DISPATCH=0``), alternated.
+asynchronous CPU dispatch and with inline dispatch (``jax_cpu_enable_async_dispatch`` False), alternated.
 
 Each row: the path, points per call, compile time, throughput after compile (points/s, best of a
 few calls with ``block_until_ready``), the max relative error against a high-accuracy reference,
@@ -328,25 +328,24 @@ def one_point_costs(repeats: int = 15, inner: int = 20) -> dict[str, float]:
 
 def dispatch_rows(rounds: int = 3) -> list[dict]:
     """One-point eager calls with JAX's default asynchronous CPU dispatch against inline dispatch
-    (``jax.config.update("jax_cpu_enable_async_dispatch", False)`` before the first JAX call; here the
-    environment variable ``JAX_CPU_ENABLE_ASYNC_DISPATCH=0``): fresh interpreters, alternated, median
-    over ``rounds``. The flag is process-wide and read once, when JAX starts its CPU backend, so
-    tissuemech never sets it; a script of many one-point calls may."""
+    (``jax.config.update("jax_cpu_enable_async_dispatch", False)`` before the first JAX call): fresh
+    interpreters, alternated, median over ``rounds``. The flag is process-wide and read once, when JAX
+    starts its CPU backend, so tissuemech never sets it; a script of many one-point calls may."""
     import json
-    import os
     import subprocess
     import sys
 
     code = (
-        "import json, tissuemech.reduced\n"
+        "import sys, json, jax\n"
+        "jax.config.update('jax_cpu_enable_async_dispatch', sys.argv[1] == '1')\n"
+        "import tissuemech.reduced\n"
         "from tissuemech.compare.bench.reduced_blastula import one_point_costs\n"
         "print(json.dumps(one_point_costs()))\n"
     )
     got: dict[str, list[dict]] = {"1": [], "0": []}
     for _ in range(rounds):
         for flag, acc in got.items():
-            env = dict(os.environ, JAX_CPU_ENABLE_ASYNC_DISPATCH=flag)
-            text = subprocess.check_output([sys.executable, "-c", code], env=env).decode()
+            text = subprocess.check_output([sys.executable, "-c", code, flag]).decode()
             acc.append(json.loads(text.strip().splitlines()[-1]))
     rows = []
     for name in got["1"][0]:
