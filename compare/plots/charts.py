@@ -49,6 +49,7 @@ def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16, note: 
     markers = iter("osD^vP*X")
     span = np.log10(d.err_plot.max()) - np.log10(d.err_plot.min())
     min_sep = max(0.06 * span, 0.25)  # decades between stacked labels: about one line of text
+    labels: list[tuple] = []  # (x, y, label x, text, colour) of every point
     for method, g in d.groupby("method", sort=False):
         x = g["wall_time [s]"].to_numpy(float)
         y = g.err_plot.to_numpy(float)
@@ -59,19 +60,20 @@ def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16, note: 
             ax.errorbar(x, y, xerr=np.maximum(xerr, 0), fmt="none", ecolor=ln.get_color(), lw=0.8, capsize=2)
         else:
             (ln,) = ax.plot(x, y, next(markers), ms=7, mfc="none", label=method)
-        ly = 10 ** _spread_labels(np.log10(y), min_sep)
-        lx = x.max() * 2.2
-        for xi, yi, lyi, text in zip(x, y, ly, g.setting.astype(str)):
-            ax.annotate(
-                text.replace("mesh ", ""),
-                (xi, yi),
-                xytext=(lx, lyi),
-                textcoords="data",
-                fontsize=7,
-                color=ln.get_color(),
-                va="center",
-                arrowprops=dict(arrowstyle="-", color=ln.get_color(), lw=0.5, alpha=0.6),
-            )
+        labels += [(xi, yi, x.max() * 2.2, text, ln.get_color()) for xi, yi, text in zip(x, y, g.setting.astype(str))]
+    # stacked over ALL methods: two methods' points at about the same place get labels one line apart
+    ly = 10 ** _spread_labels(np.log10([lab[1] for lab in labels]), min_sep) if labels else []
+    for (xi, yi, lx, text, color), lyi in zip(labels, ly):
+        ax.annotate(
+            text.replace("mesh ", ""),
+            (xi, yi),
+            xytext=(lx, lyi),
+            textcoords="data",
+            fontsize=7,
+            color=color,
+            va="center",
+            arrowprops=dict(arrowstyle="-", color=color, lw=0.5, alpha=0.6),
+        )
     front = d[d.pareto.astype(bool)].sort_values("wall_time [s]")
     ax.plot(
         front["wall_time [s]"],
@@ -87,7 +89,7 @@ def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16, note: 
     ax.set_xscale("log")
     ax.set_yscale("log")
     xmin, xmax = d["wall_time [s]"].min(), d["wall_time [s]"].max()
-    ax.set_xlim(xmin / 3, xmax * 30)
+    ax.set_xlim(xmin / 3, xmax * 150)  # room for the labels right of the slowest points
     ax.set_xlabel("wall time per solve (s): median of repeated calls after a warm-up; bars: min..max")
     ax.set_ylabel("relative error")
     ax.set_title(title, fontsize=10)
