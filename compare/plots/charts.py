@@ -62,7 +62,7 @@ def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16, note: 
             (ln,) = ax.plot(x, y, next(markers), ms=7, mfc="none", label=method)
         labels += [(xi, yi, x.max() * 2.2, text, ln.get_color()) for xi, yi, text in zip(x, y, g.setting.astype(str))]
     # stacked over ALL methods: two methods' points at about the same place get labels one line apart
-    ly = 10 ** _spread_labels(np.log10([lab[1] for lab in labels]), min_sep) if labels else []
+    ly: np.ndarray = 10 ** _spread_labels(np.log10([lab[1] for lab in labels]), min_sep) if labels else np.zeros(0)
     for (xi, yi, lx, text, color), lyi in zip(labels, ly):
         ax.annotate(
             text.replace("mesh ", ""),
