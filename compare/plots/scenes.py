@@ -31,7 +31,12 @@ def blastula_figure(
             geo = dict(inner_radius=inner_radius, outer_radius=c["outer_radius"], C=C, alpha=c["alpha"])
             lim = c["limit"]
             if lim is None or float(lim.pressure) >= max_pressure:
-                la_top = float(blastula.inner_stretch(max_pressure, **geo))
+                at_top = np.isclose(c["pressure"][-1], max_pressure, rtol=1e-12, atol=0.0)
+                la_top = (  # the table's last row when it is max_pressure (no one-point program to compile)
+                    float(c["inner_stretch"][-1])
+                    if at_top and np.isfinite(c["inner_stretch"][-1])
+                    else float(blastula.inner_stretch(max_pressure, **geo))
+                )
             else:
                 la_top = 1.6 * float(lim.inner_stretch)
             la = np.linspace(1.0, la_top, 600)
