@@ -347,18 +347,16 @@ def dispatch_rows(rounds: int = 3) -> list[dict]:
         for flag, acc in got.items():
             text = subprocess.check_output([sys.executable, "-c", code, flag]).decode()
             acc.append(json.loads(text.strip().splitlines()[-1]))
-    rows = []
-    for name in got["1"][0]:
-        a, s = (float(np.median([r[name] for r in got[f]])) * 1e6 for f in ("1", "0"))
-        rows.append(
-            dict(
-                function=f"{name}, one point",
-                n1_eager_us=a,
-                n1_inline_dispatch_us=s,
-                inline_over_async=s / a,
-            )
+    us = {f: {name: float(np.median([r[name] for r in runs])) * 1e6 for name in runs[0]} for f, runs in got.items()}
+    return [
+        dict(
+            function=f"{name}, one point",
+            n1_eager_us=a,
+            n1_inline_dispatch_us=us["0"][name],
+            inline_over_async=us["0"][name] / a,
         )
-    return rows
+        for name, a in us["1"].items()
+    ]
 
 
 def cli_rows(repeats: int = 3) -> list[dict]:
