@@ -86,7 +86,14 @@ def _finish(mesh1: skfem.Mesh, order: int, mapper, scale: float, tagger, intorde
         elem = skfem.ElementQuad1()
     else:
         raise ValueError(f"element order must be 1 or 2, got {order}")
-    basis = skfem.CellBasis(m, elem, intorder=2 * order + 2 if intorder is None else intorder)
+    if intorder is None:
+        intorder = 2 * order + 2
+    elif isinstance(intorder, bool) or not isinstance(intorder, (int, np.integer)) or intorder < 2 * order:
+        raise ValueError(
+            f"intorder (the polynomial degree the Gauss rule integrates exactly) must be a whole number >= "
+            f"{2 * order} for order-{order} elements, got {intorder!r}"
+        )
+    basis = skfem.CellBasis(m, elem, intorder=int(intorder))
     X = basis.doflocs
     bf = m.boundary_facets()
     v = m.facets[:, bf]  # (2, nbf) vertex (= nodal dof) indices

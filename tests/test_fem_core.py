@@ -263,6 +263,15 @@ def test_deformation_gradient_is_kept_only_for_an_equal_state_and_is_read_only()
     np.testing.assert_allclose(J, f2[..., 4] * (f2[..., 0] * f2[..., 3] - f2[..., 1] * f2[..., 2]), rtol=0, atol=0)
 
 
+def test_ball_section_gauss_rule_degree():
+    """ball_section(intorder=4) gives the 3 x 3 rule the fitted meshes use; a rule too low for Q2 is refused."""
+    assert ball_section(500e-6, 4, 3, intorder=4).basis.X.shape[1] == 9
+    assert ball_section(500e-6, 4, 3).basis.X.shape[1] == 16  # default 2 order + 2 = 6: 4 x 4 points
+    for bad in (-1, 0, 3, 2.5, "4", True):
+        with pytest.raises(ValueError, match="intorder"):
+            ball_section(500e-6, 4, 3, intorder=bad)
+
+
 def test_solver_backends_and_submatrix_cache():
     """Every symmetric_solve backend and the cached K[free][:, free] gather give the same answer."""
     from tissuemech.fem import newton as nw
