@@ -385,7 +385,7 @@ def cli_rows(repeats: int = 3) -> list[dict]:
                     exe + ["--out", os.path.join(tmp, "b.png")], env=env, cwd=tmp, check=True, capture_output=True
                 )
                 times[kind].append(time.perf_counter() - t0)
-    return [
+    return import_rows(repeats) + [
         dict(
             function=f"tissuemech blastula (whole process, {kind})",
             points="",
@@ -393,6 +393,31 @@ def cli_rows(repeats: int = 3) -> list[dict]:
         )
         for kind, v in times.items()
     ]
+
+
+def import_rows(repeats: int = 3) -> list[dict]:
+    """Import time of ``ml_dtypes`` and of ``jax`` (which imports it) in fresh processes, median of
+    ``repeats``: part of every command's start-up (ml_dtypes 0.7.0 took ~0.57 s here, 0.6.0 ~6 ms,
+    hence the pin in pyproject.toml)."""
+    import subprocess
+    import sys
+    from importlib.metadata import version
+
+    code = "import time, numpy; t = time.perf_counter(); import {0}; print(time.perf_counter() - t)"
+    rows = []
+    for name in ("ml_dtypes", "jax"):
+        ts = [
+            float(subprocess.run([sys.executable, "-c", code.format(name)], capture_output=True, text=True).stdout)
+            for _ in range(repeats)
+        ]
+        rows.append(
+            dict(
+                function=f"import {name} {version(name)} (fresh process, numpy already imported)",
+                points="",
+                eager_points_per_s=f"{1e3 * np.median(ts):.0f} ms",
+            )
+        )
+    return rows
 
 
 def base_fwd(rows_so_far: list[dict]) -> float:
