@@ -840,8 +840,9 @@ def _solve_stretch(p_over_C, k, omk, alpha, max_stretch=INVERSE_STRETCH_RANGE[1]
     branch of a Fung shell is never returned).
 
     Large calls (more than 2 chunks) for one shell (0-d k, 1 - k, alpha) start from a table of the
-    curve (:func:`_start_table`), so that one or two 20-point Newton steps finish each lane;
-    otherwise a 6-point Newton stage comes first.
+    curve (:func:`_start_table`), so that one or two 20-point Newton steps finish each lane; the
+    blocks of other large calls run a 6-point Newton stage first; small calls (up to 2 chunks) run
+    the 20-point Newton from the small-strain guess (one loop to compile: what they pay for most).
 
     Returns (lambda_a, converged, rule_ok): ``rule_ok`` is False where the 20-point rule cannot be
     trusted to 1e-10 at the solution (quadrature indicator above PANEL_INDICATOR)."""

@@ -434,6 +434,38 @@ def test_large_one_shell_inverse_equals_per_lane_path(alpha):
     np.testing.assert_allclose(one[good], la[good], rtol=1e-11, atol=0)
 
 
+@pytest.mark.parametrize("alpha", [0.0, 0.2, 1.0])
+def test_small_inverse_calls_equal_the_two_stage_path(alpha):
+    """Calls of up to 2048 points run the 20-point Newton from the small-strain guess (one loop to compile);
+    larger calls with per-lane shells run a 6-point stage first: the same stretches (1e-13) and the same
+    converged pattern, including p = 0, pressures beyond the deflation range and above the limit point."""
+    rng = np.random.default_rng(21)
+    n = 600
+    lim = bl.limit_point(**GEO, C=C, alpha=alpha)
+    top = float(lim.inner_stretch) - 1e-3 if lim is not None else (4.0 if alpha < 1 else 2.5)
+    la = rng.uniform(0.55, top, n)
+    la[:50] = 1.0 + rng.choice([-1.0, 1.0], 50) * 10 ** rng.uniform(-9, -3, 50)
+    p = np.array(bl.pressure(la, **GEO, C=C, alpha=alpha))
+    p[50:55] = 0.0
+    p[55:60] = -1e12 * C
+    if lim is not None:
+        p[60:65] = 1.01 * float(lim.pressure)
+    small, ok_s = (np.asarray(v) for v in bl.inner_stretch_solve(p, **GEO, C=C, alpha=alpha))
+    big, ok_b = bl.inner_stretch_solve(
+        np.tile(p, 4), inner_radius=np.full(4 * n, A), outer_radius=75e-6, C=C, alpha=alpha
+    )
+    big, ok_b = np.asarray(big)[:n], np.asarray(ok_b)[:n]
+    assert np.array_equal(ok_s, ok_b)
+    assert not ok_s[55:60].any() and ok_s[:55].all()
+    if lim is not None:
+        assert not ok_s[60:65].any()
+    np.testing.assert_allclose(small[ok_s], big[ok_s], rtol=1e-13, atol=0)
+    good = ok_s.copy()
+    good[:65] = False  # (beyond it: not converged only where the one-panel rule cannot resolve the state)
+    assert good.sum() > 400
+    np.testing.assert_allclose(small[good], la[good], rtol=1e-11, atol=0)
+
+
 def test_one_point_fast_path_equals_array_path():
     """Python floats and size-1 arrays of any rank take the one-point path: the same values as the
     same point inside a larger call, the broadcast shape, and bad one-point input still raises."""
