@@ -43,6 +43,14 @@ def _factor(K):
     return symmetric_factor(K, ordering="supervariable")
 
 
+# The Gauss rule of the scene's Q2 shell meshes: 3 x 3 points (degree 4), as FElupe's biquadratic quads. Against the
+# 4 x 4 rule (degree 6, the mesh builder's default), on the seed's six sets: 4x8 off a 24x48 reference by 3.2e-6 -
+# 4.8e-5 (4 x 4: 3.2e-6 - 5.3e-5), 8x16 by 1.8e-7 - 3.8e-6 (4 x 4: 1.8e-7 - 3.9e-6), 10-30 % less time per sweep
+# (`python notes/issue14_shell_gauss.py`); the Richardson limit of 8x16 / 16x32 / 32x64 moves by 1.3e-10
+# (`python -m tissuemech.compare.bench felupe --blastula-reference`).
+SHELL_GAUSS_DEGREE = 4
+
+
 def _make_mesh(mesh, A: float, B: float) -> AxiMesh:
     """The shell mesh of a ``mesh`` argument: a name of ``MESHES``, divisions (n_radial, n_circ) or an
     ``AxiMesh`` built with length_scale = A (m); B (m) the outer radius. Raises ValueError otherwise."""
@@ -55,7 +63,7 @@ def _make_mesh(mesh, A: float, B: float) -> AxiMesh:
         or not all(isinstance(n, (int, np.integer)) and n >= 1 for n in mesh)
     ):
         raise ValueError(f"mesh divisions must be two positive integers (n_radial, n_circ), got {mesh!r}")
-    return shell_section(A, B, int(mesh[0]), int(mesh[1]))
+    return shell_section(A, B, int(mesh[0]), int(mesh[1]), intorder=SHELL_GAUSS_DEGREE)
 
 
 class _Stretches(NamedTuple):

@@ -125,12 +125,14 @@ def shell_section(
     grading: float = 1.0,
     order: int = 2,
     half: bool = False,
+    intorder: int | None = None,
 ) -> AxiMesh:
     """Mapped mesh of the hollow-sphere wall A <= rho <= B (lengths scaled by A).
 
     theta (from the equator Z = 0) spans [0, 90] deg (quarter, with Z-symmetry) or [-90, 90] deg
     (``half``, the seed's section). Isoparametric Q2 elements represent the circles exactly up to
-    the quadratic interpolation of the polar map.
+    the quadratic interpolation of the polar map. ``intorder``: polynomial degree the basis's Gauss
+    rule integrates exactly (default 2 order + 2; ``fem.blastula`` takes 2 order: 3 x 3 points on Q2).
     """
     if not (0 < inner_radius < outer_radius):
         raise ValueError(f"need 0 < inner_radius < outer_radius, got {inner_radius}, {outer_radius}")
@@ -154,7 +156,7 @@ def shell_section(
     }
     if not half:
         tags["symmetry"] = lambda P: np.abs(P[1]) < tol
-    return _finish(m1, order, mapper, inner_radius, tags)
+    return _finish(m1, order, mapper, inner_radius, tags, intorder)
 
 
 def _check_points(p, n: int, name: str) -> np.ndarray:

@@ -361,13 +361,16 @@ def test_newton_lazy_tangent_same_answer_fewer_assemblies():
     x0 = np.zeros(prob.free.size)
     xe, xl = x0, x0
     opts = dict(ref_norm=prob.ref, rtol=1e-10, xtol=1e-9, atol=prob.floor * 2, admissible=prob.admissible)
-    for lam in (0.5, 1.0, 2.0):
+    # (steps of at most 1.0 C from the last state, no predictor: the jump 1.0 -> 2.0 converged with the 4 x 4 Gauss
+    # rule only after 18 wandering iterations, and wanders off with the scene's 3 x 3 rule: robustness of a bare
+    # Newton far from the answer is not what this test is about)
+    for lam in (0.5, 1.0, 1.5, 2.0):
         se = newton(lambda x: eager(x, lam), xe, solver=symmetric_solve, **opts)
         sl = newton(lambda x: lazy(x, lam), xl, solver=symmetric_solve, **opts)
         assert se.iterations == sl.iterations and np.allclose(se.residuals, sl.residuals, rtol=1e-12, atol=0)
         assert np.abs(sl.x - se.x).max() <= 1e-12 * np.abs(se.x).max()
         xe, xl = se.x, sl.x
-    assert calls["lazy"] == calls["eager"] - 3  # one unused tangent per solve (the converged state's)
+    assert calls["lazy"] == calls["eager"] - 4  # one unused tangent per solve (the converged state's)
 
 
 def test_supervariable_ordering_same_solution_less_fill():
@@ -443,14 +446,14 @@ def test_newton_keeps_the_factorisation_once_the_residual_has_converged():
 
     opts = dict(ref_norm=prob.ref, rtol=1e-10, xtol=1e-9, atol=prob.floor * 2, admissible=prob.admissible)
     x_s = x_f = np.zeros(prob.free.size)
-    for lam in (0.5, 1.0, 2.0, 3.0):
+    for lam in (0.5, 1.0, 1.5, 2.0, 3.0):  # (load steps a bare Newton from the last state converges from)
         fun = lambda x, lam=lam: prob.rk(x, lam, tangent="lazy")[:2]
         s = newton(fun, x_s, solver=solver, **opts)
         f = newton(fun, x_f, factor=factor, **opts)
         assert np.abs(f.x - s.x).max() <= 1e-12 * np.abs(s.x).max()
         assert f.residuals[-1] <= opts["rtol"] * prob.ref + opts["atol"]
         x_s, x_f = s.x, f.x
-    assert counts["factor"] <= counts["solver"] - 4  # at least one factorisation saved per solve
+    assert counts["factor"] <= counts["solver"] - 5  # at least one factorisation saved per solve
     with pytest.raises(ValueError, match="not both"):
         newton(fun, x_f, solver=solver, factor=factor, **opts)
 
