@@ -644,3 +644,27 @@ def test_newton_with_a_kept_factorisation_converges_wherever_newton_alone_does()
         if kept is None:
             x_alone = x
     assert np.abs(x - x_alone).max() <= 1e-8 * np.abs(x_alone).max()
+
+
+def test_fem_perf_floor_counts_residuals_and_computes_the_assemblers_F():
+    """``bench fem-perf``'s run floor: the residual counter counts one constitutive pass per residual evaluation
+    (a Newton solve's residual history has one entry per accepted evaluation), and the residual's element matmuls of the
+    floor compute the same F as the assembler (F = B u_e + I) and the same element residual (B^T P)."""
+    from tissuemech.compare.bench.fem_perf import _CountResiduals, _residual_flops
+    from tissuemech.fem import blastula as fb
+    from tissuemech.fem import constitutive as cm
+
+    prob = fb._setup(50e-6, 75e-6, 200.0, 0.2, 2.2e9, (2, 4))
+    with _CountResiduals() as count:
+        res = prob.solve(1.0, np.zeros(prob.free.size), 1e-10, "test")
+    assert 3 <= len(res.residuals) <= count.n <= len(res.residuals) + 2  # (+ trial states newton rejected)
+    assert cm.total_stress is count._orig  # restored
+    asm, x = prob.asm, prob.full(res.x)
+    ne, nq = asm.w.shape
+    f_floor, _ = _residual_flops(asm, x)()
+    np.testing.assert_allclose(
+        f_floor.reshape(ne, nq, 5) + np.array([1.0, 0.0, 0.0, 1.0, 1.0]), asm.f_at(x), rtol=0, atol=1e-14
+    )
+    P = np.cos(np.arange(ne * nq * 5, dtype=float)).reshape(ne, nq, 5)
+    re = np.einsum("eqc,eqcd->ed", P, asm.B)
+    np.testing.assert_allclose(_residual_flops(asm, x)()[1][:, 0], re, rtol=1e-13, atol=1e-13)

@@ -15,7 +15,8 @@ in the same run (interleaved repeats, medians; the machine is shared, so only th
    residual has converged, and across steps: Broyden steps on an earlier factorisation, ``KeptFactor``),
    far fewer iterations factor than there are iterations, so the cheap steps dilute that ratio. Printed
    too: the wall time per factorisation over the floor, and the whole run's wall time over the floor of the
-   iterations it took (LU x (best LU + elem) + iterations x a bare triangular solve);
+   iterations it took (LU x (best LU + elem) + iterations x a bare triangular solve + residual evaluations x
+   their element matmuls F = B u_e and r_e = B^T P);
 2b. the blastula 4x8 sweep with the one-pattern tangent (K_int - p K_p on the element pattern, cached
    free-dof gather, lazy tangent in ``newton``) against the separate assembly it replaced, interleaved: the
    speed-up and the largest difference of the answers;
@@ -118,6 +119,34 @@ def _elem_flops(asm, x, mat):
     return lambda: np.matmul(asm.Bt, np.matmul(Aw, asm.B).reshape(ne, nq * 5, nd))
 
 
+def _residual_flops(asm, x):
+    """The element matmuls of one residual evaluation: F = B u_e at the points and r_e = B^T (w P) (the flop
+    floor of a residual pass, which every iteration, Broyden steps included, makes)."""
+    ne, nq = asm.w.shape
+    ue = np.ascontiguousarray(x[asm.edofs][:, :, None])
+    P = np.cos(np.arange(ne * nq * 5, dtype=float)).reshape(ne, 1, nq * 5)
+    return lambda: (np.matmul(asm._B2, ue), np.matmul(P, asm._B2))
+
+
+class _CountResiduals:
+    """Counts the residual evaluations (``constitutive.total_stress`` passes) while active."""
+
+    def __enter__(self):
+        from tissuemech.fem import constitutive as cm
+
+        self.n, self._cm, self._orig = 0, cm, cm.total_stress
+
+        def total_stress(*a, **k):
+            self.n += 1
+            return self._orig(*a, **k)
+
+        cm.total_stress = total_stress
+        return self
+
+    def __exit__(self, *exc):
+        self._cm.total_stress = self._orig
+
+
 def per_iteration(repeats: int) -> None:
     print("\n## Per Newton iteration vs the practical floor (median of interleaved repeats)")
     print("floor = fastest bare factorisation of the same reduced tangent + element matmuls B^T A B")
@@ -131,44 +160,49 @@ def per_iteration(repeats: int) -> None:
         "blastula 4x8 sweep (50 steps)": (lambda: fb.inflate(**kw), Kb, prob_b.asm, prob_b.full(xb), prob_b.mat),
         "spheroid Fig. 10 level 1": (lambda: fs.compress(**FIG10), Ks, prob_s.asm, xs, prob_s.mat),
     }
-    rows = {k: dict(it=[], per_lu=[], lu={}, el=[], sol=[], run=[]) for k in cases}
-    its, lus = {}, {}
+    rows = {k: dict(it=[], per_lu=[], lu={}, el=[], rel=[], sol=[], run=[]) for k in cases}
+    its, lus, nres = {}, {}, {}
     for _ in range(repeats):
         for name, (run, K, asm, x, mat) in cases.items():
-            with _CountLU() as count:
+            with _CountLU() as count, _CountResiduals() as count_r:
                 t = time.perf_counter()
                 res = run()
                 wall = time.perf_counter() - t
-            its[name], lus[name] = int(np.sum(res.newton_iterations)), count.n
+            its[name], lus[name], nres[name] = int(np.sum(res.newton_iterations)), count.n, count_r.n
             rows[name]["it"].append(wall / its[name])
             rows[name]["per_lu"].append(wall / max(count.n, 1))
             facs = _factorisations(K)
             for fname, fac in facs.items():
                 rows[name]["lu"].setdefault(fname, []).append(_med(fac, 5))
             rows[name]["el"].append(_med(_elem_flops(asm, x, mat), 5))
+            rows[name]["rel"].append(_med(_residual_flops(asm, x), 5))
             best = min(facs, key=lambda k: rows[name]["lu"][k][-1])
             rows[name]["sol"].append(_med(_bare_solve(facs[best], K.shape[0]), 5))
             rows[name]["run"].append(wall)
     print("(iters: Newton iterations, the quasi-Newton steps on a kept factorisation included; LU: factorisations;")
     print(" ratio: ms/iter over the floor of a factorised iteration (LU + elem), which the cheap steps now dilute;")
     print(" ratio/LU: wall per factorisation over that floor; run: the whole run's wall over ITS floor,")
-    print(" LU x (best LU + elem) + iters x (bare solve): the unavoidable sparse work of the iterations it took)")
     print(
-        f"{'case':32s} {'dofs':>6s} {'iters':>5s} {'LU':>4s} {'ms/iter':>8s} {'ms/LU':>7s} {'best LU ms':>10s} "
-        f"{'elem ms':>8s} {'solve ms':>8s} {'ratio':>6s} {'ratio/LU':>8s} {'run':>6s}  best LU"
+        " LU x (best LU + elem) + iters x (bare solve) + res x (res elem): the unavoidable sparse and element work of"
+    )
+    print(" the iterations it took; res: residual evaluations, res elem: their element matmuls F = B u_e, r_e = B^T P)")
+    print(
+        f"{'case':32s} {'dofs':>6s} {'iters':>5s} {'LU':>4s} {'res':>4s} {'ms/iter':>8s} {'ms/LU':>7s} "
+        f"{'best LU ms':>10s} {'elem ms':>8s} {'res elem ms':>11s} {'solve ms':>8s} {'ratio':>6s} {'ratio/LU':>8s} "
+        f"{'run':>6s}  best LU"
     )
     for name, (_, K, *_r) in cases.items():
         d = rows[name]
         lu = {k: float(np.median(v)) for k, v in d["lu"].items()}
         best = min(lu, key=lu.get)
         it, el, per_lu = float(np.median(d["it"])), float(np.median(d["el"])), float(np.median(d["per_lu"]))
-        sol, run = float(np.median(d["sol"])), float(np.median(d["run"]))
+        sol, run, rel = float(np.median(d["sol"])), float(np.median(d["run"])), float(np.median(d["rel"]))
         floor = lu[best] + el
-        run_floor = lus[name] * floor + its[name] * sol
+        run_floor = lus[name] * floor + its[name] * sol + nres[name] * rel
         print(
-            f"{name:32s} {K.shape[0]:6d} {its[name]:5d} {lus[name]:4d} {1e3 * it:8.2f} {1e3 * per_lu:7.2f} "
-            f"{1e3 * lu[best]:10.2f} {1e3 * el:8.2f} {1e3 * sol:8.3f} {it / floor:6.2f} {per_lu / floor:8.2f} "
-            f"{run / run_floor:6.2f}  {best}"
+            f"{name:32s} {K.shape[0]:6d} {its[name]:5d} {lus[name]:4d} {nres[name]:4d} {1e3 * it:8.2f} "
+            f"{1e3 * per_lu:7.2f} {1e3 * lu[best]:10.2f} {1e3 * el:8.2f} {1e3 * rel:11.3f} {1e3 * sol:8.3f} "
+            f"{it / floor:6.2f} {per_lu / floor:8.2f} {run / run_floor:6.2f}  {best}"
         )
         print("    factorisations (ms): " + ", ".join(f"{k} {1e3 * v:.2f}" for k, v in lu.items()))
     print(f"symmetric_solve backend in use: {nw.backend()} (available: {', '.join(nw.available_backends())})")
