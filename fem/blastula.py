@@ -108,6 +108,17 @@ class _Problem(SceneProblem):
             keep=self.keep,
         )
 
+    def load_tangent(self, lam, uf):
+        """dx/dlam at the converged state ``uf`` (free dofs; lam unused: f_p is the follower force at unit
+        pressure): K dx/dlam = f_p with the factorisation kept from the solve that just ended (the tangent of a
+        state on its Newton path: ``load_control``'s Euler predictor); None when that solve factored nothing
+        (Broyden steps on an older factorisation, whose slope predicts worse than the secant)."""
+        solve = self.keep.solve
+        if solve is None or self.keep.n != uf.size or self.keep.age != 0:
+            return None
+        fp, _ = self.asm._follower_values(self.full(uf), 1.0, self.inner, tangent=False)
+        return getattr(solve, "unrefined", solve)(fp[self.free])
+
     def admissible(self, uf):
         """:meth:`SceneProblem.admissible` of the free dofs ``uf`` (J > 0 and hoop stretch > 0)."""
         return super().admissible(self.full(uf))
@@ -270,7 +281,9 @@ def inflate(
         return prob.solve(lam, guess, rtol, load=f"p = {lam * C:.6g} Pa")
 
     if method == "load":
-        steps = load_control(solve, p / C, u0, monitor=prob.inner_stretch, unit=" Pa", scale=C)
+        steps = load_control(
+            solve, p / C, u0, monitor=prob.inner_stretch, unit=" Pa", scale=C, tangent=prob.load_tangent
+        )
         lam = np.array([s.load for s in steps])
         xs = [s.solution.x for s in steps]
         its = np.array([s.solution.iterations for s in steps])

@@ -2,8 +2,10 @@ r"""Path following: adaptive load control and Riks arc-length (through limit poi
 
 ``load_control(solve, loads, x0, *, lam0=0.0, monitor=None, max_cuts=12)``
     ``solve(lam, x_guess) -> NewtonResult`` (raises ``NewtonError``). Reaches every requested
-    load; a failed step is halved (up to ``max_cuts`` times), the predictor is the secant of the
-    last two converged states (``scale``/``unit`` only format messages). Returns a list of ``LoadStep(load, solution, wall_time)``, one per
+    load; a failed step is halved (up to ``max_cuts`` times). The predictor is Euler's,
+    x_c + (dx/dlam) dlam, where ``tangent(lam, x) -> dx/dlam or None`` is given and has a slope at the
+    converged state, else the secant of the last two converged states (``scale``/``unit`` only
+    format messages). Returns a list of ``LoadStep(load, solution, wall_time)``, one per
     requested load. If it fails where the load-response curve flattens (monitor slope below 2 % of the
     initial one or falling), raises ``LimitPointError`` naming the last converged load.
 
@@ -68,9 +70,11 @@ def load_control(
     max_cuts: int = 12,
     unit: str = "",
     scale: float = 1.0,
+    tangent: Callable | None = None,
 ) -> list[LoadStep]:
     """Reach every load of ``loads`` (scaled, increasing) from (lam0, x0) by Newton solves ``solve(lam, guess)``,
-    halving a failed step; see the module docstring. Returns one ``LoadStep`` per requested load.
+    halving a failed step; see the module docstring. ``tangent(lam, x)``: dx/dlam at a converged state, or None
+    (then the secant predicts). Returns one ``LoadStep`` per requested load.
     Raises ``LimitPointError`` where the path flattens, ``NewtonError`` after ``max_cuts`` cuts otherwise."""
     out: list[LoadStep] = []
     x_prev, lam_prev = np.array(x0, float), float(lam0)
@@ -84,7 +88,10 @@ def load_control(
         cuts = 0
         while lam_c < target - 1e-14 * max(1.0, abs(target)):
             lam_t = min(target, lam_c + dlam)
-            if x_old is not None and lam_c != lam_old:
+            t_c = tangent(lam_c, x_c) if tangent is not None and lam_c != lam0 else None
+            if t_c is not None:  # Euler: the slope dx/dlam at the converged state
+                guess = x_c + t_c * (lam_t - lam_c)
+            elif x_old is not None and lam_c != lam_old:
                 guess = x_c + (x_c - x_old) * (lam_t - lam_c) / (lam_c - lam_old)
             else:
                 guess = x_c

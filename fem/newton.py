@@ -485,7 +485,8 @@ class KeptFactor:
     Args:
         rate: the residual reduction the first Broyden step of a solve must reach (0 < rate < 1; default 0.25).
     Attributes:
-        solve: the kept ``solve(b) -> x`` (None: nothing kept yet); ``n``: its size.
+        solve: the kept ``solve(b) -> x`` (None: nothing kept yet); ``n``: its size; ``age``: newton solves begun
+            since it was stored (0: the last solve factored it, e.g. for a predictor's slope).
         broyden_steps, refused, retried: Broyden steps accepted / phases ended by a step that did not
             contract / solves that failed after Broyden steps and were solved again by Newton alone.
     Raises:
@@ -498,6 +499,7 @@ class KeptFactor:
         self.rate = float(rate)
         self.solve: Callable | None = None
         self.n = -1
+        self.age = 0  # newton solves begun since the kept factorisation was stored
         self.broyden_steps = 0
         self.refused = 0
         self.retried = 0
@@ -505,6 +507,7 @@ class KeptFactor:
     def store(self, solve: Callable | None, n: int) -> None:
         """Keep ``solve`` (a factorisation of size n) for the next newton call."""
         self.solve, self.n = solve, int(n)
+        self.age = 0
 
 
 def _broyden(fun, x, r, free, h0, admissible, res: list, tol: float, xtol: float, rate: float, max_iter: int):
@@ -599,6 +602,7 @@ def newton(
     opts.update(load=load, max_backtracks=max_backtracks, growth=growth, atol=atol, solver=solver, factor=factor)
     if keep is None:
         return _newton(fun, x0, keep=None, **opts)
+    keep.age += 1
     steps = keep.broyden_steps
     try:
         return _newton(fun, x0, keep=keep, **opts)

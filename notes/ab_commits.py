@@ -12,7 +12,8 @@ answers (inner stretches or plate forces).
 
 Cases: ``b4x8`` / ``b16x32`` (blastula, alpha 0.2, B = 75 um, 50 pressures 20..1000 Pa on the 4x8 / 16x32
 mesh), ``fe8x16`` (``compare/bench/felupe_side.py``'s fine pairing: B = 60 um, kappa = 2.2 GPa, the
-50 pressures 20..1000 Pa on 8x16), ``fig10`` (the spheroid Fig. 10 case to 1500 s, default mesh), ``static1`` / ``static2`` /
+50 pressures 20..1000 Pa on 8x16), ``s8x16`` / ``s24x48`` (``fem-perf``'s scaling sweep: B = 75 um, 10 pressures
+100..1000 Pa on 8x16 / 24x48), ``fig10`` (the spheroid Fig. 10 case to 1500 s, default mesh), ``static1`` / ``static2`` /
 ``static3`` (the spheroid static curve of the Fig. 10 material to 10 % in 5 steps on that level),
 ``static30`` (the static curve to 30 % in 6 steps on the default mesh, ``compare/bench/felupe_side.py``'s
 case).
@@ -30,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-CASES = ("b4x8", "b16x32", "fe8x16", "fig10", "static1", "static2", "static3", "static30")
+CASES = ("b4x8", "b16x32", "fe8x16", "s8x16", "s24x48", "fig10", "static1", "static2", "static3", "static30")
 
 CHILD = r"""
 import json, sys, time
@@ -56,6 +57,11 @@ def run():
     if case in ("b4x8", "b16x32"):
         mesh = (4, 8) if case == "b4x8" else (16, 32)
         r = fb.inflate(inner_radius=50e-6, outer_radius=75e-6, C=200.0, alpha=0.2, pressures=ps, mesh=mesh)
+        return np.asarray(r.inner_stretch), r
+    if case in ("s8x16", "s24x48"):  # fem-perf's scaling sweep: B = 75 um, 10 pressures 100..1000 Pa
+        mesh = (8, 16) if case == "s8x16" else (24, 48)
+        r = fb.inflate(inner_radius=50e-6, outer_radius=75e-6, C=200.0, alpha=0.2, pressures=np.linspace(100.0, 1000.0, 10),
+                       mesh=mesh)
         return np.asarray(r.inner_stretch), r
     if case == "fe8x16":  # compare/bench/felupe_side.py's fine pairing: B = 60 um, kappa 2.2 GPa, 8x16
         r = fb.inflate(inner_radius=50e-6, outer_radius=60e-6, C=200.0, alpha=0.2, kappa=2.2e9, pressures=ps,

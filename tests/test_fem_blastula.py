@@ -163,3 +163,35 @@ def test_the_felupe_benchmark_blastula_reference_is_the_limit_of_mesh_refinement
     e1, e2 = (np.max(np.abs(fs.blastula_ours(m)[2] - fs.LAMBDA_RICHARDSON)) for m in ((8, 16), (16, 32)))
     assert e1 <= 2.4e-6 and e2 <= 1.5e-7
     assert 12.0 <= e1 / e2 <= 20.0
+
+
+def test_euler_predictor_same_answers_fewer_factorisations(monkeypatch):
+    """load_control's Euler predictor (the slope from the factorisation the last solve kept) reaches the same
+    inner stretches as the secant predictor (within the Newton tolerance) on a 10-step sweep, with fewer
+    factorisations (and no more Newton iterations); a solve that factored nothing gives no slope (secant instead)."""
+    import scipy.sparse.linalg as spla
+
+    from tissuemech.fem import blastula as fb
+
+    counts = {"lu": 0}
+    splu = spla.splu
+
+    def counted(*a, **k):
+        counts["lu"] += 1
+        return splu(*a, **k)
+
+    monkeypatch.setattr(spla, "splu", counted)
+    kw = dict(inner_radius=A, outer_radius=B, C=C, alpha=0.2, pressures=np.linspace(100.0, 1000.0, 10), mesh=(4, 8))
+    euler = inflate(**kw)
+    lu_euler, counts["lu"] = counts["lu"], 0
+    with monkeypatch.context() as m:
+        m.setattr(fb._Problem, "load_tangent", lambda self, lam, uf: None)
+        secant = inflate(**kw)
+    np.testing.assert_allclose(euler.inner_stretch, secant.inner_stretch, rtol=1e-9, atol=0)
+    assert lu_euler < 0.7 * counts["lu"]
+    assert np.sum(euler.newton_iterations) <= np.sum(secant.newton_iterations)
+    prob = fb._setup(A, B, C, 0.2, 2.2e9, (2, 4))
+    x = prob.solve(1.0, np.zeros(prob.free.size), 1e-10, "test").x
+    assert prob.keep.age == 0 and prob.load_tangent(1.0, x) is not None
+    prob.keep.age = 1  # a later solve that factored nothing: the kept factorisation is older
+    assert prob.load_tangent(1.0, x) is None
