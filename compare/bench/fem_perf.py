@@ -128,25 +128,6 @@ def _residual_flops(asm, x):
     return lambda: (np.matmul(asm._B2, ue), np.matmul(P, asm._B2))
 
 
-class _CountResiduals:
-    """Counts the residual evaluations (``constitutive.total_stress`` passes) while active."""
-
-    def __enter__(self):
-        from tissuemech.fem import constitutive as cm
-
-        self.n, self._cm, self._orig = 0, cm, cm.total_stress
-
-        def total_stress(*a, **k):
-            self.n += 1
-            return self._orig(*a, **k)
-
-        cm.total_stress = total_stress
-        return self
-
-    def __exit__(self, *exc):
-        self._cm.total_stress = self._orig
-
-
 def per_iteration(repeats: int) -> None:
     print("\n## Per Newton iteration vs the practical floor (median of interleaved repeats)")
     print("floor = fastest bare factorisation of the same reduced tangent + element matmuls B^T A B")
@@ -164,7 +145,7 @@ def per_iteration(repeats: int) -> None:
     its, lus, nres = {}, {}, {}
     for _ in range(repeats):
         for name, (run, K, asm, x, mat) in cases.items():
-            with _CountLU() as count, _CountResiduals() as count_r:
+            with _count_lu() as count, _count_residuals() as count_r:
                 t = time.perf_counter()
                 res = run()
                 wall = time.perf_counter() - t
@@ -332,22 +313,37 @@ def _slope(d, t) -> float:
     return float(np.polyfit(np.log(d), np.log(t), 1)[0])
 
 
-class _CountLU:
-    """Counts the SuperLU factorisations (``scipy.sparse.linalg.splu`` calls) while active: the reported
-    iterations leave out the passes of failed attempts (cut steps, the spheroid's contact-edge search)."""
+class _Count:
+    """Counts the calls of ``module.name`` while active (the attribute is wrapped, then restored)."""
+
+    def __init__(self, module, name: str):
+        self._module, self._name, self.n = module, name, 0
 
     def __enter__(self):
-        self.n, self._orig = 0, spla.splu
+        self._orig = getattr(self._module, self._name)
 
-        def splu(*a, **k):
+        def counted(*a, **k):
             self.n += 1
             return self._orig(*a, **k)
 
-        spla.splu = splu
+        setattr(self._module, self._name, counted)
         return self
 
     def __exit__(self, *exc):
-        spla.splu = self._orig
+        setattr(self._module, self._name, self._orig)
+
+
+def _count_lu() -> _Count:
+    """Counts the SuperLU factorisations (``scipy.sparse.linalg.splu`` calls) while active: the reported
+    iterations leave out the passes of failed attempts (cut steps, the spheroid's contact-edge search)."""
+    return _Count(spla, "splu")
+
+
+def _count_residuals() -> _Count:
+    """Counts the residual evaluations (``constitutive.total_stress`` passes) while active."""
+    from tissuemech.fem import constitutive as cm
+
+    return _Count(cm, "total_stress")
 
 
 def _exponents(label: str, d, cold, warm) -> None:
@@ -376,7 +372,7 @@ def scaling(quick: bool, repeats: int = 2) -> None:
     d, cold, warm = [], [], []
     for m in meshes:
         kw = dict(inner_radius=A, outer_radius=B, C=C, alpha=0.2, pressures=ps, mesh=m)
-        with _CountLU() as lu:
+        with _count_lu() as lu:
             t0 = time.perf_counter()
             r = fb.inflate(**kw)
             w = time.perf_counter() - t0
@@ -399,7 +395,7 @@ def scaling(quick: bool, repeats: int = 2) -> None:
     d, cold, warm = [], [], []
     for lev in [1, 2, 3] + ([] if quick else [4]):
         kw = {**FIG10, "mesh": lev, "static": True, "displacement": 100e-6, "n_static": 5}
-        with _CountLU() as lu:
+        with _count_lu() as lu:
             t0 = time.perf_counter()
             r = fs.compress(**kw)
             w = time.perf_counter() - t0
