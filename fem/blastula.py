@@ -117,7 +117,11 @@ class _Problem(SceneProblem):
         if solve is None or self.keep.n != uf.size or self.keep.age != 0:
             return None
         fp, _ = self.asm._follower_values(self.full(uf), 1.0, self.inner, tangent=False)
-        return getattr(solve, "unrefined", solve)(fp[self.free])
+        try:
+            t = getattr(solve, "unrefined", solve)(fp[self.free])
+        except (np.linalg.LinAlgError, RuntimeError, ValueError):  # a failed solve predicts nothing: the secant does
+            return None
+        return t if np.all(np.isfinite(t)) else None
 
     def admissible(self, uf):
         """:meth:`SceneProblem.admissible` of the free dofs ``uf`` (J > 0 and hoop stretch > 0)."""

@@ -195,3 +195,6 @@ def test_euler_predictor_same_answers_fewer_factorisations(monkeypatch):
     assert prob.keep.age == 0 and prob.load_tangent(1.0, x) is not None
     prob.keep.age = 1  # a later solve that factored nothing: the kept factorisation is older
     assert prob.load_tangent(1.0, x) is None
+    prob.keep.age = 0
+    prob.keep.solve.unrefined = lambda b: np.full_like(b, np.nan)  # a solve gone bad: no slope, not a NaN guess
+    assert prob.load_tangent(1.0, x) is None
