@@ -1,13 +1,14 @@
 r"""Path following: adaptive load control and Riks arc-length (through limit points).
 
-``load_control(solve, loads, x0, *, lam0=0.0, monitor=None, max_cuts=12)``
+``load_control(solve, loads, x0, *, lam0=0.0, monitor=None, max_cuts=12, tangent=None)``
     ``solve(lam, x_guess) -> NewtonResult`` (raises ``NewtonError``). Reaches every requested
     load; a failed step is halved (up to ``max_cuts`` times). The predictor is Euler's,
     x_c + (dx/dlam) dlam, where ``tangent(lam, x) -> dx/dlam or None`` is given and has a slope at the
-    converged state, else the secant of the last two converged states (``scale``/``unit`` only
-    format messages). Returns a list of ``LoadStep(load, solution, wall_time)``, one per
-    requested load. If it fails where the load-response curve flattens (monitor slope below 2 % of the
-    initial one or falling), raises ``LimitPointError`` naming the last converged load.
+    converged state, for a step no longer than the last converged one and not after a cut; else the
+    secant of the last two converged states (``scale``/``unit`` only format messages). Returns a list
+    of ``LoadStep(load, solution, wall_time)``, one per requested load. If it fails where the
+    load-response curve flattens (monitor slope below 2 % of the initial one or falling), raises
+    ``LimitPointError`` naming the last converged load.
 
 ``arc_length(fun, x0, lam0, ds, *, stop, ...)``
     Riks: unknowns (x, lam), ``fun(x, lam) -> (r, K, r_lam)`` with r_lam = dr/dlam; hyperplane
@@ -88,8 +89,17 @@ def load_control(
         cuts = 0
         while lam_c < target - 1e-14 * max(1.0, abs(target)):
             lam_t = min(target, lam_c + dlam)
-            t_c = tangent(lam_c, x_c) if tangent is not None and lam_c != lam0 else None
-            if t_c is not None:  # Euler: the slope dx/dlam at the converged state
+            # Euler (the slope dx/dlam at the converged state) for a step no longer than the last converged one and
+            # none after a cut (where its guesses, admissible but far, cost a whole failed Newton run: the secant's
+            # overshoot is refused at once)
+            euler = (
+                tangent is not None
+                and cuts == 0
+                and x_old is not None
+                and 0 < lam_t - lam_c <= (lam_c - lam_old) * (1 + 1e-9)
+            )
+            t_c = tangent(lam_c, x_c) if euler else None  # type: ignore[misc]
+            if t_c is not None:
                 guess = x_c + t_c * (lam_t - lam_c)
             elif x_old is not None and lam_c != lam_old:
                 guess = x_c + (x_c - x_old) * (lam_t - lam_c) / (lam_c - lam_old)

@@ -486,7 +486,8 @@ class KeptFactor:
         rate: the residual reduction the first Broyden step of a solve must reach (0 < rate < 1; default 0.25).
     Attributes:
         solve: the kept ``solve(b) -> x`` (None: nothing kept yet); ``n``: its size; ``age``: newton solves begun
-            since it was stored (0: the last solve factored it, e.g. for a predictor's slope).
+            since it was stored (0: the last solve converged and factored it on its way, e.g. for a predictor's
+            slope; a failed solve leaves it >= 1).
         broyden_steps, refused, retried: Broyden steps accepted / phases ended by a step that did not
             contract / solves that failed after Broyden steps and were solved again by Newton alone.
     Raises:
@@ -607,6 +608,7 @@ def newton(
     try:
         return _newton(fun, x0, keep=keep, **opts)
     except NewtonError:
+        keep.age = max(keep.age, 1)  # what a failed solve factored is no tangent of a converged state
         if keep.broyden_steps == steps:
             raise
         # the quasi-Newton steps may have led it astray: Newton alone from x0 (no worse than without keep)

@@ -198,3 +198,14 @@ def test_euler_predictor_same_answers_fewer_factorisations(monkeypatch):
     prob.keep.age = 0
     prob.keep.solve.unrefined = lambda b: np.full_like(b, np.nan)  # a solve gone bad: no slope, not a NaN guess
     assert prob.load_tangent(1.0, x) is None
+    with pytest.raises(fb.NewtonError):  # a failed solve (that factored on its way) leaves no slope either
+        prob.solve(60.0, x, 1e-10, "test")
+    assert prob.keep.age >= 1 and prob.load_tangent(1.0, x) is None
+    # longer steps than the last one, and sub-steps after a cut, take the secant: big uneven jumps (where the
+    # Euler guess is admissible but far and costs a whole failed Newton run) go as before
+    kw["pressures"] = [200.0, 500.0, 1000.0]
+    jumps = inflate(**kw)
+    with monkeypatch.context() as m:
+        m.setattr(fb._Problem, "load_tangent", lambda self, lam, uf: None)
+        jumps_secant = inflate(**kw)
+    assert np.sum(jumps.newton_iterations) == np.sum(jumps_secant.newton_iterations)

@@ -17,7 +17,9 @@ def section(*, quick: bool = False) -> Section:
         charts.accuracy_chart(
             df,
             title="Blastula (alpha = 0.2, B = 75 um, p = 200/500/1000 Pa): error vs exact",
-            note="FE labels: n_radial x n_circ Q2/P1 elements (kappa = 2.2 GPa); diffrax labels: Dopri8 relative "
+            note="FE labels: n_radial x n_circ Q2/P1 elements (kappa = 2.2 GPa: the FE converges to the slightly "
+            "compressible shell, ~2e-5 in this error (~5e-6 in stretch) from the incompressible exact one, so its error "
+            "stops falling there; 4x8 lies below by a cancellation of the two errors); diffrax labels: Dopri8 relative "
             "tolerance; reduced paths jitted, timed after compile (compile time: 'first call [s]' in the table).",
         ),
         "accuracy_blastula.png",
