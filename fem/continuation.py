@@ -98,7 +98,7 @@ def load_control(
                 and x_old is not None
                 and 0 < lam_t - lam_c <= (lam_c - lam_old) * (1 + 1e-9)
             )
-            t_c = tangent(lam_c, x_c) if euler else None  # type: ignore[misc]
+            t_c = tangent(lam_c, x_c) if euler and tangent is not None else None
             if t_c is not None:
                 guess = x_c + t_c * (lam_t - lam_c)
             elif x_old is not None and lam_c != lam_old:
