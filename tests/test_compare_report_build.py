@@ -130,3 +130,26 @@ def test_spheroid_numbers(quick_report):
     assert comp[comp.converged].fraction.max() >= 0.3
     failed = comp[~comp.converged]
     assert failed.failure.notna().all() and (failed.fraction > 0.3).all()
+
+
+def test_accuracy_chart_keeps_every_label_inside_the_axes():
+    """The stacked labels of an accuracy chart may sit above the highest point (four FE meshes near one error):
+    the y-range takes them in, so no label runs into the title or out of the figure."""
+    from tissuemech.compare.plots import charts, pyplot
+
+    df = pd.DataFrame(
+        dict(
+            method=["FE"] * 6 + ["reduced"],
+            setting=[f"mesh {n}x{2 * n}" for n in (2, 4, 8, 16, 24, 32)] + ["quadrature"],
+            error=[1.2e-4, 1.1e-4, 1.05e-4, 1e-4, 1e-4, 1e-4, 3e-15],
+            pareto=[False] * 6 + [True],
+        )
+    )
+    df["wall_time [s]"] = [0.07, 0.06, 0.2, 1.0, 3.0, 6.0, 6e-5]
+    fig = charts.accuracy_chart(df, title="t")
+    ax = fig.axes[0]
+    lo, hi = ax.get_ylim()
+    ys = [a.xyann[1] for a in ax.texts if hasattr(a, "xyann")]
+    assert len(ys) == 7 and max(ys) > 1.2e-4 * 10  # the six FE labels stack above their points
+    assert all(lo <= y <= hi for y in ys)
+    pyplot().close(fig)

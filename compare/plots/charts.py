@@ -90,6 +90,9 @@ def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16, note: 
     ax.set_yscale("log")
     xmin, xmax = d["wall_time [s]"].min(), d["wall_time [s]"].max()
     ax.set_xlim(xmin / 3, xmax * 150)  # room for the labels right of the slowest points
+    if len(ly):  # the stacked labels may sit above / below every point: keep them inside the axes
+        ys = np.concatenate([d.err_plot.to_numpy(float), ly])
+        ax.set_ylim(ys.min() / 3, ys.max() * 3)
     ax.set_xlabel("wall time per solve (s): median of repeated calls after a warm-up; bars: min..max")
     ax.set_ylabel("relative error")
     ax.set_title(title, fontsize=10)
