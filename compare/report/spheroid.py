@@ -302,7 +302,8 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
         f"an equilibrium table from one static FE run on the reference mesh ({calib_wall:.1f} s, not counted "
         "in its wall time), so its error measures the lumped-relaxation assumption alone; 'shipped FE table' "
         "uses the package's master curves (reduced/data: static runs on level 3, checked against level 4, and "
-        "interpolated in x and alpha) when present.",
+        "interpolated in x and alpha) when present. The coarsest level, where it is run, is outside the asymptotic "
+        "range of the three the reference comes from: its error need not exceed the next level's.",
         "",
         md_table(df.drop(columns=["reference"], errors="ignore")),
         "",
