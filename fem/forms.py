@@ -137,7 +137,7 @@ class Assembler:
         nb = b.Nbfun
         N = np.array([np.asarray(b.basis[i][0]) for i in range(nb)])  # (nb, ne, nq)
         dN = np.array([b.basis[i][0].grad for i in range(nb)])  # (nb, 2, ne, nq)
-        xq = np.asarray(b.global_coordinates())  # (2, ne, nq)
+        xq = mesh.quadrature_points  # (2, ne, nq)
         self.R = xq[0]
         self.w = 2 * np.pi * self.R * b.dx  # (ne, nq)
         self.B = b_matrix(N, dN, self.R)  # (ne, nq, 5, 2nb)

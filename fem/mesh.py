@@ -45,6 +45,15 @@ class AxiMesh:
     length_scale: float
     nodes: dict = field(default_factory=dict)
     edges: dict = field(default_factory=dict)
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)  # derived data (e.g. search trees)
+
+    @property
+    def quadrature_points(self) -> np.ndarray:
+        """Reference coordinates (R, Z) of the quadrature points (2, n_elements, n_points), dimensionless
+        (computed once per mesh)."""
+        if "quadrature_points" not in self._cache:
+            self._cache["quadrature_points"] = np.asarray(self.basis.mapping.F(self.basis.X))
+        return self._cache["quadrature_points"]
 
     @property
     def X(self) -> np.ndarray:

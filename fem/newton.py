@@ -224,6 +224,13 @@ def sparse_solve(K: sp.spmatrix, b: np.ndarray) -> np.ndarray:
 
 ORDERINGS = ("mmd", "supervariable")
 
+# The relative linear residual |b - K x| <= NEWTON_STEP_RTOL |b| a Newton step's solve is refined to (the
+# forcing term of an inexact Newton method: the next nonlinear residual is ~1e-6 of this one's plus the
+# quadratic term, so the iteration converges as with an exact solve, to the same tolerances); ``solve``
+# itself refines to 1e-13. The unpivoted symmetric factorisation leaves 1e-10 - 1e-5 before refinement, so a
+# step saves one or two refinement sweeps (a solve and a matvec each): issue 14.
+NEWTON_STEP_RTOL = 1e-6
+
 
 def _mmd(K) -> np.ndarray:
     """p such that K[p][:, p] has SuperLU's minimum-degree ordering of K + K^T (pattern only: a regular
@@ -455,20 +462,21 @@ def symmetric_factor(
             plan.ldl = None
         return pivoted
 
-    def solve(b: np.ndarray) -> np.ndarray:
+    def solve(b: np.ndarray, tol: float = rtol) -> np.ndarray:
         b = np.asarray(b, dtype=float)
         nb = np.linalg.norm(b)
         x = None
         try:
             x = solve_p(b)
-            x, rn = _refine(K, b, x, solve_p, refine, rtol)
+            x, rn = _refine(K, b, x, solve_p, refine, tol)
         except (RuntimeError, ValueError):
             x = None
-        if x is None or not (np.all(np.isfinite(x)) and rn <= 1e-8 * max(float(nb), 1e-300)):
+        if x is None or not (np.all(np.isfinite(x)) and rn <= max(tol, 1e-8) * max(float(nb), 1e-300)):
             return pivoted(b)
         return x
 
     solve.unrefined = solve_p  # type: ignore[attr-defined]  # a fixed linear map (quasi-Newton's H0)
+    solve.inexact = lambda b: solve(b, NEWTON_STEP_RTOL)  # type: ignore[attr-defined]  # a Newton step's accuracy
     return solve
 
 
@@ -567,7 +575,7 @@ def _chord_step(fun, x, r, free, solve, admissible, rn0: float, tol: float, max_
     inadmissible or its residual is not finite or no longer within max(10 |r0|, tol) (newton then takes a
     full iteration instead)."""
     try:
-        dx = solve(-r[free])
+        dx = getattr(solve, "inexact", solve)(-r[free])
     except (np.linalg.LinAlgError, ValueError):
         return None
     if not float(np.linalg.norm(dx)) <= max_dx:
@@ -678,7 +686,7 @@ def _newton(fun, x0, *, free, ref_norm, rtol, xtol, max_iter, admissible, load, 
                 kept = factor(Kf)
                 if keep is not None:
                     keep.store(kept, free.size)
-                dx = kept(-r[free])
+                dx = getattr(kept, "inexact", kept)(-r[free])
             else:
                 dx = (solver or sparse_solve)(Kf, -r[free])
         except np.linalg.LinAlgError:

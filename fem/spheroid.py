@@ -545,48 +545,73 @@ def _local_coordinates(xe: np.ndarray, ref: np.ndarray, x: np.ndarray, iters: in
     return X
 
 
+def _search_trees(m: AxiMesh):
+    """(tree of the quadrature points, tree of the element centres) of a mesh, built once per mesh (a step's old
+    mesh sends its history to every fitted mesh the edge search tries)."""
+    from scipy.spatial import cKDTree
+
+    if "search_trees" not in m._cache:
+        xe = m.basis.doflocs[:, m.basis.element_dofs]
+        m._cache["search_trees"] = (cKDTree(m.quadrature_points.reshape(2, -1).T), cKDTree(xe.mean(axis=1).T))
+    return m._cache["search_trees"]
+
+
 def _gauss_transfer(old: AxiMesh, new: AxiMesh) -> Callable[[np.ndarray], np.ndarray]:
     """Map Gauss-point fields (..., n_el, n_qp, c) of ``old`` to the Gauss points of ``new`` (same quadrature)
     by interpolation in the reference configuration: each new Gauss point is located in the old mesh (the
-    element of the same index first, else the nearest elements), and the old element's field is evaluated
-    there from its tensor-product quadratic through the element's 3 x 3 Gauss values (exact for fields
-    quadratic in the element's reference coordinates; slightly extrapolated for a point just outside the old
-    discretised boundary)."""
-    from scipy.spatial import cKDTree
-
+    element of the nearest old Gauss point first, then those of the next nearest Gauss points and element
+    centres), and the old element's field is evaluated there from its
+    tensor-product quadratic through the element's 3 x 3 Gauss values (exact for fields quadratic in the
+    element's reference coordinates; slightly extrapolated for a point just outside the old discretised
+    boundary)."""
     bo, bn = old.basis, new.basis
-    xq = np.asarray(bn.mapping.F(bn.X))  # (2, n_el, n_qp)
+    xq = new.quadrature_points  # (2, n_el, n_qp)
     ne, nq = xq.shape[1:]
     pts = xq.reshape(2, -1)
-    n = pts.shape[1]
     ref = np.asarray(bo.elem.doflocs, float).T  # (2, 9): the Q2 nodes in [0, 1]^2 (isoparametric geometry)
     xe = bo.doflocs[:, bo.element_dofs]  # (2, 9, n_el)
-    own = np.repeat(np.arange(ne), nq)
-    # (10 Newton steps: a point inside its old element converges in ~5 from its own reference coordinates;
-    # one that does not has left the element and is looked for in the nearest ones below)
-    loc = _local_coordinates(xe[:, :, own], ref, pts, iters=10, start=np.tile(np.asarray(bn.X, float), (1, ne)))
-    excess = np.max(np.maximum(np.maximum(-loc, loc - 1.0), 0.0), axis=0)
-    elem = own.copy()
+    G_ref = np.tile(np.asarray(bn.X, float), (1, ne))  # the reference coordinates of every Gauss point (2, n)
+    excess_of = lambda lc: np.max(np.maximum(np.maximum(-lc, lc - 1.0), 0.0), axis=0)
+    points, centres = _search_trees(old)
+    # first the element of the nearest old Gauss point, from that point's reference coordinates (10 Newton
+    # steps: a point inside converges in ~5, in one where the meshes coincide; most points that move are found
+    # there too, issue 14); the others are looked for below
+    _, near = points.query(pts.T)
+    elem = near // nq
+    loc = _local_coordinates(xe[:, :, elem], ref, pts, iters=10, start=G_ref[:, near])
+    excess = excess_of(loc)
     out = np.flatnonzero(excess > 1e-10)
-    if out.size:
-        _, cand = cKDTree(xe.mean(axis=1).T).query(pts[:, out].T, k=min(8, ne))
+
+    def take(out, cand, lc):
+        """Candidates (m, k) with local coordinates lc (2, m, k), in order: the first that contains the point
+        wins, else the least excess (a point-by-point search's choice)."""
+        ex = excess_of(lc.reshape(2, -1)).reshape(cand.shape)
         best = excess[out].copy()
         for j in range(cand.shape[1]):
-            todo = np.flatnonzero(best > 1e-10)  # points not yet inside an element
-            if not todo.size:
-                break
-            c = cand[todo, j]
-            lc = _local_coordinates(xe[:, :, c], ref, pts[:, out[todo]], iters=10)
-            ex = np.max(np.maximum(np.maximum(-lc, lc - 1.0), 0.0), axis=0)
-            better = ex < best[todo] - 1e-14
-            k = todo[better]
-            best[k], elem[out[k]], loc[:, out[k]] = ex[better], c[better], lc[:, better]
+            better = (best > 1e-10) & (ex[:, j] < best - 1e-14)
+            k = out[better]
+            best[better], elem[k], loc[:, k] = ex[better, j], cand[better, j], lc[:, better, j]
+        excess[out] = best
+
+    if out.size:
+        # the rest (near strongly graded elements, or just outside the old discretised boundary): the elements of
+        # the 16 nearest old Gauss points (from their reference coordinates) and of the 8 nearest element centres
+        # (from the centre), in one pass
+        _, near = points.query(pts[:, out].T, k=min(16, ne * nq))
+        _, cen = centres.query(pts[:, out].T, k=min(8, ne))
+        cand = np.concatenate([near // nq, cen.reshape(out.size, -1)], axis=1)
+        start = np.concatenate([G_ref[:, near], np.full((2, out.size, cand.shape[1] - near.shape[1]), 0.5)], axis=2)
+        nc = cand.shape[1]
+        lc = _local_coordinates(
+            xe[:, :, cand.ravel()], ref, np.repeat(pts[:, out], nc, axis=1), iters=10, start=start.reshape(2, -1)
+        )
+        take(out, cand, lc.reshape(2, out.size, nc))
     G = np.asarray(bo.X)  # (2, n_qp) in [0, 1]^2
     powers = [(i, j) for i in range(3) for j in range(3)]
     V = np.stack([G[0] ** i * G[1] ** j for i, j in powers], axis=1)  # (n_qp, 9)
     P = np.stack([loc[0] ** i * loc[1] ** j for i, j in powers], axis=1)  # (n, 9)
     L = P @ np.linalg.inv(V)  # (n, n_qp): weights of the old element's Gauss values
-    assert L.shape == (n, nq)
+    assert L.shape == (pts.shape[1], nq)
 
     def transfer(f: np.ndarray) -> np.ndarray:
         g = f[..., elem, :, :]  # (..., n, n_qp, c)
