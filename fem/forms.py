@@ -190,8 +190,19 @@ class Assembler:
         """Isochoric 2nd Piola-Kirchhoff stress at the points (ne, nq, 5) (for viscoelastic updates)."""
         return cm.iso_second_piola(self.f_at(u), mat.C, mat.alpha)
 
-    def stress(self, u: np.ndarray, mat: Material, extra_S=None, iso_scale: float = 1.0):
-        """(f, P, A, q): total first Piola stress and tangent at the points, q the volumetric field."""
+    def stress(self, u: np.ndarray, mat: Material, extra_S=None, iso_scale: float = 1.0, tangent: bool = True):
+        """(f, P, A, q): total first Piola stress and tangent at the points, q the volumetric field (the mean
+        Cauchy stress of the mixed form, or kappa (J - 1)). ``tangent=False``: A is None, P from the fused
+        kernel ``constitutive.total_stress`` (the same numbers to round-off, no 5 x 5 tangent per point)."""
+        if not tangent:
+            f, q = self._fields(u)
+            if q is None:
+                q_out = mat.kappa * (invariants(f)[1] - 1.0)
+            P, _, _ = cm.total_stress(
+                f, mat.C, mat.alpha, q=q, kappa=None if q is not None else mat.kappa, iso_scale=iso_scale,
+                extra_S=extra_S, tangent=False,
+            )  # fmt: skip
+            return f, P, None, (q if q is not None else q_out)
         f = self.f_at(u)
         P, A = cm.iso_stress(f, mat.C, mat.alpha)
         if iso_scale != 1.0:

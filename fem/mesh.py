@@ -27,6 +27,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 import skfem
@@ -246,6 +247,9 @@ def ball_section(
     block((1 - v)[None, :, None] * inner[:, None] + v[None, :, None] * outer[:, None])
 
     P = np.concatenate(pts)
+    key = (n_core, n_radial, n_eq, order, intorder, float(split_angle))
+    if key in _BALL_TOPOLOGY:  # the same divisions: only the node positions change (fitted meshes, issue 14)
+        return _moved_ball(_BALL_TOPOLOGY[key], P, radius)
     Q = np.concatenate(quads)
     # merge the blocks' shared points: each point maps to the first point within 1e-10 of it (a distance,
     # not a rounding of the coordinates: two copies 1e-16 apart that straddle a rounding boundary stayed
@@ -287,4 +291,48 @@ def ball_section(
         "symmetry": lambda P: np.abs(P[1]) < tol,
         "outer": lambda P: np.abs(np.hypot(P[0], P[1]) - 1.0) < 1e-9,
     }
-    return _finish(m1, order, mapper, radius, tags, intorder)
+    out = _finish(m1, order, mapper, radius, tags, intorder)
+    if order == 2:
+        _BALL_TOPOLOGY[key] = _BallTopology(first, mids, m1.facets, m1.t2f, m1.t, out, intorder or 2 * order + 2)
+        while len(_BALL_TOPOLOGY) > 8:
+            _BALL_TOPOLOGY.pop(next(iter(_BALL_TOPOLOGY)))
+    return out
+
+
+class _BallTopology(NamedTuple):
+    """What a quadratic ball_section mesh keeps from its divisions alone (its node numbering does not depend on
+    the node positions): the merge of the blocks' points (``first``), the dofs of the surface facet midpoints,
+    the facets, the element-to-facet map and vertex connectivity of the Q1 mesh, and the first mesh built (its
+    skfem mesh's connectivity, tags and edges)."""
+
+    first: np.ndarray
+    arc_mids: np.ndarray
+    facets: np.ndarray
+    t2f: np.ndarray
+    t: np.ndarray
+    mesh: AxiMesh
+    intorder: int
+
+
+_BALL_TOPOLOGY: dict[tuple, _BallTopology] = {}  # (divisions, order, intorder, split) -> topology, last 8
+
+
+def _moved_ball(topo: _BallTopology, P: np.ndarray, radius: float) -> AxiMesh:
+    """The quadratic ball_section mesh of the block points P (before merging) on a known topology: the node
+    positions of ``ball_section``'s construction (facet midpoints, surface midpoints on the arc, blended
+    element centres) without rebuilding the connectivity and tags (issue 14: fitted meshes)."""
+    p = P[topo.first].T  # (2, n_vertices)
+    nv, nf, ne = p.shape[1], topo.facets.shape[1], topo.t.shape[1]
+    dl = np.empty((2, nv + nf + ne))
+    dl[:, :nv] = p
+    dl[:, nv : nv + nf] = 0.5 * (p[:, topo.facets[0]] + p[:, topo.facets[1]])
+    dl[:, nv + nf :] = 0.25 * p[:, topo.t].sum(axis=1)
+    mids = topo.arc_mids
+    dl[:, mids] /= np.hypot(dl[0, mids], dl[1, mids])
+    dl[:, nv + nf :] = 0.5 * dl[:, nv + topo.t2f].sum(axis=1) - 0.25 * p[:, topo.t].sum(axis=1)
+    t = topo.mesh
+    m = skfem.MeshQuad2(dl, t.mesh.t)
+    basis = skfem.CellBasis(m, skfem.ElementQuad2(), intorder=topo.intorder)
+    nodes = {k: v.copy() for k, v in t.nodes.items()}
+    edges = {k: v.copy() for k, v in t.edges.items()}
+    return AxiMesh(m, basis, t.order, float(radius), nodes, edges)

@@ -159,7 +159,7 @@ class SceneProblem:
         """(f, von Mises, q) at the quadrature points of state x (scaled by C): f the 5-component
         deformation gradient, von Mises of the Cauchy stress sigma = P F^T / J, q the mean Cauchy stress
         (the mixed field; the hydrostatic pressure is -q), with the step's branch stresses."""
-        f, P, _, q = self.asm.stress(x, self.mat, extra_S, iso_scale)
+        f, P, _, q = self.asm.stress(x, self.mat, extra_S, iso_scale, tangent=False)
         return f, cm.von_mises(cm.cauchy(f, P)), q
 
     def element_mean(self, values: np.ndarray) -> np.ndarray:

@@ -82,6 +82,24 @@ def test_total_stress_lazy_tangent_is_the_eager_one_bitwise():
         assert cm.total_stress(f, 1.3, 0.3, weight=w, tangent=False, **kw)[1] is None
 
 
+def test_assembler_stress_without_tangent_is_the_stress_with_it():
+    """``Assembler.stress(..., tangent=False)`` (the fused kernel, no 5 x 5 tangent; what the output fields use)
+    gives the P and q of the separate iso + volumetric + extra-stress path to round-off, mixed and penalty."""
+    from tissuemech.fem.forms import Assembler, Material
+    from tissuemech.fem.mesh import shell_section
+
+    S0 = 0.1 * RNG.standard_normal((32, 9, 5))
+    for form in ("mixed", "displacement"):
+        asm = Assembler(shell_section(50e-6, 75e-6, 4, 8, intorder=4), form)
+        u = 0.003 * RNG.standard_normal(asm.ndof)
+        for extra, scale in ((None, 1.0), (S0, 1.3)):
+            f, P, A, q = asm.stress(u, Material(1.0, 0.2, 100.0), extra, scale)
+            f2, P2, A2, q2 = asm.stress(u, Material(1.0, 0.2, 100.0), extra, scale, tangent=False)
+            assert A2 is None and A.shape == P.shape + (5,) and np.array_equal(f, f2)
+            assert np.abs(P2 - P).max() <= 1e-13 * np.abs(P).max()
+            assert np.abs(q2 - q).max() <= 1e-13 * max(np.abs(q).max(), 1.0)
+
+
 def test_neo_hookean_exact_and_stress_free_reference():
     f = IDENTITY5 + 0.1 * RNG.standard_normal((3, 5))
     I1, J = invariants(f)
@@ -270,6 +288,29 @@ def test_ball_section_gauss_rule_degree():
     for bad in (-1, 0, 3, 2.5, "4", True):
         with pytest.raises(ValueError, match="intorder"):
             ball_section(500e-6, 4, 3, intorder=bad)
+
+
+def test_ball_section_on_a_known_topology_is_the_full_construction():
+    """A second ball_section with the same divisions only moves the nodes (issue 14: fitted meshes): the same
+    node positions bit for bit, element dofs, quadrature weights, tags and edges as building it from scratch."""
+    from tissuemech.fem import mesh as fm
+
+    rng = np.random.default_rng(7)
+    for n_core, n_radial in ((4, 3), (6, 5)):
+        for _ in range(2):
+            pole = np.r_[0.0, np.sort(rng.uniform(0.05, 0.95, n_core - 1)), 1.0]
+            radial = np.r_[0.0, np.sort(rng.uniform(0.05, 0.95, n_radial - 1)), 1.0]
+            kw = dict(pole_points=pole, radial_points=radial, split_angle=0.96, intorder=4)
+            fm._BALL_TOPOLOGY.clear()
+            full = ball_section(500e-6, n_core, n_radial, **kw)
+            ball_section(500e-6, n_core, n_radial, split_angle=0.96, intorder=4)  # the topology, other nodes
+            moved = ball_section(500e-6, n_core, n_radial, **kw)
+            assert moved.mesh is not full.mesh and np.array_equal(moved.X, full.X)
+            assert np.array_equal(moved.basis.element_dofs, full.basis.element_dofs)
+            assert np.array_equal(moved.basis.dx, full.basis.dx) and moved.length_scale == full.length_scale
+            for tags in ("nodes", "edges"):
+                a, b = getattr(moved, tags), getattr(full, tags)
+                assert a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
 
 
 def test_solver_backends_and_submatrix_cache():
