@@ -157,7 +157,7 @@ class Assembler:
         self.ndof = self.n_u + (3 * ne if formulation == "mixed" else 0)
         self.alldofs = alld
         self._pattern = _element_pattern(alld, self.ndof)
-        self._alld_flat = np.ascontiguousarray(alld.ravel())
+        self._edofs_flat = np.ascontiguousarray(self.edofs.ravel())
         self._B2 = np.ascontiguousarray(self.B.reshape(ne, -1, self.B.shape[-1]))  # (ne, nq * 5, nd)
         if formulation == "mixed":
             self._psiT = np.ascontiguousarray(self.psi.transpose(0, 2, 1))
@@ -254,11 +254,12 @@ class Assembler:
         """Global internal residual (ndof,) from the weighted stress P and J at the points."""
         ne, nq = self.w.shape
         re = np.matmul(P.reshape(ne, 1, nq * 5), self._B2)[:, 0]
-        if self.formulation == "mixed":
+        r = np.bincount(self._edofs_flat, weights=re.ravel(), minlength=self.ndof)
+        if self.formulation == "mixed":  # the q-dofs of element e are n_u + 3 e + (0, 1, 2): no sum needed
             rq = np.matmul(self._psiT, ((J - 1.0) * self.w)[:, :, None])[..., 0]
             rq -= np.matmul(self.M, u[self.qdofs][:, :, None])[..., 0] / mat.kappa
-            re = np.concatenate([re, rq], axis=1)
-        return np.bincount(self._alld_flat, weights=re.ravel(), minlength=self.ndof)
+            r[self.n_u :] = rq.ravel()
+        return r
 
     def _tangent_values(self, f: np.ndarray, A: np.ndarray, mat: Material) -> np.ndarray:
         """Element tangent blocks (ne, nd', nd') in ``alldofs`` order from the weighted A at the points."""
@@ -416,13 +417,15 @@ class Assembler:
     def surface_mean_stretch(self, u: np.ndarray, edges: np.ndarray) -> float:
         """Mean of |x|/|X| over a reference surface (area weights 2 pi R ds): a spherical stretch."""
         Nl, dNl, wq, dofs, _ = self._edge(edges)
-        X = self.mesh.X[:, edges]
-        x = X + np.stack([u[dofs[..., 0]], u[dofs[..., 1]]])
-        Xq, xq = np.einsum("aq,iea->ieq", Nl, X), np.einsum("aq,iea->ieq", Nl, x)
-        ds = np.hypot(*np.einsum("aq,iea->ieq", dNl, X))
-        w = Xq[0] * ds * wq
-        lam = np.hypot(*xq) / np.hypot(*Xq)
-        return float(np.sum(lam * w) / np.sum(w))
+        key = ("stretch", edges.tobytes(), edges.shape)
+        if key not in self._edge_cache:  # the reference surface: |X| and the area weights at the points
+            X = self.mesh.X[:, edges]
+            Xq = np.einsum("aq,iea->ieq", Nl, X)
+            w = Xq[0] * np.hypot(*np.einsum("aq,iea->ieq", dNl, X)) * wq
+            self._edge_cache[key] = (X, np.hypot(*Xq), w / np.sum(w))
+        X, Xn, w = self._edge_cache[key]
+        xq = np.einsum("aq,iea->ieq", Nl, X + u[dofs].transpose(2, 0, 1))
+        return float(np.sum(np.hypot(xq[0], xq[1]) / Xn * w))
 
     def volume(self, u: np.ndarray | None = None) -> float:
         """Reference (u None) or deformed volume of the section's solid of revolution."""
