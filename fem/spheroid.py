@@ -338,7 +338,7 @@ class _EdgeFit:
                     xtol=1e-9,
                     atol=prob.floor,
                     admissible=prob.admissible,
-                    max_iter=25,
+                    max_iter=AFFINE_MAX_ITER if g is affine else 25,
                     factor=symmetric_factor,
                     keep=self.keep,
                 )
@@ -413,6 +413,12 @@ class _EdgeFit:
             load=load,
             hint="the approach may be beyond the meshable range; use a ball_section mesh",
         )
+
+
+# Newton iterations allowed from the uniform-squeeze guess (the first contact): where it converges it takes 5-8
+# (levels 0-3, the static curves and Fig. 10 runs); on level 4 the first static step (20 um) wandered for 25
+# iterations and factorisations (~4 s) before the step was cut, which converged in 8 (issue 14)
+AFFINE_MAX_ITER = 12
 
 
 def _edge_guess(ds: list, es: list, d: float) -> float:
