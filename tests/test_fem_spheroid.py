@@ -281,6 +281,30 @@ def test_fitted_static_curve_is_smooth_and_signorini():
     assert 0.9 < r.contact_radius[0] / np.sqrt(A0 * r.approach[0] / 2) < 1.2
 
 
+def test_first_contact_gives_up_early_and_the_cut_step_gives_the_same_curve(monkeypatch):
+    """The first-contact solve from the uniform squeeze has AFFINE_MAX_ITER Newton iterations (issue 14: on level 4 a
+    wandering first step had cost 25 factorisations before the step was cut); with a limit the full first step does
+    not meet (5; it takes 6 here) the step is cut and the static curve is the same to the contact-edge tolerance."""
+    from tissuemech.fem import spheroid as fs
+
+    limits = []
+    newton = fs.newton
+
+    def recording(*a, **k):
+        limits.append(k["max_iter"])
+        return newton(*a, **k)
+
+    monkeypatch.setattr(fs, "newton", recording)
+    ref = _static(0.2, "coarse", n=2)
+    assert fs.AFFINE_MAX_ITER == 12 and limits[0] == 12 and set(limits) == {12, 25}
+    monkeypatch.setattr(fs, "AFFINE_MAX_ITER", 5)
+    limits.clear()
+    cut = _static(0.2, "coarse", n=2)
+    assert limits[:2] == [5, 5]  # the full first step failed; the cut one converged from the squeeze again
+    assert cut.newton_iterations[0] > ref.newton_iterations[0]
+    assert np.max(np.abs(cut.force / ref.force - 1)) < 1e-6
+
+
 def test_fitted_mesh_topology_is_fixed_and_edge_node_on_target():
     from tissuemech.fem.spheroid import LEVELS, SPLIT, fitted_mesh
 
