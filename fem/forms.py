@@ -196,13 +196,10 @@ class Assembler:
         kernel ``constitutive.total_stress`` (the same numbers to round-off, no 5 x 5 tangent per point)."""
         if not tangent:
             f, q = self._fields(u)
-            if q is None:
-                q_out = mat.kappa * (invariants(f)[1] - 1.0)
-            P, _, _ = cm.total_stress(
-                f, mat.C, mat.alpha, q=q, kappa=None if q is not None else mat.kappa, iso_scale=iso_scale,
-                extra_S=extra_S, tangent=False,
-            )  # fmt: skip
-            return f, P, None, (q if q is not None else q_out)
+            kappa = None if q is not None else mat.kappa
+            P, _, J = cm.total_stress(f, mat.C, mat.alpha, q=q, kappa=kappa, iso_scale=iso_scale, extra_S=extra_S,
+                                      tangent=False)  # fmt: skip
+            return f, P, None, (q if q is not None else mat.kappa * (J - 1.0))
         f = self.f_at(u)
         P, A = cm.iso_stress(f, mat.C, mat.alpha)
         if iso_scale != 1.0:

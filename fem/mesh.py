@@ -326,7 +326,6 @@ def _moved_ball(topo: _BallTopology, P: np.ndarray, radius: float) -> AxiMesh:
     dl = np.empty((2, nv + nf + ne))
     dl[:, :nv] = p
     dl[:, nv : nv + nf] = 0.5 * (p[:, topo.facets[0]] + p[:, topo.facets[1]])
-    dl[:, nv + nf :] = 0.25 * p[:, topo.t].sum(axis=1)
     mids = topo.arc_mids
     dl[:, mids] /= np.hypot(dl[0, mids], dl[1, mids])
     dl[:, nv + nf :] = 0.5 * dl[:, nv + topo.t2f].sum(axis=1) - 0.25 * p[:, topo.t].sum(axis=1)

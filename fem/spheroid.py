@@ -566,10 +566,9 @@ def _gauss_transfer(old: AxiMesh, new: AxiMesh) -> Callable[[np.ndarray], np.nda
     """Map Gauss-point fields (..., n_el, n_qp, c) of ``old`` to the Gauss points of ``new`` (same quadrature)
     by interpolation in the reference configuration: each new Gauss point is located in the old mesh (the
     element of the nearest old Gauss point first, then those of the next nearest Gauss points and element
-    centres), and the old element's field is evaluated there from its
-    tensor-product quadratic through the element's 3 x 3 Gauss values (exact for fields quadratic in the
-    element's reference coordinates; slightly extrapolated for a point just outside the old discretised
-    boundary)."""
+    centres), and the old element's field is evaluated there from its tensor-product quadratic through the
+    element's 3 x 3 Gauss values (exact for fields quadratic in the element's reference coordinates; slightly
+    extrapolated for a point just outside the old discretised boundary)."""
     bo, bn = old.basis, new.basis
     xq = new.quadrature_points  # (2, n_el, n_qp)
     ne, nq = xq.shape[1:]
@@ -587,22 +586,11 @@ def _gauss_transfer(old: AxiMesh, new: AxiMesh) -> Callable[[np.ndarray], np.nda
     loc = _local_coordinates(xe[:, :, elem], ref, pts, iters=10, start=G_ref[:, near])
     excess = excess_of(loc)
     out = np.flatnonzero(excess > 1e-10)
-
-    def take(out, cand, lc):
-        """Candidates (m, k) with local coordinates lc (2, m, k), in order: the first that contains the point
-        wins, else the least excess (a point-by-point search's choice)."""
-        ex = excess_of(lc.reshape(2, -1)).reshape(cand.shape)
-        best = excess[out].copy()
-        for j in range(cand.shape[1]):
-            better = (best > 1e-10) & (ex[:, j] < best - 1e-14)
-            k = out[better]
-            best[better], elem[k], loc[:, k] = ex[better, j], cand[better, j], lc[:, better, j]
-        excess[out] = best
-
     if out.size:
         # the rest (near strongly graded elements, or just outside the old discretised boundary): the elements of
         # the 16 nearest old Gauss points (from their reference coordinates) and of the 8 nearest element centres
-        # (from the centre), in one pass
+        # (from the centre), in one pass, taken in that order: the first that contains the point wins, else the
+        # least excess (a point-by-point search's choice)
         _, near = points.query(pts[:, out].T, k=min(16, ne * nq))
         _, cen = centres.query(pts[:, out].T, k=min(8, ne))
         cand = np.concatenate([near // nq, cen.reshape(out.size, -1)], axis=1)
@@ -610,8 +598,13 @@ def _gauss_transfer(old: AxiMesh, new: AxiMesh) -> Callable[[np.ndarray], np.nda
         nc = cand.shape[1]
         lc = _local_coordinates(
             xe[:, :, cand.ravel()], ref, np.repeat(pts[:, out], nc, axis=1), iters=10, start=start.reshape(2, -1)
-        )
-        take(out, cand, lc.reshape(2, out.size, nc))
+        ).reshape(2, out.size, nc)
+        ex = excess_of(lc.reshape(2, -1)).reshape(out.size, nc)
+        best = excess[out]
+        for j in range(nc):
+            better = (best > 1e-10) & (ex[:, j] < best - 1e-14)
+            k = out[better]
+            best[better], elem[k], loc[:, k] = ex[better, j], cand[better, j], lc[:, better, j]
     G = np.asarray(bo.X)  # (2, n_qp) in [0, 1]^2
     powers = [(i, j) for i in range(3) for j in range(3)]
     V = np.stack([G[0] ** i * G[1] ** j for i, j in powers], axis=1)  # (n_qp, 9)
