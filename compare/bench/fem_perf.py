@@ -340,10 +340,11 @@ def _count_lu() -> _Count:
 
 
 def _count_residuals() -> _Count:
-    """Counts the residual evaluations (``constitutive.total_stress`` passes) while active."""
-    from tissuemech.fem import constitutive as cm
+    """Counts the residual evaluations (``Assembler._residual``, the B^T P pass of ``internal`` and
+    ``internal_follower``) while active; the output fields' stress passes are not residuals."""
+    from tissuemech.fem.forms import Assembler
 
-    return _Count(cm, "total_stress")
+    return _Count(Assembler, "_residual")
 
 
 def _exponents(label: str, d, cold, warm) -> None:
