@@ -87,10 +87,15 @@ def _spheroid_state(level: int = 1):
 def _factorisations(K):
     """Bare factorisations of K (no solve, no refinement): name -> callable."""
     Kc = sp.csc_matrix(K)
+    p = nw._supervariable_mmd(K)
+    Ksv = sp.csc_matrix(K[p][:, p])
     out = {
         "SuperLU COLAMD": lambda: spla.splu(Kc),
         "SuperLU sym MMD(K+K^T)": lambda: spla.splu(
             Kc, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options=dict(SymmetricMode=True)
+        ),
+        "SuperLU sym supervariable MMD": lambda: spla.splu(
+            Ksv, permc_spec="NATURAL", diag_pivot_thresh=0.0, options=dict(SymmetricMode=True)
         ),
     }
     if "qdldl" in nw.available_backends():
@@ -347,33 +352,65 @@ def _count_residuals() -> _Count:
     return _Count(Assembler, "_residual")
 
 
-def _exponents(label: str, d, cold, warm) -> None:
+def _exponents(label: str, d, cold, warm, floor=None) -> None:
     """Print the fitted wall ~ dofs^k (least squares over all points) and the local exponents between
-    neighbouring meshes, for the cold (first) and warm (min of repeats) runs."""
+    neighbouring meshes, for the cold (first) and warm (min of repeats) runs and (given) their floors."""
     d = np.asarray(d, dtype=float)
-    for name, t in (("cold", cold), ("warm", warm)):
+    series = [("cold", cold), ("warm", warm)] + ([] if floor is None else [("floor", floor)])
+    for name, t in series:
         t = np.asarray(t, dtype=float)
         local = np.diff(np.log(t)) / np.diff(np.log(d))
+        what = "the floor" if name == "floor" else "wall"
         print(
-            f"{label} exponent ({name}, {d.size} meshes, {d.min():.0f}-{d.max():.0f} dofs): wall ~ dofs^"
+            f"{label} exponent ({name}, {d.size} meshes, {d.min():.0f}-{d.max():.0f} dofs): {what} ~ dofs^"
             f"{_slope(d, t):.2f}; between neighbours: " + ", ".join(f"{v:.2f}" for v in local)
         )
+
+
+def _run_floor(state, lu: int, iters: int, res: int) -> tuple[float, str]:
+    """(seconds, best factorisation) of the floor of a run that took ``lu`` factorisations, ``iters``
+    iterations and ``res`` residual evaluations on the mesh of ``state`` = (K, asm, x, mat): LU x (best bare
+    LU + tangent element matmuls) + iters x (bare solve) + res x (residual element matmuls), each timed here
+    (median of 3); the per-iteration section's run floor on any mesh."""
+    K, asm, x, mat = state
+    facs = _factorisations(K)
+    t = {k: _med(f, 3) for k, f in facs.items()}
+    best = min(t, key=t.get)
+    el, rel = _med(_elem_flops(asm, x, mat), 3), _med(_residual_flops(asm, x), 3)
+    sol = _med(_bare_solve(facs[best], K.shape[0]), 3)
+    return lu * (t[best] + el) + iters * sol + res * rel, best
 
 
 def scaling(quick: bool, repeats: int = 2) -> None:
     """Wall time against dofs. Each mesh runs once cold (its setup, sparsity pattern and solver plan are new)
     and then ``repeats`` times warm (min taken: the box is shared, the min is the least disturbed run); the
     exponent is fitted over all fine meshes (>= 1e3 dofs) and given between neighbours too (a two-point fit on
-    a noisy machine moved by +-0.3 between runs: issue 14's third pass)."""
+    a noisy machine moved by +-0.3 between runs: issue 14's third pass). Next to it the same exponents of each
+    run's floor (``_run_floor``: the bare factorisations, solves and element matmuls of the iterations the run
+    took, timed on a tangent of that mesh): how fast any code that factors as often must grow."""
     print("\n## Wall time vs dofs (blastula: 10 equal steps to 1 kPa; spheroid: static curve to 10 %, 5 steps)")
     print("(iterations: those of the accepted states; LU: every SuperLU factorisation, failed attempts included;")
-    print(f" cold: the first run on the mesh; warm: min of {repeats} more)")
+    print(f" res: residual evaluations; cold: the first run on the mesh; warm: min of {repeats} more;")
+    print(" floor: LU x (best bare LU + element matmuls) + iterations x bare solve + res x residual element matmuls,")
+    print(" timed on a tangent of the same mesh; warm/floor: how far above it the run is)")
     meshes = [(4, 8), (8, 16), (16, 32), (24, 48)] + ([] if quick else [(32, 64)])
     ps = np.linspace(100.0, 1000.0, 10)
-    d, cold, warm = [], [], []
+    d, cold, warm, floor = [], [], [], []
+
+    def row(label: str, n: int, w: float, ws: list, its: int, lu: int, res: int, state) -> None:
+        fl, best = _run_floor(state, lu, its, res)
+        d.append(n)
+        cold.append(w)
+        warm.append(min(ws))
+        floor.append(fl)
+        print(
+            f"{label:25s} dofs {n:6d}  cold {w:8.3f} s  warm {min(ws):8.3f} s  {its:4d} iterations  {lu:3d} LU  "
+            f"{res:4d} res  floor {fl:7.3f} s  warm/floor {min(ws) / fl:5.2f}  ({best})"
+        )
+
     for m in meshes:
         kw = dict(inner_radius=A, outer_radius=B, C=C, alpha=0.2, pressures=ps, mesh=m)
-        with _count_lu() as lu:
+        with _count_lu() as lu, _count_residuals() as nres:
             t0 = time.perf_counter()
             r = fb.inflate(**kw)
             w = time.perf_counter() - t0
@@ -382,21 +419,16 @@ def scaling(quick: bool, repeats: int = 2) -> None:
             t0 = time.perf_counter()
             fb.inflate(**kw)
             ws.append(time.perf_counter() - t0)
-        n = fb._setup(A, B, C, 0.2, 2.2e9, m).free.size
-        d.append(n)
-        cold.append(w)
-        warm.append(min(ws))
-        print(
-            f"blastula {str(m):10s} dofs {n:6d}  cold {w:8.3f} s  warm {min(ws):8.3f} s  "
-            f"{int(r.newton_iterations.sum())} iterations  {lu.n} LU"
-        )
+        prob, x, K = _blastula_state(m)
+        state = (K, prob.asm, prob.full(x), prob.mat)
+        row(f"blastula {m}", prob.free.size, w, ws, int(r.newton_iterations.sum()), lu.n, nres.n, state)
     k = np.array(d) >= 1000
     if k.sum() >= 2:
-        _exponents("blastula", np.array(d)[k], np.array(cold)[k], np.array(warm)[k])
-    d, cold, warm = [], [], []
+        _exponents("blastula", np.array(d)[k], np.array(cold)[k], np.array(warm)[k], np.array(floor)[k])
+    d, cold, warm, floor = [], [], [], []
     for lev in [1, 2, 3] + ([] if quick else [4]):
         kw = {**FIG10, "mesh": lev, "static": True, "displacement": 100e-6, "n_static": 5}
-        with _count_lu() as lu:
+        with _count_lu() as lu, _count_residuals() as nres:
             t0 = time.perf_counter()
             r = fs.compress(**kw)
             w = time.perf_counter() - t0
@@ -406,14 +438,10 @@ def scaling(quick: bool, repeats: int = 2) -> None:
             fs.compress(**kw)
             ws.append(time.perf_counter() - t0)
         n = 2 * r.mesh.basis.N + 3 * r.mesh.mesh.nelements
-        d.append(n)
-        cold.append(w)
-        warm.append(min(ws))
-        print(
-            f"spheroid level {lev}  dofs {n:6d}  cold {w:8.3f} s  warm {min(ws):8.3f} s  "
-            f"{int(r.newton_iterations.sum())} iterations  {lu.n} LU"
-        )
-    _exponents("spheroid", d, cold, warm)
+        prob, x, K, _ = _spheroid_state(lev)
+        state = (K, prob.asm, x, prob.mat)
+        row(f"spheroid level {lev}", n, w, ws, int(r.newton_iterations.sum()), lu.n, nres.n, state)
+    _exponents("spheroid", d, cold, warm, floor)
 
 
 SECTIONS = ("per-iteration", "one-pattern", "orderings", "solvers", "scaling")
