@@ -206,7 +206,7 @@ def inflate(
     alpha: float,
     pressures: Sequence[float] | np.ndarray | None,
     kappa: float = 2.2e9,
-    mesh="default",
+    mesh: str | tuple[int, int] | AxiMesh = "default",
     method: str = "load",
     max_inner_stretch: float | None = None,
     rtol: float = 1e-10,
@@ -219,8 +219,11 @@ def inflate(
     ``tissuemech.reduced.blastula``). The stretches are surface means of deformed / reference radius.
 
     Args:
-        inner_radius, outer_radius: reference radii A < B of the wall (m).
-        C: Fung stiffness (Pa); alpha: Fung exponent (dimensionless); kappa: bulk modulus (Pa).
+        inner_radius: reference radius A of the wall's inner surface (m).
+        outer_radius: reference radius B > A of its outer surface (m).
+        C: Fung stiffness (Pa).
+        alpha: Fung exponent (dimensionless).
+        kappa: bulk modulus (Pa).
         pressures: the pressures to reach (Pa): finite, >= 0, non-decreasing. ``method="load"``: one
             result entry per value (steps are subdivided internally when Newton struggles).
             ``method="arclength"``: only its first positive entry is used, as the first step; None for an
@@ -340,7 +343,7 @@ def creep(
     ramp_time: float,
     end_time: float,
     kappa: float = 2.2e9,
-    mesh="default",
+    mesh: str | tuple[int, int] | AxiMesh = "default",
     times: Sequence[float] = (),
     n_ramp: int = 8,
     n_hold: int = 60,
@@ -358,16 +361,21 @@ def creep(
     the elastic shell at every step.
 
     Args:
-        inner_radius, outer_radius: reference radii A < B (m); C: Fung stiffness (Pa) of the relaxed
-            (long-time) shell; alpha: Fung exponent (dimensionless); kappa: bulk modulus (Pa).
+        inner_radius: reference radius A of the wall's inner surface (m).
+        outer_radius: reference radius B > A of its outer surface (m).
+        C: Fung stiffness (Pa) of the relaxed (long-time) shell.
+        alpha: Fung exponent (dimensionless).
+        kappa: bulk modulus (Pa).
         branches: [(beta_m, tau_m), ...]: energy factors beta_m >= 0 (dimensionless) and relaxation
             times tau_m > 0 (s).
-        pressure: the held cavity pressure (Pa, > 0); ramp_time: the ramp's duration (s, > 0);
-            end_time: the end of the hold (s, >= ramp_time).
+        pressure: the held cavity pressure (Pa, > 0).
+        ramp_time: the ramp's duration (s, > 0).
+        end_time: the end of the hold (s, >= ramp_time).
         mesh: as for :func:`inflate`.
         times: extra step times (s, in (0, end_time]), merged into the schedule.
-        n_ramp: equal steps on the ramp; n_hold: geometrically growing steps through the hold, the first
-            ``first_hold`` long (s; default ramp_time / 2).
+        n_ramp: equal steps on the ramp.
+        n_hold: geometrically growing steps through the hold, the first ``first_hold`` long.
+        first_hold: the first hold step (s; default ramp_time / 2).
         rtol: Newton's relative residual tolerance.
         store_fields: keep the fields of every converged step (``BlastulaField`` with its time).
 

@@ -117,7 +117,8 @@ def total_stress(
 
     Args:
         f: 5-comp deformation gradients (..., 5).
-        C, alpha: Fung parameters (C in the caller's stress unit; alpha dimensionless).
+        C: Fung stiffness (in the caller's stress unit).
+        alpha: Fung exponent (dimensionless).
         q: mixed volumetric field (..., ) (P_vol = q dJ); or None with ``kappa`` for the penalty U(J).
         kappa: bulk modulus (stress unit) of the penalty form, used only when ``q`` is None.
         iso_scale: factor on the isochoric part (viscoelastic algorithmic stress).

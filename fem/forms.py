@@ -217,14 +217,23 @@ class Assembler:
             A = A + dfirst_from_second(extra_S)
         return f, P, A, q
 
-    def internal(self, u: np.ndarray, mat: Material, extra_S=None, iso_scale: float = 1.0, tangent: bool | str = True):
+    def internal(
+        self,
+        u: np.ndarray,
+        mat: Material,
+        extra_S: np.ndarray | None = None,
+        iso_scale: float = 1.0,
+        tangent: bool | str = True,
+    ):
         """Internal residual (ndof,) and tangent (CSR) of the elastic (+ extra) stress at x = (u, q).
 
         Args:
             u: the full unknown vector x = (u, q) (scaled).
-            mat: scaled material; extra_S: fixed 2nd Piola stress (n_el, n_qp, 5) or None;
-            iso_scale: factor on the isochoric stress; tangent: False returns (r, None); "lazy" returns
-            (r, a zero-argument callable assembling K) for ``fem.newton`` (it calls it only when it needs K).
+            mat: scaled material.
+            extra_S: fixed 2nd Piola stress (n_el, n_qp, 5) or None.
+            iso_scale: factor on the isochoric stress.
+            tangent: True assembles K; False returns (r, None); "lazy" returns r and a zero-argument callable
+                that assembles K, for ``fem.newton`` (it calls it only when it needs K).
         Returns:
             (r, K): r (ndof,), K CSR (ndof, ndof) with the same canonical pattern at every call (the sparsity
             pattern is built once; only the values are assembled).
@@ -290,11 +299,14 @@ class Assembler:
         """Internal forces, the follower force at unit pressure and the tangent of r_int - p f_p on ONE pattern.
 
         Args:
-            u: the full unknown vector x = (u, q) (scaled); mat: scaled material.
-            p: follower pressure (scaled by C) in the tangent; edges: the loaded boundary curve (``mesh.edges``).
-            free: sorted unique dof indices: the tangent is restricted to K[free][:, free] by a gather cached per
-                free set (None: the full matrix).
-            extra_S, iso_scale: as in :meth:`internal`.
+            u: the full unknown vector x = (u, q) (scaled).
+            mat: scaled material.
+            p: follower pressure (scaled by C) in the tangent.
+            edges: the loaded boundary curve (``mesh.edges``).
+            free: sorted unique dof indices: the tangent is restricted to ``K[free][:, free]`` by a gather cached
+                per free set (None: the full matrix).
+            extra_S: as in :meth:`internal`.
+            iso_scale: as in :meth:`internal`.
             tangent: True (a CSR matrix), False (None) or "lazy": a zero-argument callable that assembles the
                 tangent when called (``fem.newton`` calls it only for states whose tangent it needs).
         Returns:

@@ -714,7 +714,7 @@ def compress(
     ramp_time: float,
     end_time: float,
     kappa: float = 2.2e9,
-    mesh="default",
+    mesh: str | int | AxiMesh = "default",
     static: bool = False,
     field_times: Sequence[float] | str = (),
     n_ramp: int | None = None,
@@ -729,16 +729,17 @@ def compress(
 
     Args:
         radius: the ball's radius a0 (m).
-        C: Fung stiffness of the relaxed (long-time) material (Pa); alpha: Fung exponent
-            (dimensionless); kappa: bulk modulus (Pa).
+        C: Fung stiffness of the relaxed (long-time) material (Pa).
+        alpha: Fung exponent (dimensionless).
+        kappa: bulk modulus (Pa).
         branches: [(beta_m, tau_m), ...]: energy factors beta_m >= 0 (dimensionless) and relaxation
             times tau_m > 0 (s); empty for elastic.
         displacement: the total approach delta (m, < 1.6 a0) of the two plates, reached at ``ramp_time``
             by a linear ramp and then held to ``end_time``; or a callable delta(t) (m, t in s, delta(0) =
             0): ``ramp_time`` is then the time scale of the fine initial steps and each step moves the
             plate by at most the ramp's step (steps are halved until it does).
-        ramp_time, end_time: end of the ramp and of the hold (s, 0 < ramp_time <= end_time; ignored
-            when ``static``).
+        ramp_time: end of the ramp (s, 0 < ramp_time <= end_time; ignored when ``static``).
+        end_time: end of the hold (s; ignored when ``static``).
         mesh: "coarse", "default", "fine" or a level 0..4 (0 = coarse, 1 = default, 2 = fine; ``LEVELS``
             gives (n_core, n_radial, surface grading, n_contact, n_equator) of :func:`fitted_mesh`):
             CONTACT-EDGE-FITTED meshes. Static runs solve every state on its own mesh whose surface node
@@ -762,7 +763,8 @@ def compress(
             ``"all"``: every converged step (for ``SpheroidResult.to_pvd``). A stored field is given on the
             result's ``mesh`` (the last state's): ``deformed_nodes`` are the state's deformed positions (m),
             ``displacement`` = deformed_nodes - the result mesh's reference positions.
-        n_ramp, n_hold: ramp steps (default 6) and geometrically growing hold steps (default 20).
+        n_ramp: ramp steps (default 6).
+        n_hold: geometrically growing hold steps (default 20).
         n_static: static steps (default: 0.04 in delta / a0 on a level, 0.02 on a mesh object, at least 8;
             failed steps are cut back).
         rtol: Newton's relative residual tolerance.
