@@ -1039,15 +1039,14 @@ def equilibrium_force(
             type(law).check(law, d / (2.0 * r), a)
             return _equilibrium_core(law, d, r, c, a)
     elif fast_params := _plain_numbers(radius, C, alpha) if _float_array(displacement) else None:
-        # an array of approaches: its range found inside the compiled kernel (no NumPy pass over it)
+        # an array of approaches: its range checked in one NumPy pass, then one compiled kernel
         r, c, a = fast_params
         if r > 0 and c > 0 and a >= 0:
             law = as_equilibrium_law(equilibrium)
-            F = _equilibrium_core(law, displacement, r, c, a)
-            lo, hi = _array_range(displacement)
-            if 0 <= lo and hi < 2.0 * r:
+            hi = _array_max_below(displacement, 2.0 * r)
+            if hi is not None:
                 type(law).check(law, hi / (2.0 * r), a)
-                return F
+                return _equilibrium_core(law, displacement, r, c, a)
     if not is_traced(displacement, radius, C, alpha):
         r = validate_positive("radius (of the ball)", radius, "m")
         validate_material(C, alpha)
@@ -1086,15 +1085,14 @@ def midplane_radius(
             type(law).check(law, d / (2.0 * r), a)
             return _midplane_core(law, d, r, a)
     elif fast_params := _plain_numbers(radius, alpha) if _float_array(displacement) else None:
-        # an array of approaches: its range found inside the compiled kernel (no NumPy pass over it)
+        # an array of approaches: its range checked in one NumPy pass, then one compiled kernel
         r, a = fast_params
         if r > 0 and a >= 0:
             law = as_midplane_law(midplane)
-            out = _midplane_core(law, displacement, r, a)
-            lo, hi = _array_range(displacement)
-            if 0 <= lo and hi < 2.0 * r:
+            hi = _array_max_below(displacement, 2.0 * r)
+            if hi is not None:
                 type(law).check(law, hi / (2.0 * r), a)
-                return out
+                return _midplane_core(law, displacement, r, a)
     if not is_traced(displacement, radius, alpha):
         r = validate_positive("radius (of the ball)", radius, "m")
         validate_nonnegative("alpha (the Fung stiffening exponent)", alpha, "dimensionless")
@@ -1123,13 +1121,24 @@ def _float_array(v: Any) -> bool:
     return isinstance(v, (np.ndarray, jax.Array)) and not is_traced(v) and v.dtype.kind == "f"
 
 
-def _array_range(d: Any) -> tuple[float, float]:
-    """(min, max) of a concrete array (NaN if any entry is NaN or the array is empty), by NumPy: two passes
-    that run while the compiled kernel (dispatched first, asynchronously) computes."""
+def _array_max_below(d: Any, upper: float) -> float | None:
+    """The largest entry of a concrete float array when every entry lies in [0, upper) (upper > 0), else None
+    (the caller then runs the full validators, which name the offending value; so does an empty array).
+
+    One NumPy pass, before the compiled kernel (which uses both cores: run alongside it, the pass slowed it more
+    than it cost). For float64 it is the maximum of the bit patterns read as unsigned integers, which order like
+    the values for +0 and positive finite floats and put every negative value (sign bit) and NaN / inf above any
+    finite ``upper`` (-0.0 too: it goes to the validators, which accept it); min and max for other float types."""
     v = np.asarray(d)
-    if v.size == 0:  # the full validators name the empty array
-        return math.nan, math.nan
-    return float(np.min(v)), float(np.max(v))
+    if v.size == 0 or not upper > 0.0:
+        return None
+    if v.dtype == np.float64:
+        bits = int(np.max(v.view(np.uint64)))
+        if bits < int(np.float64(upper).view(np.uint64)):
+            return float(np.uint64(bits).view(np.float64))
+        return None
+    lo, hi = float(np.min(v)), float(np.max(v))
+    return hi if 0.0 <= lo and hi < upper else None
 
 
 def _plain_numbers(*values: Any) -> tuple[float, ...] | None:

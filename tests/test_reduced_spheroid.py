@@ -499,3 +499,41 @@ def test_eager_fast_paths_agree_with_jit_and_still_refuse_bad_input():
             sp.midplane_radius(bad, radius=A0)
     with pytest.raises(ValueError, match="empty"):
         sp.equilibrium_force(np.zeros(0), **kw, equilibrium="hertz")
+
+
+def test_the_eager_range_check_of_an_approach_array_is_exact():
+    """``_array_max_below(d, upper)`` (one pass over the float64 bit patterns): the largest entry exactly when every
+    entry lies in [0, upper), else None, on arrays with negatives, -0.0, NaN, +-inf, subnormals, values at and just
+    below / above the bound, float32 and empty arrays; the public functions give the same values on the fast path
+    and raise naming the approach for the rest."""
+    upper = 1e-3
+    below = np.nextafter(upper, 0.0)
+    rng = np.random.default_rng(7)
+    base = rng.uniform(0.0, upper, 1000)
+    specials = [0.0, -0.0, 5e-324, below, upper, np.nextafter(upper, 1.0), -5e-324, -1.0, np.nan, -np.nan, np.inf,
+                -np.inf, 1e300]  # fmt: skip
+    for value in specials:
+        for where in (0, 500, 999):
+            d = base.copy()
+            d[where] = value
+            ok = bool(np.all((d >= 0) & (d < upper))) and not np.signbit(d).any()
+            got = sp._array_max_below(d, upper)
+            assert got == (float(np.max(d)) if ok else None), (value, where)
+    assert sp._array_max_below(base[::3], upper) == float(np.max(base[::3]))  # a strided view
+    assert sp._array_max_below(np.array([]), upper) is None
+    assert sp._array_max_below(base.astype(np.float32), upper) == float(np.max(base.astype(np.float32)))
+    assert sp._array_max_below(np.array([-1.0, 0.5e-3], np.float32), upper) is None
+    # public functions: the fast path gives the full path's numbers; bad entries raise naming the approach
+    d = rng.uniform(0.0, 150e-6, 5000)
+    fast = np.asarray(sp.equilibrium_force(d, radius=500e-6, C=150.0, alpha=0.2))
+    full = np.asarray(sp.equilibrium_force(list(d), radius=500e-6, C=150.0, alpha=0.2))
+    np.testing.assert_array_equal(fast, full)
+    with_zero = np.r_[-0.0, d]
+    np.testing.assert_array_equal(
+        np.asarray(sp.midplane_radius(with_zero, radius=500e-6))[1:], np.asarray(sp.midplane_radius(d, radius=500e-6))
+    )
+    for bad in (-1e-6, np.nan, 1e-3):
+        with pytest.raises(ValueError, match="displacement"):
+            sp.equilibrium_force(np.r_[d, bad], radius=500e-6, C=150.0, alpha=0.2, equilibrium="hertz")
+        with pytest.raises(ValueError, match="displacement"):
+            sp.midplane_radius(np.r_[d, bad], radius=500e-6)
