@@ -2,10 +2,13 @@ r"""Path following: adaptive load control and Riks arc-length (through limit poi
 
 ``load_control(solve, loads, x0, *, lam0=0.0, monitor=None, max_cuts=12, tangent=None)``
     ``solve(lam, x_guess) -> NewtonResult`` (raises ``NewtonError``). Reaches every requested
-    load; a failed step is halved (up to ``max_cuts`` times). The predictor is Euler's,
-    x_c + (dx/dlam) dlam, where ``tangent(lam, x) -> dx/dlam or None`` is given and has a slope at the
-    converged state, for a step no longer than the last converged one and not after a cut; else the
-    secant of the last two converged states (``scale``/``unit`` only format messages). Returns a list
+    load; a failed step is halved (up to ``max_cuts`` times). The predictor, first that applies: with a
+    ``monitor`` (a scalar response m(x), e.g. the inner stretch) and three converged states, the curve through
+    them quadratic in m (lam(m) solved for the target load, x(m) interpolated: smooth where x(lam) bends
+    sharply, e.g. a shell that inflates fast before the Fung law stiffens it); Euler's, x_c + (dx/dlam) dlam,
+    where ``tangent(lam, x) -> dx/dlam or None`` is given and has a slope at the converged state, for a step
+    no longer than the last converged one; else the secant of the last two converged states (none of the
+    first two after a cut; ``scale``/``unit`` only format messages). Returns a list
     of ``LoadStep(load, solution, wall_time)``, one per requested load. If it fails where the
     load-response curve flattens (monitor slope below 2 % of the initial one or falling), raises
     ``LimitPointError`` naming the last converged load.
@@ -61,6 +64,40 @@ class LimitPointError(NewtonError):
     last_converged: float = float("nan")
 
 
+def _monitor_quadratic(hist: list, lam_t: float) -> np.ndarray | None:
+    """Predictor through the last three converged states (lam_i, m_i, x_i), m the monitor: the load as a quadratic
+    in m, lam(m), solved for lam(m*) = lam_t (the root next to the secant's m), then x(m*) by Lagrange
+    interpolation in m. Near an inflection of the load-response curve (a blastula that inflates fast before the
+    Fung law stiffens it) x is far smoother in m than in lam: errors ~ 0.02-0.1 of the step there against 0.3-1 for
+    Euler's slope in lam (issue 14). None when there is no such root nearby or the monitor does not increase."""
+    if len(hist) < 3:
+        return None
+    (l0, m0, x0), (l1, m1, x1), (l2, m2, x2) = hist
+    if not (m0 < m1 < m2 and l0 < l1 < l2 < lam_t) or not all(np.isfinite((m0, m1, m2))):
+        return None
+    # lam(m) = l2 + b d + a d^2, d = m - m2 (Newton's divided differences)
+    d0, d1 = m0 - m2, m1 - m2
+    s1, s0 = (l1 - l2) / d1, (l0 - l2) / d0
+    a = (s0 - s1) / (d0 - d1)
+    b = s1 - a * d1  # slope at m2
+    lin = (lam_t - l2) / ((l2 - l1) / (m2 - m1))  # the secant's step in m
+    if b <= 0 or lin <= 0:
+        return None
+    if abs(a) * lin < 1e-12 * b:
+        d = (lam_t - l2) / b
+    else:
+        disc = b * b + 4.0 * a * (lam_t - l2)
+        if disc < 0:  # lam(m) turns before lam_t: a limit point ahead
+            return None
+        d = 2.0 * (lam_t - l2) / (b + np.sqrt(disc))  # the root next to lam_t - l2 = b d (no cancellation)
+    if not 0.0 < d <= 4.0 * lin:
+        return None
+    w0 = (d - d1) * d / ((d0 - d1) * d0)
+    w1 = (d - d0) * d / ((d1 - d0) * d1)
+    w2 = (d - d0) * (d - d1) / (d0 * d1)
+    return w0 * x0 + w1 * x1 + w2 * x2
+
+
 def load_control(
     solve: Callable,
     loads: Sequence[float],
@@ -82,6 +119,7 @@ def load_control(
     x_old: np.ndarray | None = None
     lam_old = 0.0
     slope0 = None
+    hist: list = []  # the last three converged (load, monitor, x): the monitor-quadratic predictor
     for target in loads:
         lam_c, x_c = lam_prev, x_prev
         t0 = time.perf_counter()
@@ -98,8 +136,11 @@ def load_control(
                 and x_old is not None
                 and 0 < lam_t - lam_c <= (lam_c - lam_old) * (1 + 1e-9)
             )
-            t_c = tangent(lam_c, x_c) if euler and tangent is not None else None
-            if t_c is not None:
+            curve = _monitor_quadratic(hist, lam_t) if cuts == 0 else None
+            t_c = tangent(lam_c, x_c) if curve is None and euler and tangent is not None else None
+            if curve is not None:
+                guess = curve
+            elif t_c is not None:
                 guess = x_c + t_c * (lam_t - lam_c)
             elif x_old is not None and lam_c != lam_old:
                 guess = x_c + (x_c - x_old) * (lam_t - lam_c) / (lam_c - lam_old)
@@ -146,6 +187,8 @@ def load_control(
                 continue
             x_old, lam_old = x_c, lam_c
             x_c, lam_c = res.x, lam_t
+            if monitor is not None:
+                hist = (hist + [(lam_c, float(monitor(x_c)), x_c)])[-3:]
             iters += res.iterations
             if monitor is not None and lam_c != lam_old:
                 dm = monitor(x_c) - monitor(x_old)

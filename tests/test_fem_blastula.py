@@ -172,6 +172,7 @@ def test_euler_predictor_same_answers_fewer_factorisations(monkeypatch):
     import scipy.sparse.linalg as spla
 
     from tissuemech.fem import blastula as fb
+    from tissuemech.fem import continuation as ct
 
     counts = {"lu": 0}
     splu = spla.splu
@@ -181,6 +182,7 @@ def test_euler_predictor_same_answers_fewer_factorisations(monkeypatch):
         return splu(*a, **k)
 
     monkeypatch.setattr(spla, "splu", counted)
+    monkeypatch.setattr(ct, "_monitor_quadratic", lambda hist, lam: None)  # Euler vs secant alone
     kw = dict(inner_radius=A, outer_radius=B, C=C, alpha=0.2, pressures=np.linspace(100.0, 1000.0, 10), mesh=(4, 8))
     euler = inflate(**kw)
     lu_euler, counts["lu"] = counts["lu"], 0
@@ -209,3 +211,43 @@ def test_euler_predictor_same_answers_fewer_factorisations(monkeypatch):
         m.setattr(fb._Problem, "load_tangent", lambda self, lam, uf: None)
         jumps_secant = inflate(**kw)
     assert np.sum(jumps.newton_iterations) == np.sum(jumps_secant.newton_iterations)
+
+
+def test_monitor_quadratic_predictor_exact_on_a_quadratic_path_and_fewer_factorisations(monkeypatch):
+    """load_control's predictor through the last three converged states, quadratic in the monitor m: exact when the
+    load and the state are quadratics in m (it solves lam(m) = lam_t for the root next to the secant's), None where
+    the monitor does not increase or lam(m) turns before lam_t (a limit point ahead). On the 10-step sweeps of a
+    75 um and a 60 um shell it reaches the same inner stretches as Euler / secant alone (within the Newton
+    tolerance) with fewer factorisations (23 vs 27, 54 vs 69 when written)."""
+    import scipy.sparse.linalg as spla
+
+    from tissuemech.fem import continuation as ct
+
+    lam = lambda m: 0.3 + 2.0 * m - 0.4 * m**2  # increasing for m < 2.5
+    x = lambda m: np.array([m, m**2 - 1.0, 3.0 - 0.5 * m**2])
+    hist = [(lam(m), m, x(m)) for m in (0.1, 0.5, 0.8)]
+    m_t = 1.3
+    np.testing.assert_allclose(ct._monitor_quadratic(hist, lam(m_t)), x(m_t), rtol=1e-13, atol=1e-13)
+    lin = [(lam(m), m, 2.0 * x(m)) for m in (0.1, 0.5, 0.8)]  # lam quadratic, x(m) exact too
+    np.testing.assert_allclose(ct._monitor_quadratic(lin, lam(1.0)), 2.0 * x(1.0), rtol=1e-13, atol=1e-13)
+    assert ct._monitor_quadratic(hist[:2], lam(m_t)) is None  # fewer than three states
+    assert ct._monitor_quadratic([hist[0], hist[2], hist[1]], lam(m_t)) is None  # monitor not increasing
+    assert ct._monitor_quadratic(hist, lam(2.5) + 0.01) is None  # beyond the maximum of lam(m)
+    counts = {"lu": 0}
+    splu = spla.splu
+
+    def counted(*a, **k):
+        counts["lu"] += 1
+        return splu(*a, **k)
+
+    monkeypatch.setattr(spla, "splu", counted)
+    for outer in (B, 60e-6):
+        kw = dict(inner_radius=A, outer_radius=outer, C=C, alpha=0.2, pressures=np.linspace(100.0, 1000.0, 10))
+        counts["lu"] = 0
+        curve = inflate(**kw, mesh=(4, 8))
+        lu_curve, counts["lu"] = counts["lu"], 0
+        with monkeypatch.context() as m:
+            m.setattr(ct, "_monitor_quadratic", lambda hist, lam: None)
+            plain = inflate(**kw, mesh=(4, 8))
+        np.testing.assert_allclose(curve.inner_stretch, plain.inner_stretch, rtol=1e-9, atol=0)
+        assert lu_curve < 0.9 * counts["lu"]
