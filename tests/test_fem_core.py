@@ -779,3 +779,21 @@ def test_fem_perf_run_floor_is_the_work_of_the_iterations_taken(monkeypatch):
     floor, best = fp._run_floor((K, prob.asm, prob.full(x), prob.mat), 4, 30, 40)
     assert best == fastest
     assert floor == pytest.approx(4 * (times[id(facs[fastest])] + 5e-4) + 30 * 3e-5 + 40 * 7e-5, rel=1e-12)
+
+
+def test_newton_abandons_a_diverging_solve_after_diverging_after_iterations():
+    """Newton on arctan(x) = 0 diverges from |x0| > 1.3917 (the iterates alternate in sign and grow): with the
+    default ``diverging_after=8`` it stops after 8 iterations whose last three residuals all exceed the first
+    (a caller cuts the step then), without it only at a singular tangent (the residual saturates at pi/2).
+    A converging start is untouched; bad values are refused."""
+    fun = lambda x: (np.arctan(x), sp.csr_matrix([[1.0 / (1.0 + x[0] ** 2)]]))
+    with pytest.raises(NewtonError, match="diverging") as err:
+        newton(fun, np.array([1.45]), load=2.0)
+    assert len(err.value.residuals) == 9 and min(err.value.residuals[-3:]) > err.value.residuals[0]
+    with np.errstate(over="ignore"), pytest.raises(NewtonError) as late:
+        newton(fun, np.array([1.45]), diverging_after=None)
+    assert "diverging" not in str(late.value) and len(late.value.residuals) > 9
+    assert newton(fun, np.array([1.3])).iterations == newton(fun, np.array([1.3]), diverging_after=None).iterations
+    for bad in (2, 0, 3.5, True, "8"):
+        with pytest.raises(ValueError, match="diverging_after"):
+            newton(fun, np.array([1.3]), diverging_after=bad)
