@@ -189,10 +189,11 @@ def load_control(
             x_old, lam_old = x_c, lam_c
             x_c, lam_c = res.x, lam_t
             if monitor is not None:
+                m_old = hist[-1][1] if hist and hist[-1][2] is x_old else monitor(x_old)
                 hist = (hist + [(lam_c, float(monitor(x_c)), x_c)])[-3:]
             iters += res.iterations
             if monitor is not None and lam_c != lam_old:
-                dm = monitor(x_c) - monitor(x_old)
+                dm = hist[-1][1] - m_old
                 s = (lam_c - lam_old) / dm if dm != 0 else np.inf
                 slope0 = s if slope0 is None else slope0
             if res.iterations <= 4:
