@@ -10,8 +10,6 @@ linear system); the question is only whether the smaller LU gains more than form
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
@@ -20,15 +18,6 @@ from tissuemech.compare.bench import fem_perf as fp
 from tissuemech.fem import newton as nw
 
 SYM = dict(permc_spec="NATURAL", diag_pivot_thresh=0.0, options=dict(SymmetricMode=True))
-
-
-def _med(f, n: int = 3) -> float:
-    ts = []
-    for _ in range(n):
-        t = time.perf_counter()
-        f()
-        ts.append(time.perf_counter() - t)
-    return float(np.median(ts))
 
 
 def main() -> None:
@@ -50,14 +39,14 @@ def main() -> None:
             return (K[iu][:, iu] - K[iu][:, iq] @ (Dinv.tocsr() @ K[iq][:, iu])).tocsr()
 
         S = schur()
-        t_form = _med(schur)
+        t_form = fp._med(schur, 3)
         cols = []
         for M in (K, S):
             ts, fills = [], []
             for order in (nw._mmd, nw._supervariable_mmd):
                 p = order(M)
                 Mp = sp.csc_matrix(M[p][:, p])
-                ts.append(_med(lambda: spla.splu(Mp, **SYM)))
+                ts.append(fp._med(lambda: spla.splu(Mp, **SYM), 3))
                 lu = spla.splu(Mp, **SYM)
                 fills.append(lu.L.nnz + lu.U.nnz)
             cols.append((ts, fills))

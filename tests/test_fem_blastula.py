@@ -165,14 +165,9 @@ def test_the_felupe_benchmark_blastula_reference_is_the_limit_of_mesh_refinement
     assert 12.0 <= e1 / e2 <= 20.0
 
 
-def test_euler_predictor_same_answers_fewer_factorisations(monkeypatch):
-    """load_control's Euler predictor (the slope from the factorisation the last solve kept) reaches the same
-    inner stretches as the secant predictor (within the Newton tolerance) on a 10-step sweep, with fewer
-    factorisations (and no more Newton iterations); a solve that factored nothing gives no slope (secant instead)."""
+def _count_factorisations(monkeypatch) -> dict:
+    """{"lu": n}: the SuperLU factorisations (``scipy.sparse.linalg.splu`` calls) while the test runs."""
     import scipy.sparse.linalg as spla
-
-    from tissuemech.fem import blastula as fb
-    from tissuemech.fem import continuation as ct
 
     counts = {"lu": 0}
     splu = spla.splu
@@ -182,6 +177,17 @@ def test_euler_predictor_same_answers_fewer_factorisations(monkeypatch):
         return splu(*a, **k)
 
     monkeypatch.setattr(spla, "splu", counted)
+    return counts
+
+
+def test_euler_predictor_same_answers_fewer_factorisations(monkeypatch):
+    """load_control's Euler predictor (the slope from the factorisation the last solve kept) reaches the same
+    inner stretches as the secant predictor (within the Newton tolerance) on a 10-step sweep, with fewer
+    factorisations (and no more Newton iterations); a solve that factored nothing gives no slope (secant instead)."""
+    from tissuemech.fem import blastula as fb
+    from tissuemech.fem import continuation as ct
+
+    counts = _count_factorisations(monkeypatch)
     monkeypatch.setattr(ct, "_monitor_quadratic", lambda hist, lam: None)  # Euler vs secant alone
     kw = dict(inner_radius=A, outer_radius=B, C=C, alpha=0.2, pressures=np.linspace(100.0, 1000.0, 10), mesh=(4, 8))
     euler = inflate(**kw)
@@ -219,8 +225,6 @@ def test_monitor_quadratic_predictor_exact_on_a_quadratic_path_and_fewer_factori
     the monitor does not increase or lam(m) turns before lam_t (a limit point ahead). On the 10-step sweeps of a
     75 um and a 60 um shell it reaches the same inner stretches as Euler / secant alone (within the Newton
     tolerance) with fewer factorisations (23 vs 27, 54 vs 69 when written)."""
-    import scipy.sparse.linalg as spla
-
     from tissuemech.fem import continuation as ct
 
     lam = lambda m: 0.3 + 2.0 * m - 0.4 * m**2  # increasing for m < 2.5
@@ -233,14 +237,7 @@ def test_monitor_quadratic_predictor_exact_on_a_quadratic_path_and_fewer_factori
     assert ct._monitor_quadratic(hist[:2], lam(m_t)) is None  # fewer than three states
     assert ct._monitor_quadratic([hist[0], hist[2], hist[1]], lam(m_t)) is None  # monitor not increasing
     assert ct._monitor_quadratic(hist, lam(2.5) + 0.01) is None  # beyond the maximum of lam(m)
-    counts = {"lu": 0}
-    splu = spla.splu
-
-    def counted(*a, **k):
-        counts["lu"] += 1
-        return splu(*a, **k)
-
-    monkeypatch.setattr(spla, "splu", counted)
+    counts = _count_factorisations(monkeypatch)
     for outer in (B, 60e-6):
         kw = dict(inner_radius=A, outer_radius=outer, C=C, alpha=0.2, pressures=np.linspace(100.0, 1000.0, 10))
         counts["lu"] = 0
