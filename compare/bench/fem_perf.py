@@ -397,7 +397,9 @@ def scaling(quick: bool, repeats: int = 2) -> None:
     took, timed on a tangent of that mesh): how fast any code that factors as often must grow."""
     print("\n## Wall time vs dofs (blastula: 10 equal steps to 1 kPa; spheroid: static curve to 10 %, 5 steps)")
     print("(iterations: those of the accepted states; LU: every SuperLU factorisation, failed attempts included;")
-    print(f" res: residual evaluations; cold: the first run on the mesh; warm: min of {repeats} more;")
+    print(
+        f" res: residual evaluations; cold: the first run on the mesh; warm: min of {repeats} more (spheroid level 4: one);"
+    )
     print(" floor: LU x (best bare LU + element matmuls) + iterations x bare solve + res x residual element matmuls,")
     print(" timed on a tangent of the same mesh; warm/floor: how far above it the run is)")
     meshes = [(4, 8), (8, 16), (16, 32), (24, 48)] + ([] if quick else [(32, 64)])
@@ -440,7 +442,7 @@ def scaling(quick: bool, repeats: int = 2) -> None:
             r = fs.compress(**kw)
             w = time.perf_counter() - t0
         ws = []
-        for _ in range(repeats if lev < 3 else 1):
+        for _ in range(repeats if lev < 4 else 1):  # level 4 (~8 s a run) once
             t0 = time.perf_counter()
             fs.compress(**kw)
             ws.append(time.perf_counter() - t0)
