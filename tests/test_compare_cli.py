@@ -133,3 +133,23 @@ def test_checks_cli_rejects_bad_options(capsys):
             checks.main(argv)
         assert e.value.code == 2
     assert "unknown table(s) foo" in capsys.readouterr().err
+
+
+def test_bench_dispatch_takes_only_an_int_as_an_exit_code(monkeypatch, tmp_path):
+    """The reduced suites return their rows (a list): the dispatcher ran them and then failed with
+    ``int(list)``; an int exit code from a suite still stops ``all``."""
+    import sys
+
+    from tissuemech.compare.bench import __main__ as dispatch
+
+    (tmp_path / "suite_rows.py").write_text("def main(argv):\n    return [{'row': 1}]\n")
+    (tmp_path / "suite_usage.py").write_text("def main(argv):\n    return 2\n")
+    (tmp_path / "suite_none.py").write_text("def main(argv):\n    return None\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    for m in ("suite_rows", "suite_usage", "suite_none"):
+        sys.modules.pop(m, None)
+    monkeypatch.setattr(dispatch, "SUITES", {"rows": "suite_rows", "usage": "suite_usage", "none": "suite_none"})
+    assert dispatch.main(["rows"]) == 0
+    assert dispatch.main(["none"]) == 0
+    assert dispatch.main(["usage"]) == 2
+    assert dispatch.main(["all"]) == 2

@@ -32,9 +32,10 @@ def main(argv: list[str] | None = None) -> int:
             print(f"== {n} (python -m tissuemech.compare.bench {n} [options]) ==\n{doc}\n")
         return 0
     for n in names:
-        rc = importlib.import_module(SUITES[n]).main(rest) or 0  # a suite's usage error stops the run
-        if rc:
-            return int(rc)
+        rc = importlib.import_module(SUITES[n]).main(rest)
+        # an int is a suite's exit code (its usage error stops the run); the reduced suites return their rows
+        if isinstance(rc, int) and not isinstance(rc, bool) and rc:
+            return rc
     return 0
 
 
