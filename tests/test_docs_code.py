@@ -1,6 +1,7 @@
-"""The README's Python API example runs as printed and says what it prints (issue 14's README pass found its
-fit comment stale: it claimed a one-sided alpha bound where the fit now printed a tight interval that missed
-the truth, for noise-free default-mesh records)."""
+"""The Python in the README and the tutorials runs as printed and says what it prints (issue 14's README pass
+found the README's fit comment stale: it claimed a one-sided alpha bound where the fit printed a tight interval
+that missed the truth, for noise-free default-mesh records). Blocks that only include a file (``--8<--``, the
+examples) are run by tests/test_examples.py."""
 
 import re
 from pathlib import Path
@@ -8,7 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
+TUTORIALS = ("docs/tutorial-blastula.md", "docs/tutorial-spheroid.md")
 
 
 def _api_block() -> str:
@@ -40,3 +43,29 @@ def test_readme_api_example_runs_and_its_comments_hold(tmp_path, monkeypatch, ca
         assert f"{lo:.{digits}g}..{hi:.{digits}g}" in comment.replace(" Pa", "").replace(" s", ""), (name, lo, hi)
     assert np.isfinite(ns["grid"]).all() and ns["grid"].shape == (100, 100, 301)
     assert (tmp_path / "blastula.pvd").exists()
+
+
+def _blocks(path: Path) -> list[str]:
+    return [
+        b for b in re.findall(r"```python\n(.*?)```", path.read_text(), re.S) if not b.lstrip().startswith("--8<--")
+    ]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("page", TUTORIALS)
+def test_tutorial_code_runs_in_order(page, tmp_path, monkeypatch, capsys):
+    """Each tutorial's blocks, run in order in one namespace (as a reader pastes them), raise nothing; the
+    blastula page's limit point is the one its comment gives."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    monkeypatch.chdir(tmp_path)
+    blocks = _blocks(ROOT / page)
+    assert blocks, page
+    ns: dict = {}
+    for i, block in enumerate(blocks):
+        exec(compile(block, f"{page}[{i}]", "exec"), ns)
+    capsys.readouterr()
+    if "blastula" in page:
+        assert abs(ns["lp"].pressure - 197.41) < 0.005
+        assert abs(float(ns["trace"].pressure.max()) - 197.41) < 0.05  # "~197.41 Pa, the exact limit pressure"
