@@ -35,7 +35,11 @@ Brent). A profile that stays below ``t^2`` up to a search bound gives a one-side
 alpha in [0, 0.9]: "alpha < 0.9 at 95 %"), one that stays below it without bound an open end (inf).
 Records without information raise ValueError (fewer points than parameters, constant or
 non-positive stress); round-off-level residuals (noise-free data) and a model that does not depend
-on a parameter are flagged, with NaN or full-range intervals instead of zero widths.
+on a parameter are flagged, with NaN or full-range intervals instead of zero widths. Records that scatter
+about the model by less than the equilibrium table's own stated accuracy (metadata ``model_error_rel``; noise
+sd below that fraction of the record's peak) are flagged too (``success`` False): their residuals are then the
+records' own discretisation error and the model's rather than noise (noise-free FE-made records: the fit
+moves alpha to absorb the mesh's error and the intervals shrink below that bias).
 
 Identifiability: the eigen-decomposition of the (model-error-marginalised) Fisher matrix in log
 space: an eigenvector ``v`` with eigenvalue ``lam`` says the combination ``prod_i p_i^{v_i}`` is known
@@ -422,6 +426,18 @@ def model_error_of(equilibrium: Any) -> float:
     return v if math.isfinite(v) and v >= 0 else DEFAULT_MODEL_ERROR_REL
 
 
+def _law_accuracy(equilibrium: Any) -> float:
+    """The equilibrium table's own numerical accuracy (its metadata ``model_error_rel``, relative), or 0 where
+    the law does not state one: records that scatter about the model by less than this carry no noise the
+    intervals could rest on (``relaxation`` flags them)."""
+    mc = _table(equilibrium)
+    try:
+        v = float(mc.metadata.get("model_error_rel")) if mc is not None else 0.0
+    except (TypeError, ValueError):
+        return 0.0
+    return v if math.isfinite(v) and v > 0 else 0.0
+
+
 def _inverse_eigenvalues(lam: np.ndarray) -> np.ndarray:
     """1/lambda with a relative floor (1e-16 of the largest): a null direction gets a huge but finite
     variance, so it does not leak round-off into the well-determined parameters."""
@@ -784,6 +800,16 @@ def relaxation(
         )
     if not sol.success:
         flags.append(f"the optimizer did not converge: {sol.message}")
+    acc = _law_accuracy(equilibrium)
+    too_clean = [] if noise_free else [j for j in range(R) if noise[j] < acc * peaks[j]]
+    if too_clean:
+        flags.append(
+            f"record(s) {', '.join(str(j + 1) for j in too_clean)} scatter about the model by less (noise sd "
+            f"{min(noise[j] / peaks[j] for j in too_clean):.2g} of the peak stress) than the equilibrium table is "
+            f"accurate ({acc:.2g}, its model_error_rel): the residuals are then the records' own discretisation "
+            "error and the model's, not noise, and the intervals can miss the truth (noise-free synthetic data?); "
+            "add the measurement noise"
+        )
 
     sd = np.sqrt(np.abs(np.diag(cov)))
     p = np.exp(z[:P])
@@ -845,7 +871,7 @@ def relaxation(
         elif kinds[nm] == "none" and names.index(nm) not in dead:
             ident.report += f"\n  -> {nm}: not bounded by these records at 95 % (any value in the search range fits)"
     rdata = prob.data_residual(z)
-    success = bool(sol.success) and not noise_free and prof.better is None
+    success = bool(sol.success) and not noise_free and not too_clean and prof.better is None
     return FitResult(
         params={nm: float(v) for nm, v in zip(names, p)},
         intervals=ivals,

@@ -310,6 +310,30 @@ def test_model_error_from_table_metadata():
         _fit(synthetic([50e-6]), model_error=-1.0)
 
 
+def test_records_cleaner_than_the_law_are_flagged():
+    """Records that scatter about the model by less than the equilibrium table's stated accuracy (noise-free
+    synthetic data carrying a small smooth error, as FE-made records carry their mesh's) can give intervals
+    that miss the truth: flagged, not success. With 0.5 % noise the same records fit without the flag; a law
+    that states no accuracy (model_error_rel absent) never raises it."""
+    from tissuemech.reduced import spheroid
+
+    mc = spheroid.master_curve()
+    tagged = spheroid.MasterCurve(mc.x, np.asarray(mc.f(mc.x, 0.0)), metadata={"model_error_rel": 1e-4})
+    untagged = spheroid.MasterCurve(mc.x, np.asarray(mc.f(mc.x, 0.0)), metadata={})
+    clean = [(t, y * (1 + 3e-5 * np.cos(np.log1p(t))), d) for t, y, d in synthetic([50e-6, 200e-6])]
+    r0 = _fit(clean, equilibrium=tagged)
+    assert not r0.success
+    assert any("scatter about the model by less" in f and "(0.0001, its model_error_rel)" in f for f in r0.flags), (
+        r0.flags
+    )
+    assert "WARNING: record(s) 1, 2 scatter" in r0.summary()
+    rng = np.random.default_rng(3)
+    noisy = [(t, y * (1 + 0.005 * rng.standard_normal(y.shape)), d) for t, y, d in clean]
+    r1 = _fit(noisy, equilibrium=tagged)
+    assert r1.success and not r1.flags
+    assert not any("scatter about" in f for f in _fit(clean, equilibrium=untagged).flags)
+
+
 def test_to_dict_is_json_ready():
     import json
 
