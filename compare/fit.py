@@ -415,27 +415,24 @@ def model_error_of(equilibrium: Any) -> float:
     :data:`DEFAULT_MODEL_ERROR_REL`. For "hertz", an (x, f) table or a callable: 0 (taken as exact;
     pass ``model_error=`` to :func:`relaxation` to add one).
     """
+    if _table(equilibrium) is None:
+        return 0.0
+    v = _stated_accuracy(equilibrium)
+    return DEFAULT_MODEL_ERROR_REL if v is None else v
+
+
+def _stated_accuracy(equilibrium: Any) -> float | None:
+    """The equilibrium table's own stated accuracy (metadata ``model_error_rel``, relative, >= 0), or None where
+    the law is no table or states none. ``relaxation`` flags records that scatter about the model by less than
+    it: they carry no noise the intervals could rest on."""
     mc = _table(equilibrium)
     if mc is None:
-        return 0.0
-    v = mc.metadata.get("model_error_rel")
+        return None
     try:
-        v = float(v)
+        v = float(mc.metadata.get("model_error_rel"))
     except (TypeError, ValueError):
-        return DEFAULT_MODEL_ERROR_REL
-    return v if math.isfinite(v) and v >= 0 else DEFAULT_MODEL_ERROR_REL
-
-
-def _law_accuracy(equilibrium: Any) -> float:
-    """The equilibrium table's own numerical accuracy (its metadata ``model_error_rel``, relative), or 0 where
-    the law does not state one: records that scatter about the model by less than this carry no noise the
-    intervals could rest on (``relaxation`` flags them)."""
-    mc = _table(equilibrium)
-    try:
-        v = float(mc.metadata.get("model_error_rel")) if mc is not None else 0.0
-    except (TypeError, ValueError):
-        return 0.0
-    return v if math.isfinite(v) and v > 0 else 0.0
+        return None
+    return v if math.isfinite(v) and v >= 0 else None
 
 
 def _inverse_eigenvalues(lam: np.ndarray) -> np.ndarray:
@@ -800,7 +797,7 @@ def relaxation(
         )
     if not sol.success:
         flags.append(f"the optimizer did not converge: {sol.message}")
-    acc = _law_accuracy(equilibrium)
+    acc = _stated_accuracy(equilibrium) or 0.0
     too_clean = [] if noise_free else [j for j in range(R) if noise[j] < acc * peaks[j]]
     if too_clean:
         flags.append(
