@@ -12,9 +12,10 @@ The store survives corruption and concurrency:
   detected, moved aside to ``<key>.npz.corrupt``, recomputed, and a ``StoreWarning`` says so;
 * files are written to a unique temporary name (``<key>.npz.<pid>.<random>.part``) and renamed
   (atomic), so a crash loses nothing that finished and writers never collide;
-* a point being computed is claimed by a lock file ``<key>.lock`` (pid and host inside): a second run
-  into the same store waits for that point instead of computing it again; the lock of a dead process
-  (same host) is taken over, so a killed batch resumes;
+* a point being computed is claimed by a lock file ``<key>.lock`` (pid and host inside, from the instant it
+  exists: a written file hard-linked to the lock's name): a second run into the same store waits for that
+  point instead of computing it again; the lock of a dead process (same host) is taken over, so a killed
+  batch resumes;
 * a store that cannot be written raises :class:`StoreError` before any point is computed.
 
 Executors: local processes by default (``ProcessPoolExecutor``, 2 workers, "spawn" start so JAX
@@ -240,12 +241,24 @@ def _pid_alive(pid: int) -> bool:
     return True
 
 
+UNWRITTEN_LOCK_GRACE = 60.0  # s: a lock file still without content after this lost its writer (see _claim)
+
+
 def _lock_is_stale(lock: Path, stale_after: float) -> bool:
     try:
-        info = json.loads(lock.read_text() or "{}")
+        text = lock.read_text()
         age = time.time() - lock.stat().st_mtime
-    except (OSError, ValueError):
-        return False  # being written or just removed: look again later
+    except OSError:
+        return False  # just removed: look again later
+    try:
+        info = json.loads(text) if text.strip() else None
+    except ValueError:
+        info = None
+    if not isinstance(info, dict):
+        # no owner written in it: a writer that died between creating and filling it (only where the store's
+        # file system has no hard links, or a lock of an older version); the writer fills it within
+        # microseconds, so after the grace period nobody will
+        return age > UNWRITTEN_LOCK_GRACE
     if info.get("host") == _HOST and isinstance(info.get("pid"), int):
         return not _pid_alive(info["pid"])
     return age > stale_after
@@ -255,22 +268,39 @@ _RUN_ID = uuid.uuid4().hex
 
 
 def _claim(lock: Path, stale_after: float) -> bool:
-    """Create ``lock`` exclusively (True), or False if a live process holds it; stale locks are taken over."""
-    for _ in range(2):
-        try:
-            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
-        except FileExistsError:
-            if _lock_is_stale(lock, stale_after):
+    """Create ``lock`` exclusively (True), or False if a live process holds it; stale locks are taken over.
+
+    The lock appears with its owner (pid, host) already in it: the owner is written to a private file that is
+    then hard-linked to the lock's name (atomic, and refused when the name exists), so a process killed at
+    any instant never leaves a lock without an owner. Where the file system has no hard links the lock is
+    created exclusively and then filled (a lock left empty there counts as stale after
+    ``UNWRITTEN_LOCK_GRACE``)."""
+    owner = json.dumps({"pid": os.getpid(), "host": _HOST, "run": _RUN_ID, "time": time.time()})
+    part = lock.with_name(f"{lock.name}.{os.getpid()}.{uuid.uuid4().hex[:12]}.part")  # _clean_parts' pattern
+    part.write_text(owner)
+    try:
+        for _ in range(2):
+            try:
                 try:
-                    lock.unlink()
-                except FileNotFoundError:
-                    pass
-                continue
-            return False
-        with os.fdopen(fd, "w") as fh:
-            json.dump({"pid": os.getpid(), "host": _HOST, "run": _RUN_ID, "time": time.time()}, fh)
-        return True
-    return False
+                    os.link(part, lock)
+                except FileExistsError:
+                    raise
+                except OSError:  # no hard links here: exclusive create, then fill
+                    fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+                    with os.fdopen(fd, "w") as fh:
+                        fh.write(owner)
+                return True
+            except FileExistsError:
+                if _lock_is_stale(lock, stale_after):
+                    try:
+                        lock.unlink()
+                    except FileNotFoundError:
+                        pass
+                    continue
+                return False
+        return False
+    finally:
+        part.unlink(missing_ok=True)
 
 
 def _release(lock: Path) -> None:

@@ -242,6 +242,46 @@ def test_stale_lock_of_a_dead_process_is_taken_over(tmp_path):
     assert not lock.exists() and not list(store.glob("*.part"))
 
 
+def test_a_lock_never_appears_without_its_owner_and_an_ownerless_one_expires(tmp_path, monkeypatch):
+    """A batch killed between creating a lock and writing its owner left an EMPTY lock, which no run took over
+    before ``stale_after`` (24 h): the rerun of a killed batch hung (seen in CI, test_resume_after_kill).
+    Now a lock is created with its owner in it (a written file hard-linked to the lock's name), and a lock
+    still without an owner after UNWRITTEN_LOCK_GRACE counts as stale."""
+    import json
+    import threading
+
+    store = tmp_path / "store"
+    store.mkdir()
+    lock = store / "k.lock"
+    assert batch._claim(lock, 24 * 3600.0)
+    assert json.loads(lock.read_text())["pid"] == os.getpid()  # the owner is there from the start
+    assert not list(store.glob("*.part")) and not batch._claim(lock, 24 * 3600.0)  # held: refused
+    batch._release(lock)
+    # an ownerless lock: young = being written (kept), older than the grace = its writer died (taken over)
+    lock.write_text("")
+    assert not batch._lock_is_stale(lock, 24 * 3600.0)
+    old = time.time() - batch.UNWRITTEN_LOCK_GRACE - 5
+    os.utime(lock, (old, old))
+    assert batch._lock_is_stale(lock, 24 * 3600.0)
+    # end to end: a store holding such a lock for a point of the batch finishes and computes that point
+    pt = dict(a=3.0)
+    empty = store / f"{batch.point_key(square, pt)}.lock"
+    empty.write_text("")
+    os.utime(empty, (old, old))
+    out: list = []
+    worker = threading.Thread(
+        target=lambda: out.append(batch.run(square, [pt], executor="serial", store=store, progress=False)),
+        daemon=True,
+    )
+    worker.start()
+    worker.join(timeout=60)
+    assert out, "the batch waited on an ownerless lock"
+    assert float(out[0][0].total) == 15.0 and not empty.exists()
+    # where the file system refuses hard links, the lock is created exclusively and then filled
+    monkeypatch.setattr(batch.os, "link", lambda *a: (_ for _ in ()).throw(PermissionError("no hard links")))
+    assert batch._claim(lock, 24 * 3600.0) and json.loads(lock.read_text())["host"] == batch._HOST
+
+
 WRITER = """
 import sys, json
 sys.path.insert(0, {tests!r})
