@@ -270,37 +270,40 @@ _RUN_ID = uuid.uuid4().hex
 def _claim(lock: Path, stale_after: float) -> bool:
     """Create ``lock`` exclusively (True), or False if a live process holds it; stale locks are taken over.
 
-    The lock appears with its owner (pid, host) already in it: the owner is written to a private file that is
-    then hard-linked to the lock's name (atomic, and refused when the name exists), so a process killed at
-    any instant never leaves a lock without an owner. Where the file system has no hard links the lock is
-    created exclusively and then filled (a lock left empty there counts as stale after
-    ``UNWRITTEN_LOCK_GRACE``)."""
+    The lock appears with its owner (pid, host) already in it (:func:`_place`), so a process killed at any
+    instant never leaves a lock without an owner."""
     owner = json.dumps({"pid": os.getpid(), "host": _HOST, "run": _RUN_ID, "time": time.time()})
     part = lock.with_name(f"{lock.name}.{os.getpid()}.{uuid.uuid4().hex[:12]}.part")  # _clean_parts' pattern
     part.write_text(owner)
     try:
         for _ in range(2):
             try:
-                try:
-                    os.link(part, lock)
-                except FileExistsError:
-                    raise
-                except OSError:  # no hard links here: exclusive create, then fill
-                    fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
-                    with os.fdopen(fd, "w") as fh:
-                        fh.write(owner)
-                return True
+                _place(lock, part, owner)
             except FileExistsError:
-                if _lock_is_stale(lock, stale_after):
-                    try:
-                        lock.unlink()
-                    except FileNotFoundError:
-                        pass
-                    continue
-                return False
+                if not _lock_is_stale(lock, stale_after):
+                    return False
+                lock.unlink(missing_ok=True)
+                continue
+            return True
         return False
     finally:
         part.unlink(missing_ok=True)
+
+
+def _place(lock: Path, part: Path, owner: str) -> None:
+    """Make ``lock`` exist holding ``owner``, or raise FileExistsError: a hard link of ``part`` (which holds
+    ``owner``) to the lock's name, atomic; where the file system refuses hard links, an exclusive create and
+    then the write (a lock left empty there counts as stale after ``UNWRITTEN_LOCK_GRACE``)."""
+    try:
+        os.link(part, lock)
+        return
+    except FileExistsError:
+        raise
+    except OSError:
+        pass
+    fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+    with os.fdopen(fd, "w") as fh:
+        fh.write(owner)
 
 
 def _release(lock: Path) -> None:
