@@ -14,17 +14,22 @@ README = ROOT / "README.md"
 TUTORIALS = ("docs/tutorial-blastula.md", "docs/tutorial-spheroid.md")
 
 
+def _python_blocks(text: str) -> list[str]:
+    """The ```python blocks of a Markdown text, without those that only include a file (``--8<--``)."""
+    return [b for b in re.findall(r"```python\n(.*?)```", text, re.S) if not b.lstrip().startswith("--8<--")]
+
+
 def _api_block() -> str:
     text = README.read_text()
-    section = text[text.index("## Python API") :]
-    return re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    return _python_blocks(text[text.index("## Python API") :])[0]
 
 
 @pytest.mark.slow
 def test_readme_api_example_runs_and_its_comments_hold(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)  # it writes blastula.pvd
+    block = _api_block()
     ns: dict = {}
-    exec(compile(_api_block(), str(README), "exec"), ns)
+    exec(compile(block, str(README), "exec"), ns)
     capsys.readouterr()
     # limit point as the comment gives it
     lp = ns["lp"]
@@ -37,18 +42,12 @@ def test_readme_api_example_runs_and_its_comments_hold(tmp_path, monkeypatch, ca
         assert lo < value < hi, (name, lo, hi)
     assert fitres.success and "all parameters are identified" in fitres.summary()
     # the comment quotes the printed intervals
-    comment = _api_block().split("print(res.summary())", 1)[1].splitlines()[0]
+    comment = block.split("print(res.summary())", 1)[1].splitlines()[0]
     for name, digits in (("C", 4), ("alpha", 3), ("tau", 4)):
         lo, hi = fitres.intervals[name]
         assert f"{lo:.{digits}g}..{hi:.{digits}g}" in comment.replace(" Pa", "").replace(" s", ""), (name, lo, hi)
     assert np.isfinite(ns["grid"]).all() and ns["grid"].shape == (100, 100, 301)
     assert (tmp_path / "blastula.pvd").exists()
-
-
-def _blocks(path: Path) -> list[str]:
-    return [
-        b for b in re.findall(r"```python\n(.*?)```", path.read_text(), re.S) if not b.lstrip().startswith("--8<--")
-    ]
 
 
 @pytest.mark.slow
@@ -60,7 +59,7 @@ def test_tutorial_code_runs_in_order(page, tmp_path, monkeypatch, capsys):
 
     matplotlib.use("Agg")
     monkeypatch.chdir(tmp_path)
-    blocks = _blocks(ROOT / page)
+    blocks = _python_blocks((ROOT / page).read_text())
     assert blocks, page
     ns: dict = {}
     for i, block in enumerate(blocks):
