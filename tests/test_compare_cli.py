@@ -2,6 +2,7 @@
 
 import re
 
+import numpy as np
 import pytest
 
 from tissuemech.compare import cli
@@ -42,6 +43,27 @@ def test_blastula_table_and_plot(tmp_path, capsys):
     row = [ln for ln in text.splitlines() if ln.strip().startswith("1000.0")][0]
     assert "3.01223 / 2.06471" in row
     assert "burst" in [ln for ln in text.splitlines() if ln.strip().startswith("300.0")][0]
+
+
+def test_blastula_curves_solve_every_set_with_one_shape(monkeypatch):
+    """Every Fig. 4/5 set goes through the inverse with the same array shape (one compiled program for
+    the command, not one per set length: a cold ``tissuemech blastula`` compiled the inverse twice), and
+    the entries past a set's limit point are NaN, not a solution of the 0 Pa stand-in."""
+    from tissuemech.reduced import blastula
+
+    shapes = []
+    real = blastula.inner_stretch
+
+    def recording(p, **kw):
+        shapes.append(np.shape(p))
+        return real(p, **kw)
+
+    monkeypatch.setattr(blastula, "inner_stretch", recording)
+    curves = cli_blastula.blastula_curves(200.0, 50e-6, 1000.0, 50.0)
+    assert len(shapes) == len(curves) == 7 and set(shapes) == {(21,)}
+    burst = [c for c in curves if c["limit"] is not None]
+    assert burst and all(np.isnan(c["inner_stretch"][c["pressure"] >= c["limit"].pressure]).all() for c in burst)
+    assert all(np.isfinite(c["inner_stretch"][c["pressure"] < c["limit"].pressure]).all() for c in burst)
 
 
 def test_spheroid_table_and_plot(tmp_path, capsys):

@@ -96,9 +96,11 @@ def blastula_curves(C: float, inner_radius: float, max_pressure: float, step: fl
         geo = dict(inner_radius=inner_radius, outer_radius=B)
         lim = blastula.limit_point(**geo, C=C, alpha=alpha)
         ok = pressures < lim.pressure if lim is not None else np.ones_like(pressures, bool)
-        la = np.full_like(pressures, np.nan)
-        if ok.any():
-            la[ok] = np.asarray(blastula.inner_stretch(pressures[ok], **geo, C=C, alpha=alpha))
+        # every set solves the full pressure array (0 Pa, lambda_a = 1 exactly, past its limit point), so
+        # all sets share one compiled program (a per-set length would compile the inverse once per length)
+        la = np.where(
+            ok, np.asarray(blastula.inner_stretch(np.where(ok, pressures, 0.0), **geo, C=C, alpha=alpha)), np.nan
+        )
         lb = np.where(ok, np.asarray(blastula.outer_stretch(np.where(ok, la, 1.0), **geo)), np.nan)
         out.append(
             dict(
