@@ -47,7 +47,7 @@ def test_blastula_table_and_plot(tmp_path, capsys):
 
 def test_blastula_curves_solve_every_set_with_one_shape(monkeypatch):
     """Every Fig. 4/5 set goes through the inverse with the same array shape (one compiled program for
-    the command, not one per set length: a cold ``tissuemech blastula`` compiled the inverse twice), and
+    the command, not one per set length: ``tissuemech blastula --step 50`` compiled the inverse twice), and
     the entries past a set's limit point are NaN, not a solution of the 0 Pa stand-in."""
     from tissuemech.reduced import blastula
 
