@@ -232,8 +232,9 @@ class MasterCurve:
         if av is not None and self.alpha is not None:
             lo, hi = self.alpha_range
             if np.min(av) < lo - 1e-12 or np.max(av) > hi + 1e-12:
+                span = f"{np.min(av):g}" if np.min(av) == np.max(av) else f"{np.min(av):g}..{np.max(av):g}"
                 raise ValueError(
-                    f"alpha = {np.min(av):g}..{np.max(av):g} is outside the calibrated table "
+                    f"alpha = {span} is outside the calibrated table "
                     f"(alpha in [{lo:g}, {hi:g}]); use equilibrium='hertz' or extend the table."
                 )
 
@@ -859,7 +860,6 @@ def _evaluate(
     stress,
 ):
     br = validate_branches(branches)
-    t_arr = jnp.asarray(t, dtype=jnp.float64)
     eager = not is_traced(
         t,
         radius,
@@ -872,6 +872,7 @@ def _evaluate(
     if eager:
         _check_inputs(t, radius, C, alpha, displacement, ramp_time, equilibrium, midplane, jump_times, stress)
     _check_solver_options(rtol, atol, max_steps)
+    t_arr = jnp.asarray(t, dtype=jnp.float64)  # after the checks: their messages name t, numpy's would not
     betas = tuple(jnp.asarray(b, dtype=jnp.float64) for b, _ in br)
     taus = tuple(jnp.asarray(tau, dtype=jnp.float64) for _, tau in br)
     params = dict(radius=radius, C=C, alpha=alpha)
