@@ -251,25 +251,45 @@ def test_profiles_boundary_conditions_and_equilibrium():
 
 
 @pytest.mark.parametrize(
-    "kw",
+    "kw, message",
     [
-        dict(inner_radius=-1e-6, outer_radius=75e-6, C=C, alpha=0.0),
-        dict(inner_radius=75e-6, outer_radius=75e-6, C=C, alpha=0.0),
-        dict(inner_radius=80e-6, outer_radius=75e-6, C=C, alpha=0.0),
-        dict(inner_radius=A, outer_radius=75e-6, C=0.0, alpha=0.0),
-        dict(inner_radius=A, outer_radius=75e-6, C=-5.0, alpha=0.0),
-        dict(inner_radius=A, outer_radius=75e-6, C=C, alpha=-0.1),
-        dict(inner_radius=A, outer_radius=75e-6, C=C, alpha=float("nan")),
+        (dict(inner_radius=-1e-6, outer_radius=75e-6, C=C, alpha=0.0), r"^inner_radius must be positive \(in m\)"),
+        (
+            dict(inner_radius=75e-6, outer_radius=75e-6, C=C, alpha=0.0),
+            r"^inner_radius must be smaller than outer_radius",
+        ),
+        (
+            dict(inner_radius=80e-6, outer_radius=75e-6, C=C, alpha=0.0),
+            r"^inner_radius must be smaller than outer_radius",
+        ),
+        (
+            dict(inner_radius=A, outer_radius=75e-6, C=0.0, alpha=0.0),
+            r"^C \(the Fung stiffness.*must be positive \(in Pa\)",
+        ),
+        (
+            dict(inner_radius=A, outer_radius=75e-6, C=-5.0, alpha=0.0),
+            r"^C \(the Fung stiffness.*must be positive \(in Pa\)",
+        ),
+        (
+            dict(inner_radius=A, outer_radius=75e-6, C=C, alpha=-0.1),
+            r"^alpha \(the Fung stiffening exponent\) must be >= 0",
+        ),
+        (
+            dict(inner_radius=A, outer_radius=75e-6, C=C, alpha=float("nan")),
+            r"^alpha \(the Fung stiffening exponent\) must be finite",
+        ),
     ],
 )
-def test_bad_parameters_raise(kw):
-    with pytest.raises(ValueError):
+def test_bad_parameters_raise(kw, message):
+    """Each entry point names the bad parameter (numerics downstream would raise ValueErrors of their own, e.g.
+    'exceeds the limit pressure -21.3 Pa' for swapped radii: a bare ``pytest.raises(ValueError)`` passed on those)."""
+    with pytest.raises(ValueError, match=message):
         bl.pressure(1.5, **kw)
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match=message):
         bl.inner_stretch(10.0, **kw)
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match=message):
         bl.limit_point(**kw)
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match=message):
         bl.profiles(1.5, **kw)
 
 
