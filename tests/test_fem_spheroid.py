@@ -186,6 +186,20 @@ def test_unloading_releases_contact():
     k = np.argmax(r.force)
     assert r.contact_radius[-1] < r.contact_radius[k]
     assert r.force[-1] < 0.1 * r.force[k]
+    # elastic and frictionless: the unloading branch retraces the loading curve, state for state (the static
+    # curve through the same approaches agrees to ~1e-8 in force, ~1e-7 in contact radius), and the plate never
+    # pulls (no tensile contact multiplier while the contact shrinks)
+    s = compress(
+        radius=A0, C=200.0, alpha=0.0, branches=(), displacement=22e-6, ramp_time=1.0, end_time=1.0, mesh="coarse",
+        static=True, n_static=11,
+    )  # fmt: skip
+    for a in (22e-6, 10e-6, 4e-6):
+        i = np.flatnonzero((r.time > 1.0) & np.isclose(r.approach, a, rtol=1e-9))
+        j = np.flatnonzero(np.isclose(s.approach, a, rtol=1e-9))
+        assert i.size == 1 and j.size == 1
+        assert r.force[i[0]] == pytest.approx(s.force[j[0]], rel=1e-6)
+        assert r.contact_radius[i[0]] == pytest.approx(s.contact_radius[j[0]], rel=1e-5)
+    assert np.all(r.min_contact_force[r.time > 1.0] >= -1e-6 * r.force[r.time > 1.0])
 
 
 def test_static_monotone_and_hertz_limit(static_coarse):

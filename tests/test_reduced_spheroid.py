@@ -181,6 +181,9 @@ def test_jit_and_vmap_on_public_api():
     out = jax.vmap(f)(jnp.array([100.0, 200.0]), jnp.array([0.2, 0.4]))
     ref = np.asarray(sp.nominal_stress([0.2, 100.0], **{**FIG10, "C": 200.0}))
     assert np.allclose(out[1], ref, rtol=1e-8)  # traced: Kvaerno5; eager non-stiff: Tsit5 (both rtol 1e-10)
+    ref0 = np.asarray(sp.nominal_stress([0.2, 100.0], **{**FIG10, "C": 100.0, "branches": [(0.2, 200.0)]}))
+    assert np.allclose(out[0], ref0, rtol=1e-8)  # every lane its own parameters (the lanes differ by ~57 %)
+    assert not np.allclose(ref0, ref, rtol=0.1)
 
 
 def test_table_and_callable_equilibria():
