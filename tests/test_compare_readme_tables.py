@@ -16,10 +16,9 @@ README = Path(__file__).resolve().parent.parent / "README.md"
 
 def _readme_block(name: str) -> str:
     blocks = readme_tables.blocks_in(README.read_text())
-    if not blocks:  # the README has not adopted the generated blocks yet (notes/issue12.md has them)
-        pytest.skip(
-            "README.md has no readme_tables blocks yet: paste the output of python -m tissuemech.compare.readme_tables"
-        )
+    assert blocks, (
+        "README.md has no readme_tables blocks: paste the output of python -m tissuemech.compare.readme_tables"
+    )
     assert name in blocks, f"README.md lacks the generated block {name!r} (python -m tissuemech.compare.readme_tables)"
     return blocks[name]
 

@@ -114,8 +114,7 @@ def test_viscous_and_stiff_maps(quick_report):
 @pytest.mark.slow
 def test_spheroid_numbers(quick_report):
     out, summary = quick_report
-    if not summary["spheroid_available"]:
-        pytest.skip("fem.spheroid / reduced.spheroid not importable")
+    assert summary["spheroid_available"], "the report left out its spheroid section (fem.spheroid / reduced.spheroid)"
     acc = _csv(out, "accuracy_spheroid.csv")
     fe = acc[acc.method.str.startswith("FE")]
     assert fe.error.iloc[:-1].max() < 0.02

@@ -140,7 +140,8 @@ def test_validation():
 
 
 def test_spheroid_scan_with_reduced_model():
-    red = pytest.importorskip("tissuemech.reduced.spheroid")
+    from tissuemech.reduced import spheroid as red
+
     df = scan.spheroid(C=(100.0, 300.0), beta=(0.1, 1.0), n=3, curves=True, batch_size=4, rtol=1e-10)
     fast = scan.spheroid(C=(100.0, 300.0), beta=(0.1, 1.0), n=3, curves=True, batch_size=4)  # default rtol 1e-6
     for a, b in zip(df["sigma [Pa]"], fast["sigma [Pa]"]):
@@ -164,7 +165,6 @@ def test_spheroid_scan_with_reduced_model():
 
 def test_blastula_scan_fe_spot_checks_agree():
     """FE spot-checks (fem.blastula, default mesh, kappa = 2.2 GPa) against the exact shell: < 1e-5."""
-    pytest.importorskip("tissuemech.fem.blastula")
     df = scan.blastula(
         alpha=[0.2], outer_radius=[60e-6, 75e-6], pressure=(10.0, 60.0), n=4, fe_checks=2, fe_executor="serial"
     )

@@ -45,9 +45,10 @@ def test_burst_pressure(tmp_path):
 
 
 def test_export_paraview(tmp_path):
+    import meshio
+
     from tissuemech.fem.output import read_pvd
 
-    meshio = pytest.importorskip("meshio")
     run_example("export_paraview.py", tmp_path)
     b = read_pvd(tmp_path / "out" / "blastula.pvd")
     assert [t for t, _ in b] == [100.0, 400.0, 700.0, 1000.0]

@@ -1,13 +1,12 @@
 """ParaView time series (``to_pvd``) of both FE scenes: read back by meshio and a plain XML parse."""
 
+import meshio
 import numpy as np
 import pytest
 
 from tissuemech.fem.blastula import creep, inflate
 from tissuemech.fem.output import contact_pressure, read_pvd
 from tissuemech.fem.spheroid import compress
-
-meshio = pytest.importorskip("meshio")
 
 A, B, C = 50e-6, 75e-6, 200.0
 A0 = 500e-6

@@ -49,7 +49,7 @@ def test_maxwell_hold_decays_exactly_and_algorithmic_stress_matches():
     assert ve.algorithmic(ve.initial_state(0, (2, 3, 5)), [], [], 1.0) == (1.0, None)
     _, g = ve.coefficients(np.array([1.0]), np.array([1.0]), 1e-12)
     assert abs(g[0] - 1.0) < 1e-12
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="time step must be positive"):
         ve.coefficients(np.array([1.0]), np.array([1.0]), 0.0)
 
 

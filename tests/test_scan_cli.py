@@ -5,12 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+import xarray as xr
 from fakes import fake_nominal_stress
 
 from tissuemech.compare import cli, scan
 from tissuemech.compare import scan_cli as sc
-
-xr = pytest.importorskip("xarray")
 
 C_OPT = [o for o in sc.SPHEROID_OPTIONS if o.name == "C"][0]
 R_OPT = [o for o in sc.SPHEROID_OPTIONS if o.name == "radius"][0]

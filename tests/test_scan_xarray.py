@@ -5,11 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+import xarray as xr
 from fakes import fake_nominal_stress
 
 from tissuemech.compare import scan
-
-xr = pytest.importorskip("xarray")
 
 
 def test_grid_blastula_dims_units_and_round_trip(tmp_path):
