@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import meshio
 import numpy as np
 import pytest
 from scipy.optimize import curve_fit
@@ -237,9 +238,16 @@ def test_outputs_vtu_and_plots(fig10_coarse, tmp_path):
     assert len(r.fields) == 2 and np.isclose(r.fields[0].time, 0.2)
     assert np.allclose(r.nominal_stress, r.force / (np.pi * r.midplane_radius**2))
     r.to_vtu(str(tmp_path / "s.vtu"), time=0.2)
-    assert (tmp_path / "s.vtu").stat().st_size > 0
-    r.plot_von_mises(0.2)
-    r.plot_relaxation()
+    back = meshio.read(tmp_path / "s.vtu")  # the state at 0.2 s, cell by cell, as ParaView reads it
+    f = r.field_at(0.2)
+    assert back.points.shape[0] == r.mesh.mesh.nvertices
+    assert np.array_equal(back.cell_data["von_mises_Pa"][0], f.von_mises)
+    assert np.array_equal(back.cell_data["hydrostatic_pressure_Pa"][0], f.hydrostatic_pressure)
+    assert not np.allclose(f.von_mises, r.field_at(r.time[-1]).von_mises, rtol=1e-3)  # another time, other stress
+    ax = r.plot_von_mises(0.2)
+    assert "t = 0.2 s" in ax.get_title() and ax.collections
+    axes = r.plot_relaxation()
+    assert np.array_equal(axes[0].lines[0].get_ydata(), r.nominal_stress)
     assert np.all(r.newton_iterations >= 1)
 
 

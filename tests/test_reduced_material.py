@@ -86,4 +86,6 @@ def test_validation_is_skipped_under_jit():
         m.validate_material(c, 0.1)
         return m.fung_energy(4.0, c, 0.1)
 
-    assert np.isfinite(float(f(200.0)))
+    # the value of the law (not just a finite number), and a bad C under jit is computed, not raised
+    assert float(f(200.0)) == pytest.approx(200.0 / 0.1 * np.expm1(0.1), rel=1e-14)
+    assert float(f(-1.0)) == pytest.approx(-1.0 / 0.1 * np.expm1(0.1), rel=1e-14)
