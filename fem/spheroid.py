@@ -632,12 +632,11 @@ def _timed_fitted(fit: _EdgeFit, beta, tau, d_of_t, times, load_of_t, too_large=
 
     Every step is an equilibrium state whose contact edge is a node of its own fitted mesh (``_EdgeFit``,
     with the step's algorithmic viscoelastic stress). The meshes of one level share topology and numbering,
-    so the Maxwell variables (Q_m, S_iso^n per element and Gauss point) and the displacement guess are
-    carried from step to step by index: a material point's history is taken to the Gauss point of the same
-    index, which moves by a fraction of an element in the reference configuration when the edge moves (ramp
-    steps only; while the plate is held the edge stays where it is, the mesh with it). Only the combination
-    Q^n - beta g S_iso^n enters the next step's stress, and for dt << tau it is O(dt / tau) of the stress,
-    so the index carry-over error is that small fraction of the Gauss-point shift times the stress gradient.
+    so the displacement guess is carried from step to step by index; the Maxwell variables (Q_m, S_iso^n per
+    element and Gauss point) are interpolated to the new mesh's Gauss points in the reference configuration
+    (:func:`_gauss_transfer`, exact for fields quadratic in an element) whenever the step's mesh is another
+    than the last one's: in ramp steps, and for every trial mesh of the edge search. While the plate is held the
+    edge stays where it is, the mesh with it, and the history is taken as it is.
     """
     p0 = fit.problem(0.5)
     n0 = p0.asm.ndof
