@@ -1062,7 +1062,18 @@ def equilibrium_force(
 @functools.partial(jax.jit, static_argnums=(0,))
 def _equilibrium_core(law: EquilibriumLaw, displacement, radius, C, alpha):
     x = jnp.asarray(displacement, dtype=jnp.float64) / (2.0 * jnp.asarray(radius, dtype=jnp.float64))
-    return law.curve(alpha=alpha, radius=radius, C=C)(x) * C * jnp.asarray(radius) ** 2
+    if jnp.ndim(alpha) == 0:  # one alpha: the law's curve is made once (its alpha interpolation done once)
+        return law.curve(alpha=alpha, radius=radius, C=C)(x) * C * jnp.asarray(radius) ** 2
+    # an array of alphas: one curve per point (a law's curve is made for ONE alpha)
+    return _pointwise(lambda xi, ai, ri, ci: law.curve(alpha=ai, radius=ri, C=ci)(xi) * ci * ri**2, x, alpha, radius, C)
+
+
+def _pointwise(fn: Callable, *args):
+    """fn over the broadcast arguments, point by point (vmap over the flattened broadcast), in their shape."""
+    arrs = [jnp.asarray(a, dtype=jnp.float64) for a in args]
+    shape = jnp.broadcast_shapes(*(a.shape for a in arrs))
+    flat = [jnp.broadcast_to(a, shape).reshape(-1) for a in arrs]
+    return jax.vmap(fn)(*flat).reshape(shape)
 
 
 def midplane_radius(
@@ -1108,7 +1119,9 @@ def midplane_radius(
 @functools.partial(jax.jit, static_argnums=(0,))
 def _midplane_core(law: MidplaneLaw, displacement, radius, alpha):
     x = jnp.asarray(displacement, dtype=jnp.float64) / (2.0 * jnp.asarray(radius, dtype=jnp.float64))
-    return jnp.asarray(radius) * law.curve(alpha=alpha, radius=radius)(x)
+    if jnp.ndim(alpha) == 0:
+        return jnp.asarray(radius) * law.curve(alpha=alpha, radius=radius)(x)
+    return _pointwise(lambda xi, ai, ri: ri * law.curve(alpha=ai, radius=ri)(xi), x, alpha, radius)
 
 
 # ---------------------------------------------------------------- input checks of the public entry points

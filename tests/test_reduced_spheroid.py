@@ -541,3 +541,22 @@ def test_the_eager_range_check_of_an_approach_array_is_exact():
             sp.equilibrium_force(np.r_[d, bad], radius=500e-6, C=150.0, alpha=0.2, equilibrium="hertz")
         with pytest.raises(ValueError, match="displacement"):
             sp.midplane_radius(np.r_[d, bad], radius=500e-6)
+
+
+def test_table_laws_broadcast_over_alpha_arrays():
+    """equilibrium_force / midplane_radius with the FE table and an ARRAY alpha: one value per point, equal to the
+    one-point calls (they returned one value per x knot of the table, shape (23,), without an error)."""
+    al = np.array([0.0, 0.5, 1.5])
+    d = np.array([10e-6, 20e-6, 30e-6])
+    F = np.asarray(sp.equilibrium_force(10e-6, radius=A0, C=150.0, alpha=al))
+    assert F.shape == (3,)
+    assert np.allclose(F, [float(sp.equilibrium_force(10e-6, radius=A0, C=150.0, alpha=a)) for a in al], rtol=1e-13)
+    assert np.asarray(sp.equilibrium_force(10e-6, radius=A0, C=150.0, alpha=np.array([0.5]))).shape == (1,)
+    Fd = np.asarray(sp.equilibrium_force(d, radius=A0, C=150.0, alpha=al))
+    assert np.allclose(Fd, [float(sp.equilibrium_force(x, radius=A0, C=150.0, alpha=a)) for x, a in zip(d, al)])
+    grid = np.asarray(sp.equilibrium_force(d[:, None], radius=A0, C=150.0, alpha=al))
+    assert grid.shape == (3, 3) and np.allclose(np.diag(grid), Fd, rtol=1e-13)
+    r = np.asarray(sp.midplane_radius(d, radius=A0, alpha=al, midplane="fem"))
+    assert r.shape == (3,)
+    assert np.allclose(r, [float(sp.midplane_radius(x, radius=A0, alpha=a, midplane="fem")) for x, a in zip(d, al)])
+    assert len(set(np.round(F / F[0], 8))) == 3  # alpha matters in the table: the check has teeth
