@@ -454,6 +454,33 @@ def _blastula_one(inner_radius, outer_radius, C, alpha, pressure):
 _blastula_evaluate = jax.jit(jax.vmap(_blastula_one))  # compiled once per batch shape, reused by every scan
 
 
+def _polish_blastula(res: dict[str, np.ndarray], pts: pd.DataFrame) -> None:
+    """Solve again, eagerly, the points the compiled solve left NaN below their limit pressure (or without one).
+
+    Under jit the inverse is NaN where its one-panel rule cannot be trusted to 1e-10 (very stiff states, e.g. thick
+    shells at high pressure; ``reduced.blastula.inner_stretch_solve``); the eager ``inner_stretch`` takes the
+    error-controlled rule there. Points it cannot solve either (a stretch outside 0.5..10) stay NaN: they hold, but
+    beyond the stretch range the scan covers; only a pressure at or above the limit pressure is a burst."""
+    from tissuemech.reduced import blastula as red
+
+    la, p, lim = res["inner_stretch"], pts["pressure"].to_numpy(), res["p_limit"]
+    redo = np.flatnonzero(np.isnan(la) & ~(p >= lim))
+    if redo.size == 0:
+        return
+    kw = {k: pts[k].to_numpy()[redo] for k in ("inner_radius", "outer_radius", "C", "alpha")}
+    try:  # all at once (the usual case) ...
+        la[redo] = np.asarray(red.inner_stretch(p[redo], **kw))
+    except ValueError:  # ... else point by point: some have no state in the stretch range searched (0.5..10)
+        for j, i in enumerate(redo):
+            try:
+                la[i] = float(red.inner_stretch(p[i], **{k: float(v[j]) for k, v in kw.items()}))
+            except ValueError:
+                continue
+    ok = np.isfinite(la[redo])
+    geo = {k: kw[k][ok] for k in ("inner_radius", "outer_radius")}
+    res["outer_stretch"][redo[ok]] = np.asarray(red.outer_stretch(la[redo[ok]], **geo))
+
+
 def _run_fe(function, points, executor, store):
     from tissuemech.compare import batch
 
@@ -498,10 +525,11 @@ def blastula(
 
     Parameters inner_radius, outer_radius (m), C (Pa), alpha (-), pressure (Pa): each a number,
     a (lo, hi) range or (grid) a list. Returns a DataFrame with the parameters and
-    ``inner_stretch [-]``, ``outer_stretch [-]`` (NaN where the shell bursts), ``p_limit [Pa]``
-    (limit pressure, NaN if none up to stretch 10) and ``bursts [-]`` (True where the pressure
-    exceeds the limit). ``fe_checks=k`` adds ``fe_inner_stretch [-]`` and ``deviation [-]``
-    (relative difference of the inner stretch) from ``fem.blastula.inflate`` at k spread points.
+    ``inner_stretch [-]``, ``outer_stretch [-]`` (NaN where the shell bursts, or where its state lies outside the
+    stretch range 0.5..10 searched), ``p_limit [Pa]`` (limit pressure, NaN if none up to stretch 10) and
+    ``bursts [-]`` (True where the pressure is at or above the limit pressure). ``fe_checks=k`` adds
+    ``fe_inner_stretch [-]`` and ``deviation [-]`` (relative difference of the inner stretch) from
+    ``fem.blastula.inflate`` at k spread points.
     ``points``: a ready design (DataFrame or dict of arrays), as in :func:`spheroid`.
     """
     params = dict(inner_radius=inner_radius, outer_radius=outer_radius, C=C, alpha=alpha, pressure=pressure)
@@ -513,10 +541,12 @@ def blastula(
     validate_finite("pressure", pts["pressure"].to_numpy(), "Pa")
 
     res = _batched(lambda **kw: _blastula_evaluate(**kw), {k: pts[k].to_numpy() for k in BLASTULA_PARAMS}, batch_size)
+    _polish_blastula(res, pts)
     df = pts.rename(columns={k: _col(k) for k in pts.columns})
     for k in ("inner_stretch", "outer_stretch", "p_limit"):
         df[_col(k)] = res[k]
-    df[_col("bursts")] = np.isnan(res["inner_stretch"]) & (pts["pressure"].to_numpy() > 0)
+    p = pts["pressure"].to_numpy()
+    df[_col("bursts")] = np.isnan(res["inner_stretch"]) & (p > 0) & (p >= res["p_limit"])  # NaN p_limit: False
     if fe_checks:
         ok = np.nonzero(~np.isnan(res["inner_stretch"]) & (pts["pressure"].to_numpy() > 0))[0]
         sub = spread_indices(pts.iloc[ok].reset_index(drop=True), fe_checks, seed)
@@ -552,8 +582,8 @@ _LONG_NAMES = {
     "sigma_end": "nominal stress at the end of the hold",
     "relaxed_fraction": "relaxed fraction 1 - sigma_end/sigma_peak",
     "t_half": "time at which the stress has fallen half-way from peak to end",
-    "inner_stretch": "inner stretch a/A (NaN where the shell bursts)",
-    "outer_stretch": "outer stretch b/B (NaN where the shell bursts)",
+    "inner_stretch": "inner stretch a/A (NaN where the shell bursts or leaves 0.5..10)",
+    "outer_stretch": "outer stretch b/B (NaN where the shell bursts or leaves 0.5..10)",
     "p_limit": "limit (burst) pressure of the exact shell (NaN: none up to stretch 10)",
     "bursts": "the pressure exceeds the limit pressure",
     "fe_sigma_peak": "FE nominal stress at the end of the ramp",

@@ -334,7 +334,7 @@ def _fe_checks(scene: str, table: pd.DataFrame, pts: pd.DataFrame, k: int, kw: d
     if scene == "spheroid":
         idx = scan.spread_indices(pts, k, kw["seed"])
     else:  # only where the shell holds at a positive pressure, as scan.blastula does
-        ok = np.nonzero(~table["bursts [-]"].to_numpy(bool) & (pts["pressure"].to_numpy() > 0))[0]
+        ok = np.nonzero(np.isfinite(table["inner_stretch [-]"].to_numpy(float)) & (pts["pressure"].to_numpy() > 0))[0]
         if ok.size == 0:
             return 0
         idx = ok[scan.spread_indices(pts.iloc[ok].reset_index(drop=True), k, kw["seed"])]
@@ -444,8 +444,11 @@ def _summary_md(*, scene, argv_text, design, n_points, specs, options, table, ti
     if scene == "blastula":
         lines.append("")
         lines.append(
-            f"{int(table['bursts [-]'].sum())} of {len(table)} points burst (pressure above the limit pressure)."
+            f"{int(table['bursts [-]'].sum())} of {len(table)} points burst (pressure at or above the limit pressure)."
         )
+        beyond = int(np.sum(np.isnan(table["inner_stretch [-]"].to_numpy(float)) & ~table["bursts [-]"].to_numpy(bool)))
+        if beyond:
+            lines.append(f"{beyond} points hold but lie outside the stretch range 0.5..10 searched (NaN stretch).")
     lines += ["", "## FE spot-checks", ""]
     if n_fe:
         chk = table[table["deviation [-]"].notna()]

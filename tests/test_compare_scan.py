@@ -195,3 +195,30 @@ def test_scan_flags_bursts_above_the_limit_pressure():
     t = scan.blastula(points=pts)
     p_lim = t["p_limit [Pa]"].to_numpy()
     assert list(t["bursts [-]"]) == [False, True] and np.all(p_lim > 10.0) and np.all(p_lim < 962.8)
+
+
+def test_blastula_scan_bursts_only_past_the_limit_pressure():
+    """Where the compiled inverse leaves NaN below the limit pressure (its one-panel rule untrusted: thick shells at
+    high pressure), the scan solves eagerly; only a pressure at or above the limit pressure is a burst (these thick
+    shells were reported as bursting although they have no limit point)."""
+    from tissuemech.reduced import blastula as red
+
+    pts = dict(
+        inner_radius=[50e-6] * 4,
+        outer_radius=[500e-6, 500e-6, 75e-6, 196.4e-6],
+        C=[200.0] * 4,
+        alpha=[0.2, 0.2, 1e-5, 0.0428],
+        pressure=[1e4, 2e4, 300.0, 3e4],
+    )
+    df = scan.blastula(points=pts)
+    la = df["inner_stretch [-]"].to_numpy()
+    eager = red.inner_stretch([1e4, 2e4], inner_radius=50e-6, outer_radius=500e-6, C=200.0, alpha=0.2)
+    assert np.allclose(la[:2], eager, rtol=1e-12) and np.isnan(df["p_limit [Pa]"].to_numpy()[:2]).all()
+    assert np.allclose(
+        df["outer_stretch [-]"].to_numpy()[:2], red.outer_stretch(eager, inner_radius=50e-6, outer_radius=500e-6)
+    )
+    # neo-Hookean 75 um shell at 300 Pa: past its limit pressure (197.4 Pa): bursts
+    assert np.isnan(la[2]) and df["bursts [-]"].to_numpy()[2] and df["p_limit [Pa]"].to_numpy()[2] < 300.0
+    # no limit point, but the state lies beyond the largest stretch searched (10): NaN, and it does not burst
+    assert np.isnan(la[3]) and not df["bursts [-]"].to_numpy()[3]
+    assert list(df["bursts [-]"]) == [False, False, True, False]
