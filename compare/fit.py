@@ -79,6 +79,10 @@ __all__ = [
 Z95 = 1.959963984540054  # two-sided 95 % normal quantile
 ALPHA_BOUNDS = (1e-6, 10.0)
 BETA_BOUNDS = (1e-8, 1e4)
+# tau is searched within TAU_SPAN = (1e-3 ramp times, 1e3 times the last record time): beyond either end a branch is
+# indistinguishable in the records from one at that end (relaxed within the ramp's start / not relaxing during the
+# records: extra permanent stiffness), and an unbounded search ran tau to 1e302 s on records that do not relax
+TAU_SPAN = (1e-3, 1e3)
 POOR_SD = 0.5  # a log-combination with standard deviation above this (a factor ~2.7 at 95 %) is "poor"
 DEFAULT_MODEL_ERROR_REL = 0.005  # 1-sigma relative error of F_eq assumed for a table without `model_error_rel`
 NOISE_FREE_REL = 1e-9  # RMS residual below this fraction of the record's peak: noise-free (synthetic) data
@@ -457,8 +461,9 @@ def _identifiability(fisher: np.ndarray, names: tuple[str, ...], dead: Sequence[
         lines.append(f"  {ident.combination(i):<45} eigenvalue {lam[i]:10.3e}  95% factor {rel:>12}  {tag}")
     for i in dead:
         lines.append(
-            f"  -> the model does not depend on {names[i]} at all (e.g. alpha with equilibrium='hertz'): "
-            "it is not identified by any data of this kind."
+            f"  -> the model does not depend on {names[i]} at the estimate (alpha with equilibrium='hertz'; a "
+            "relaxation time whose branch has vanished, beta -> 0, as in records that do not relax): "
+            "it is not identified by these data."
         )
     if poorly:
         weak = [ident.combination(i) for i in poorly]
@@ -528,20 +533,26 @@ class _Problem:
 
 
 def _solve(fun, jac, z0, lo, hi, max_nfev):
+    """scipy's trust-region least squares within [lo, hi]; its overflow warnings on trial points far out (which
+    ``_safe`` turns into a large residual, so the step is refused) are not the user's concern and stay here."""
+    import warnings
+
     from scipy.optimize import least_squares
 
-    return least_squares(
-        fun,
-        np.clip(z0, lo + 1e-12, hi - 1e-12),
-        jac=jac,
-        bounds=(lo, hi),
-        method="trf",
-        x_scale="jac",
-        xtol=1e-12,
-        ftol=1e-12,
-        gtol=1e-12,
-        max_nfev=max_nfev,
-    )
+    with warnings.catch_warnings(), np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return least_squares(
+            fun,
+            np.clip(z0, lo + 1e-12, hi - 1e-12),
+            jac=jac,
+            bounds=(lo, hi),
+            method="trf",
+            x_scale="jac",
+            xtol=1e-12,
+            ftol=1e-12,
+            gtol=1e-12,
+            max_nfev=max_nfev,
+        )
 
 
 def _masked_solver(fun, jac, z_template, free, lo, hi):
@@ -639,7 +650,7 @@ class _Profiler:
         return float(root), "profile"
 
 
-def _bounds(names, n_branches, equilibrium):
+def _bounds(names, n_branches, equilibrium, ramp_time: float, t_end: float):
     lo = np.full(len(names), -np.inf)
     hi = np.full(len(names), np.inf)
     a_lo, a_hi = ALPHA_BOUNDS
@@ -648,7 +659,14 @@ def _bounds(names, n_branches, equilibrium):
         a_lo, a_hi = max(a_lo, mc.alpha_range[0]), min(a_hi, mc.alpha_range[1])
     lo[1], hi[1] = np.log(a_lo), np.log(a_hi)
     lo[2 : 2 + n_branches], hi[2 : 2 + n_branches] = np.log(BETA_BOUNDS[0]), np.log(BETA_BOUNDS[1])
+    taus = slice(2 + n_branches, 2 + 2 * n_branches)
+    lo[taus], hi[taus] = np.log(TAU_SPAN[0] * ramp_time), np.log(TAU_SPAN[1] * max(t_end, ramp_time))
     return lo, hi
+
+
+def _exp(th: float) -> float:
+    """exp(th), inf beyond the float range (a Wald end of a poorly determined log-parameter can lie there)."""
+    return math.exp(th) if th < 709.0 else math.inf
 
 
 def relaxation(
@@ -722,7 +740,7 @@ def relaxation(
     if np.any(p0 <= 0) or not np.all(np.isfinite(p0)):
         raise ValueError(f"initial values must be positive and finite; got {dict(zip(names, p0))}")
     P, R = len(names), len(recs)
-    lo_t, hi_t = _bounds(names, n_branches, equilibrium)
+    lo_t, hi_t = _bounds(names, n_branches, equilibrium, float(ramp_time), max(float(np.max(r.time)) for r in recs))
     theta0 = np.clip(np.log(p0), lo_t + 1e-9, hi_t - 1e-9)
 
     res_fn, jac_fn, scale = _builder(recs, float(radius), float(ramp_time), n_branches, equilibrium, model)
@@ -770,6 +788,9 @@ def relaxation(
     r = prob.resid(z)
     chi2 = float(r @ r)
     Jz = prob.jac(z)
+    if not np.all(np.isfinite(Jz)):
+        flags.append("the model's sensitivities are not finite at the estimate: the intervals cannot be trusted")
+        Jz = np.nan_to_num(Jz, nan=0.0, posinf=0.0, neginf=0.0)
     N = prob.y.size
     dof = N - P
     from scipy.stats import t as student_t
@@ -792,8 +813,10 @@ def relaxation(
         ident.report += (
             "\n  -> at a bound of the search: "
             + ", ".join(at_bound)
-            + f" (alpha in [{math.exp(lo[1]):.3g}, {math.exp(hi[1]):.3g}], beta in {BETA_BOUNDS}); e.g. alpha "
-            "at its lower bound means the data are consistent with a neo-Hookean law (alpha = 0)."
+            + f" (alpha in [{math.exp(lo[1]):.3g}, {math.exp(hi[1]):.3g}], beta in {BETA_BOUNDS}, tau in "
+            f"[{math.exp(lo[2 + n_branches]):.3g}, {math.exp(hi[2 + n_branches]):.3g}] s); e.g. alpha "
+            "at its lower bound means the data are consistent with a neo-Hookean law (alpha = 0), tau at its upper "
+            "bound that a branch does not relax within the records (beta then trades off against C)."
         )
     if not sol.success:
         flags.append(f"the optimizer did not converge: {sol.message}")
@@ -819,8 +842,8 @@ def relaxation(
         if how in ("bound", "open"):
             if side < 0:
                 return float(phys_lo[i])
-            return math.inf if how == "open" else float(math.exp(th))
-        return float(math.exp(th))
+            return math.inf if how == "open" else _exp(th)
+        return _exp(th)
 
     prof = _Profiler(prob, z, chi2, cov_z, lo, hi)
     prof.free = free.copy()
