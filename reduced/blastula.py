@@ -503,10 +503,20 @@ def pressure_derivative(
     """
     fast = _one_point(inner_stretch, (inner_radius, outer_radius, C, alpha))
     if fast is not None:
-        return np.asarray(_pressure_derivative_core(fast[0], fast[1])).reshape(fast[2])
+        out = np.asarray(_pressure_derivative_core(fast[0], fast[1])).reshape(fast[2])
+        if np.isfinite(out).all():
+            return out
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
     A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
-    return _call(_pressure_derivative_core, la, (A, B, C_, al))
+    out = _call(_pressure_derivative_core, la, (A, B, C_, al))
+    if is_traced(out) or np.isfinite(out).all():
+        return out
+    bad = ~np.isfinite(np.asarray(out))
+    la_b, al_b = (np.broadcast_to(np.asarray(v, dtype=float), bad.shape)[bad][0] for v in (la, al))
+    raise ValueError(
+        f"dp/d lambda_a at inner_stretch {la_b:g} with alpha = {al_b:g} is beyond the float64 range: the Fung law "
+        "stiffens as exp(2 alpha lambda^2) (and the slope grows as lambda^-5 towards collapse); lower the stretch or alpha"
+    )
 
 
 @jax.jit

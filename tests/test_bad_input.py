@@ -122,6 +122,10 @@ CASES = [
     ("dp text", lambda: bl.pressure_derivative("abc", **SHELL), E, r"^inner_stretch\b"),
     ("dp nan", lambda: bl.pressure_derivative(np.nan, **SHELL), E, r"^inner_stretch\b"),
     ("dp C text", lambda: bl.pressure_derivative(1.2, **kw(SHELL, C="x")), E, r"^C\b"),
+    # the slope beyond float64 (inf, or inf - inf = NaN) was returned silently where pressure() raises
+    ("dp overflow", lambda: bl.pressure_derivative(45.0, **SHELL), E, r"^dp/d lambda_a at inner_stretch 45 .*float64"),
+    ("dp overflow nan", lambda: bl.pressure_derivative(2.0, **kw(SHELL, alpha=1000.0)), E, r"float64 range"),
+    ("dp collapse", lambda: bl.pressure_derivative([1.2, 1e-100], **kw(SHELL, alpha=0.0)), E, r"inner_stretch 1e-100"),
     ("outer_stretch text", lambda: bl.outer_stretch("abc", **GEO), E, r"^inner_stretch\b"),
     ("outer_stretch negative", lambda: bl.outer_stretch(-1.0, **GEO), E, r"^inner_stretch\b"),
     (
