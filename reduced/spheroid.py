@@ -404,11 +404,23 @@ class Incompressible(MidplaneLaw):
     """The volume-preserving oblate estimate: a spheroid keeping the ball's volume when its height
     2 a0 shrinks by delta has g(x) = r_mid / a0 = 1 / sqrt(1 - x) (= 1 + x/2 + ... at small x).
 
-    Valid for 0 <= x < 1 (x is capped at 0.999 inside, so traced calls stay finite)."""
+    Valid for 0 <= x <= X_MAX = 0.999 (r_mid up to 31.6 a0): eager calls beyond it raise; traced calls are capped
+    there, so they stay finite."""
+
+    X_MAX = 0.999
 
     def curve(self, *, alpha: Any, radius: Any) -> Callable[[Any], jnp.ndarray]:
-        """x -> 1 / sqrt(1 - min(x, 0.999))."""
-        return lambda x: 1.0 / jnp.sqrt(1.0 - jnp.minimum(x, 0.999))
+        """x -> 1 / sqrt(1 - min(x, X_MAX))."""
+        return lambda x: 1.0 / jnp.sqrt(1.0 - jnp.minimum(x, self.X_MAX))
+
+    def check(self, x_max: Any, alpha: Any) -> None:
+        """x <= X_MAX (eager values only): beyond it the estimate 1/sqrt(1 - x) runs to infinity."""
+        xv = _concrete(x_max)
+        if xv is not None and np.max(xv) > self.X_MAX * (1 + 1e-12):
+            raise ValueError(
+                f"compression delta/(2 a0) = {np.max(xv):.6g} is beyond the incompressible midplane law's range "
+                f"(up to {self.X_MAX}, where r_mid = {1 / np.sqrt(1 - self.X_MAX):.3g} a0): the plates nearly touch"
+            )
 
 
 class FEMMidplane(MidplaneLaw):

@@ -242,6 +242,12 @@ CASES = [
     ("r_mid radius negative", lambda: sp.midplane_radius(50e-6, radius=-5e-4), E, r"^radius\b"),
     ("r_mid displacement nan", lambda: sp.midplane_radius(np.nan, radius=5e-4), E, r"^displacement\b"),
     ("r_mid displacement negative", lambda: sp.midplane_radius(-1e-5, radius=5e-4), E, r"^displacement\b"),
+    (
+        "r_mid past incompressible range",
+        lambda: sp.midplane_radius(0.9999e-3, radius=5e-4),
+        E,
+        r"^compression delta/\(2 a0\) = 0\.9999 is beyond the incompressible midplane",
+    ),
     ("r_mid past diameter", lambda: sp.midplane_radius(2e-3, radius=5e-4), E, "diameter"),
     ("r_mid alpha negative", lambda: sp.midplane_radius(5e-5, radius=5e-4, alpha=-1.0), E, r"^alpha\b"),
     ("r_mid midplane name", lambda: sp.midplane_radius(5e-5, radius=5e-4, midplane="foo"), E, r"^midplane\b"),
