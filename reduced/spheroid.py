@@ -891,9 +891,19 @@ def _evaluate(
     if not callable(displacement):
         params.update(displacement=displacement, ramp_time=ramp_time)
     params = {k: jnp.asarray(v, dtype=jnp.float64) for k, v in params.items()}
-    shape = jnp.broadcast_shapes(
-        *(v.shape for v in params.values()), *(b.shape for b in betas), *(tau.shape for tau in taus)
-    )
+    shapes = {
+        **{k: v.shape for k, v in params.items()},
+        **{f"beta of branch {m}": b.shape for m, b in enumerate(betas)},
+    }
+    shapes.update({f"tau of branch {m}": tau.shape for m, tau in enumerate(taus)})
+    try:
+        shape = jnp.broadcast_shapes(*shapes.values())
+    except ValueError:
+        given = ", ".join(f"{k} {v}" for k, v in shapes.items() if v != ())
+        raise ValueError(
+            f"the parameter arrays do not broadcast together ({given}): give them shapes that broadcast, e.g. "
+            "(2, 1) and (3,) for a 2 x 3 grid"
+        ) from None
     if solver is None:
         solver = diffrax.Kvaerno5()  # L-stable: safe for any tau / ramp ratio
         if eager and br and not callable(displacement):

@@ -178,6 +178,12 @@ CASES = [
     ("force t negative", _force(t=[-1.0, 0.0]), E, r"^t\b"),
     ("force t nan", _force(t=[0.0, np.nan]), E, r"^t\b"),
     ("force t empty", _force(t=[]), E, r"^t\b"),
+    (
+        "force shapes",
+        _force(C=np.array([100.0, 150.0]), alpha=np.array([0.0, 0.1, 0.2])),
+        E,
+        r"^the parameter arrays do not broadcast together \(C \(2,\), alpha \(3,\)\)",
+    ),
     ("force radius text", _force(radius="x"), E, r"^radius\b"),
     ("force radius negative", _force(radius=-1.0), E, r"^radius\b"),
     ("force C None", _force(C=None), E, r"^C\b"),
