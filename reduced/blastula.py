@@ -138,12 +138,17 @@ def _geometry(inner_radius, outer_radius):
 
 
 def _log_stretches(la, k, one_minus_k):
-    """(log lambda_b, log(lambda_a / lambda_b)) without cancellation near lambda_a = 1."""
+    """(log lambda_b, log(lambda_a / lambda_b)) without cancellation near lambda_a = 1 (log1p forms) nor in strong
+    deflation (lambda_a^3 < 1/2: lambda_b^3 = 1 - k + k lambda_a^3 summed directly and the width as log a - log b,
+    where 1 + e (1 - k)/(1 + e k) = (lambda_a / lambda_b)^3 -> 0 would lose digits: 2e-8 at lambda_a = 1e-3)."""
     xp = jnp if any(isinstance(v, jax.Array) for v in (la, k, one_minus_k)) else np
     sa = xp.log(la)
     e = xp.expm1(3.0 * sa)  # lambda_a^3 - 1
-    sb = xp.log1p(e * k) / 3.0
-    width = xp.log1p(e * one_minus_k / (1.0 + e * k)) / 3.0  # = sa - sb
+    deflated = e < -0.5
+    ek = xp.where(deflated, 0.0, e * k)  # (the unused branch kept finite: no NaN in a gradient)
+    sb = xp.where(deflated, xp.log(one_minus_k + k * xp.exp(3.0 * sa)) / 3.0, xp.log1p(ek) / 3.0)
+    arg = xp.where(deflated, 0.0, e * one_minus_k / (1.0 + ek))
+    width = xp.where(deflated, sa - sb, xp.log1p(arg) / 3.0)  # = sa - sb
     return sb, width
 
 
@@ -499,7 +504,9 @@ def pressure_derivative(
     d lambda_b/d lambda_a = (A/B)^3 lambda_a^2 / lambda_b^2,  g(l) = 4 W'(I1(l)) (l^3 + 1)/l^5.
 
     Arguments as :func:`pressure` (inner_stretch > 0; A < B in m; C > 0 in Pa; alpha >= 0), broadcast.
-    Returns dp/d lambda_a in Pa. Raises ``ValueError`` for bad inputs in eager calls.
+    Returns dp/d lambda_a in Pa (to ~1e-14 for walls thicker than ~1e-2 of A; the two terms cancel as A/B -> 1:
+    ~5e-16 / (wall / A), 4.9e-10 at a wall of 1e-6 A). Raises ``ValueError`` for bad inputs and for a slope beyond
+    the float64 range in eager calls.
     """
     fast = _one_point(inner_stretch, (inner_radius, outer_radius, C, alpha))
     if fast is not None:
@@ -662,7 +669,9 @@ def limit_point(*, inner_radius: Array, outer_radius: Array, C: Array, alpha: Ar
     The maximum is the first root of the closed-form slope (Leibniz rule)
     dp/dlambda_a = g(lambda_a) - g(lambda_b) (A/B)^3 lambda_a^2/lambda_b^2 on 1 < lambda_a <= 10
     (scan on a 256-node geometric grid, 12 bisections, 4 safeguarded Newton steps; the stretch is exact
-    to round-off, ~1e-14).
+    to round-off, ~1e-14, for walls down to ~1e-3 of the inner radius; thinner walls lose digits as the slope's
+    two terms cancel for A/B -> 1, ~3e-17 / (wall / A): 1.5e-11 at a wall of 1e-6 A, 3.4e-8 at 1e-9 A; p_max,
+    stationary there, keeps ~1e-15).
     Arguments: inner_radius A and outer_radius B in m (A < B), C in Pa (> 0), alpha >= 0 (broadcast).
     Returns ``None`` for scalar eager inputs without a maximum up to lambda_a = 10 (e.g. Fung with
     alpha >= ~0.06 for A/B = 2/3 stiffens before it can go unstable), a ``LimitPoint`` of two floats
@@ -1174,7 +1183,13 @@ def _profiles_core(inner_stretch, params, n):
     t = jnp.linspace(0.0, 1.0, int(n))
     R = A + (B - A) * t
     e = jnp.expm1(3.0 * jnp.log(la))
-    lam = jnp.exp(jnp.log1p(e * (A / R) ** 3) / 3.0)
+    q = (A / R) ** 3
+    # l^3 = 1 + e q near lambda_a = 1 (log1p); in strong deflation 1 - q + q lambda_a^3 summed directly (1 + e q -> 0
+    # there loses every digit: l was 0 at lambda_a = 1e-10), with 1 - q = (R - A)(R^2 + R A + A^2) / R^3
+    deflated = e < -0.5
+    one_minus_q = (R - A) * (R * R + R * A + A * A) / R**3
+    direct = jnp.log(jnp.where(deflated, one_minus_q + q * la**3, 1.0)) / 3.0
+    lam = jnp.exp(jnp.where(deflated, direct, jnp.log1p(jnp.where(deflated, 0.0, e * q)) / 3.0))
     kR, omkR, alpha, C = _wall_geometry(A, B, R, alpha, C)
     lam_b, kR_b, omkR_b, alpha_b, C_b, R_b = jnp.broadcast_arrays(lam, kR, omkR, alpha, C, R)
     pc, redo = _p_over_C_flagged(lam_b, kR_b, omkR_b, alpha_b)

@@ -522,3 +522,22 @@ def test_one_point_fast_path_equals_array_path():
         bl.inner_stretch(10.0, **GEO, C=C, alpha=-0.1)
     with pytest.raises(ValueError, match="limit pressure"):
         bl.inner_stretch(250.0, **GEO, C=C, alpha=0.0)
+
+
+@pytest.mark.parametrize("la", [0.7, 1e-2, 1e-3, 1e-5, 1e-8])
+def test_strong_deflation_against_the_neo_hookean_closed_form(la):
+    """p = C [4 (1/lb - 1/la) + (1/lb^4 - 1/la^4)] for W = C (I1 - 3), down to the collapse (both methods, profiles):
+    the width log(la / lb) was formed from 1 + e (1 - k)/(1 + e k) -> 0 and lost digits (2e-8 at 1e-3, 2 % at 1e-5,
+    an error at 1e-6), and the profile's hoop stretch was 0 at 1e-10."""
+    import warnings
+
+    lb = (1 + (la**3 - 1) * (A / 75e-6) ** 3) ** (1 / 3)
+    exact = C * (4 * (1 / lb - 1 / la) + (1 / lb**4 - 1 / la**4))
+    geo = dict(inner_radius=A, outer_radius=75e-6, C=C, alpha=0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for method in ("quadrature", "ode"):
+            assert float(bl.pressure(la, **geo, method=method)) == pytest.approx(exact, rel=1e-12)
+        pr = bl.profiles(la, **geo, n=5)
+        assert float(np.asarray(pr.sigma_r)[0]) == pytest.approx(-exact, rel=1e-12)
+        assert np.asarray(pr.stretch)[0] == pytest.approx(la, rel=1e-14)
