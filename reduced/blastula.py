@@ -109,13 +109,22 @@ _LOG_FLOAT_MAX = 705.0  # log(p/C) above this would overflow float64 (max ~ 1.8e
 _NODES_PER_CHUNK = 4_000_000  # eager composite rules are evaluated in chunks of this many nodes
 
 
+STRETCH_DOMAIN = (1e-30, 1e30)  # inner stretches an eager call accepts: beyond, the integrand's powers leave float64
+
+
 def _check_stretch(name: str, value: Any) -> np.ndarray | None:
-    """Eager check: stretch finite and > 0 (``< 1`` is deflation and allowed); the float64 array
-    (None for a traced value)."""
+    """Eager check: stretch finite and > 0 (``< 1`` is deflation and allowed) and within ``STRETCH_DOMAIN``; the
+    float64 array (None for a traced value)."""
     v = validate_finite(name, value, "a/A, dimensionless")
     if v is not None and (v <= 0).any():
         raise ValueError(
             f"{name} must be positive (a/A > 0; values below 1 mean the cavity shrinks); got {np.min(v):g}"
+        )
+    if v is not None and ((v < STRETCH_DOMAIN[0]) | (v > STRETCH_DOMAIN[1])).any():
+        bad = v[(v < STRETCH_DOMAIN[0]) | (v > STRETCH_DOMAIN[1])].ravel()[0]
+        raise ValueError(
+            f"{name} must lie within {STRETCH_DOMAIN[0]:g}..{STRETCH_DOMAIN[1]:g} (a/A, dimensionless; beyond, the "
+            f"powers of the stretch in the pressure integral leave the float64 range); got {bad:g}"
         )
     return v
 
@@ -132,8 +141,9 @@ def _geometry(inner_radius, outer_radius):
     """k = (A/B)^3 and 1 - k, the latter without cancellation for thin walls."""
     A = jnp.asarray(inner_radius, dtype=jnp.float64)
     B = jnp.asarray(outer_radius, dtype=jnp.float64)
-    k = (A / B) ** 3
-    one_minus_k = (B - A) * (B * B + A * B + A * A) / B**3
+    r = A / B
+    k = r**3
+    one_minus_k = (B - A) / B * (1.0 + r + r * r)  # scale-free (B^3 under/overflows for radii beyond ~1e+-100 m)
     return k, one_minus_k
 
 
@@ -355,7 +365,7 @@ def _one_point(x, params, stretch: bool = True):
         return None
     if x is not _NO_X:
         xv = vals.pop(0)
-        if stretch and not xv > 0.0:
+        if stretch and not STRETCH_DOMAIN[0] <= xv <= STRETCH_DOMAIN[1]:
             return None
     A, B = vals[0], vals[1]
     if not (0.0 < A < B) or (len(vals) > 2 and not (vals[2] > 0.0 and vals[3] >= 0.0)):
