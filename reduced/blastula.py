@@ -483,6 +483,7 @@ def pressure(
                     f"the radial-ODE integration failed at inner stretch {stretch.ravel()[0]:g} (diffrax did not "
                     f"reach the inner wall in {_ODE_MAX_STEPS} steps). Hint: use method='quadrature' (exact to 1e-13)."
                 )
+            return np.asarray(p)  # eager results are NumPy arrays, whichever method
         return p
     p = _call(_pressure_core, la, (A, B, C_, al))
     if is_traced(p) or not np.isnan(p).any():
