@@ -2,7 +2,8 @@ r"""Path following: adaptive load control and Riks arc-length (through limit poi
 
 ``load_control(solve, loads, x0, *, lam0=0.0, monitor=None, max_cuts=12, tangent=None)``
     ``solve(lam, x_guess) -> NewtonResult`` (raises ``NewtonError``). Reaches every requested
-    load; a failed step is halved (up to ``max_cuts`` times). The predictor, first that applies: with a
+    load; a failed step is halved (up to ``max_cuts`` times), after one retry from the last converged state
+    where the predicted guess is inadmissible (Newton could not start from it). The predictor, first that applies: with a
     ``monitor`` (a scalar response m(x), e.g. the inner stretch) and three converged states, the curve through
     them quadratic in m (lam(m) solved for the target load, x(m) interpolated: smooth where x(lam) bends
     sharply, e.g. a shell that inflates fast before the Fung law stiffens it); Euler's, x_c + (dx/dlam) dlam,
@@ -99,6 +100,22 @@ def _monitor_quadratic(hist: list, lam_t: float) -> np.ndarray | None:
     return w0 * x0 + w1 * x1 + w2 * x2
 
 
+def _solve_from(solve: Callable, lam: float, guess: np.ndarray, x_c: np.ndarray):
+    """(result, None) of ``solve(lam, guess)``, or (None, the NewtonError). A predicted guess that Newton could not
+    even start from (inadmissible: an extrapolation that turns an element inside out, residual history empty) is
+    replaced by the last converged state ``x_c`` for the same step before the step is cut: a fast-inflating shell's
+    secant would otherwise fail every step and exhaust the cuts (``inflate(pressures=[1e6])`` did, at 488 Pa)."""
+    try:
+        return solve(lam, guess), None
+    except NewtonError as e:
+        if e.residuals or guess is x_c:
+            return None, e
+    try:
+        return solve(lam, x_c), None
+    except NewtonError as e:
+        return None, e
+
+
 def load_control(
     solve: Callable,
     loads: Sequence[float],
@@ -147,9 +164,8 @@ def load_control(
                 guess = x_c + (x_c - x_old) * (lam_t - lam_c) / (lam_c - lam_old)
             else:
                 guess = x_c
-            try:
-                res = solve(lam_t, guess)
-            except NewtonError as err:
+            res, err = _solve_from(solve, lam_t, guess, x_c)
+            if res is None:
                 cuts += 1
                 if cuts > max_cuts:
                     s = None

@@ -254,3 +254,16 @@ def test_monitor_quadratic_predictor_exact_on_a_quadratic_path_and_fewer_factori
             plain = inflate(**kw, mesh=(4, 8))
         np.testing.assert_allclose(curve.inner_stretch, plain.inner_stretch, rtol=1e-9, atol=0)
         assert lu_curve < 0.9 * counts["lu"]
+
+
+def test_one_large_load_step_is_reached():
+    """A single requested pressure far up the curve: where the predictor's extrapolation turns an element inside
+    out, the step restarts from the last converged state before it is cut (600 kPa in one request exhausted the
+    cuts at 439 Pa before; one request of 1 kPa took 98 iterations, now ~16). The state is the sweep's."""
+    geo = dict(inner_radius=A, outer_radius=B, C=C, alpha=0.2, mesh="coarse")
+    one = inflate(**geo, pressures=[1000.0])
+    sweep = inflate(**geo, pressures=np.linspace(20.0, 1000.0, 50))
+    assert float(one.inner_stretch[-1]) == pytest.approx(float(sweep.inner_stretch[-1]), rel=1e-9)
+    far = inflate(**geo, pressures=[6e5])
+    exact = float(bl.inner_stretch(6e5, inner_radius=A, outer_radius=B, C=C, alpha=0.2))
+    assert float(far.inner_stretch[-1]) == pytest.approx(exact, rel=0.08)  # the coarse mesh at lambda ~ 5.4
