@@ -21,10 +21,11 @@ The accumulators cost ~1 us a call (a few hundred calls per run).
 from __future__ import annotations
 
 import argparse
-import functools
 import time
+import types
 
 import numpy as np
+from issue14_fig10_breakdown import _accumulate  # (the notes folder is on sys.path when run as a script)
 
 from tissuemech.compare.bench import fem_perf as bp
 from tissuemech.fem import blastula as fb
@@ -35,30 +36,17 @@ from tissuemech.fem import spheroid as fs
 PARTS = ("residuals", "tangent assemblies", "factorisations", "solves", "admissibility checks")
 
 
-def _accumulate(acc: dict, owner, name: str, label: str) -> None:
-    f = getattr(owner, name)
-
-    @functools.wraps(f)
-    def timed(*a, **k):
-        t = time.perf_counter()
-        try:
-            return f(*a, **k)
-        finally:
-            acc[label] = acc.get(label, 0.0) + time.perf_counter() - t
-
-    setattr(owner, name, timed)
-
-
 def _counted(acc: dict, fn, label: str):
-    def g(*a, **k):
-        t = time.perf_counter()
-        try:
-            return fn(*a, **k)
-        finally:
-            acc[label] = acc.get(label, 0.0) + time.perf_counter() - t
-            acc["n " + label] = acc.get("n " + label, 0) + 1
+    """fn with its wall time added to acc[label] and its calls counted in acc["n " + label]."""
+    holder = types.SimpleNamespace(fn=fn)
+    _accumulate(acc, holder, "fn", label)
+    timed = holder.fn
 
-    return g
+    def counting(*a, **k):
+        acc["n " + label] = acc.get("n " + label, 0) + 1
+        return timed(*a, **k)
+
+    return counting
 
 
 def _instrument(acc: dict) -> None:
