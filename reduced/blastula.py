@@ -395,9 +395,9 @@ def _call(core, x, params, *static):
     if n == 1:  # one point (Python floats or size-1 arrays): 0-d inputs, parameters in one vector
         ps = np.array([float(v.reshape(())) for v in params])
         out = core(*(() if x is None else (x.reshape(()),)), ps, *static)
-        return jax.tree_util.tree_map(lambda o: np.asarray(o).reshape(shape + o.shape), out)
+        return jax.tree_util.tree_map(lambda o: _host(o).reshape(shape + o.shape), out)
     if n > _BUCKET_MAX:
-        return jax.tree_util.tree_map(np.asarray, core(*(() if x is None else (x,)), _pack(*params), *static))
+        return jax.tree_util.tree_map(_host, core(*(() if x is None else (x,)), _pack(*params), *static))
     size = max(16, 1 << (n - 1).bit_length())
 
     def pad(v):
@@ -408,7 +408,13 @@ def _call(core, x, params, *static):
     scalar_params = all(v.ndim == 0 for v in params)
     ps = _pack(*params) if scalar_params else tuple(pad(v) for v in params)
     out = core(*(() if x is None else (pad(x),)), ps, *static)
-    return jax.tree_util.tree_map(lambda o: np.asarray(o)[:n].reshape(shape + o.shape[1:]), out)
+    return jax.tree_util.tree_map(lambda o: _host(o)[:n].reshape(shape + o.shape[1:]), out)
+
+
+def _host(o):
+    """A compiled core's output as a NumPy array; a tracer stays one (concrete inputs inside a user's jit or vmap:
+    the core was staged into the user's program, and the caller takes its traced branch)."""
+    return o if isinstance(o, jax.core.Tracer) else np.asarray(o)
 
 
 @jax.jit
@@ -462,8 +468,8 @@ def pressure(
     if method == "quadrature":
         fast = _one_point(inner_stretch, (inner_radius, outer_radius, C, alpha))
         if fast is not None:
-            p1 = np.asarray(_pressure_core(fast[0], fast[1]))
-            if not np.isnan(p1):
+            p1 = _host(_pressure_core(fast[0], fast[1]))
+            if is_traced(p1) or not np.isnan(p1):
                 return p1.reshape(fast[2])
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
     A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
@@ -521,8 +527,8 @@ def pressure_derivative(
     """
     fast = _one_point(inner_stretch, (inner_radius, outer_radius, C, alpha))
     if fast is not None:
-        out = np.asarray(_pressure_derivative_core(fast[0], fast[1])).reshape(fast[2])
-        if np.isfinite(out).all():
+        out = _host(_pressure_derivative_core(fast[0], fast[1])).reshape(fast[2])
+        if is_traced(out) or np.isfinite(out).all():
             return out
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
     A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
@@ -553,7 +559,7 @@ def outer_stretch(inner_stretch: Array, *, inner_radius: Array, outer_radius: Ar
     """
     fast = _one_point(inner_stretch, (inner_radius, outer_radius))
     if fast is not None:
-        return np.asarray(_outer_stretch_core(fast[0], fast[1])).reshape(fast[2])
+        return _host(_outer_stretch_core(fast[0], fast[1])).reshape(fast[2])
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
     A, B = validate_radii(inner_radius, outer_radius)
     return _call(_outer_stretch_core, la, (_concrete(A, inner_radius), _concrete(B, outer_radius)))
@@ -694,7 +700,9 @@ def limit_point(*, inner_radius: Array, outer_radius: Array, C: Array, alpha: Ar
     """
     fast = _one_point(_NO_X, (inner_radius, outer_radius, C, alpha))
     if fast is not None:
-        pm1, la1, redo1 = (np.asarray(v) for v in _limit_core(fast[1]))
+        pm1, la1, redo1 = (_host(v) for v in _limit_core(fast[1]))
+        if is_traced(pm1):  # inside a user's jit/vmap: the traced convention (NaN where there is no maximum)
+            return LimitPoint(pm1.reshape(fast[2]), la1.reshape(fast[2]))
         if not redo1:
             if not fast[2]:
                 return None if np.isnan(pm1) else LimitPoint(float(pm1), float(la1))
@@ -1016,7 +1024,9 @@ def inner_stretch(pressure: Array, *, inner_radius: Array, outer_radius: Array, 
     """
     fast = _one_point(pressure, (inner_radius, outer_radius, C, alpha), stretch=False)
     if fast is not None:
-        la1, conv1, ok1 = (np.asarray(v) for v in _inverse_core(fast[0], fast[1]))
+        la1, conv1, ok1 = (_host(v) for v in _inverse_core(fast[0], fast[1]))
+        if is_traced(la1):  # inside a user's jit/vmap: NaN where there is no stable state
+            return jnp.where(conv1 & ok1, la1, jnp.nan).reshape(fast[2])
         if conv1 and ok1:
             return la1.reshape(fast[2])
     p = _concrete(validate_finite("pressure", pressure, "Pa"), pressure)
@@ -1025,6 +1035,8 @@ def inner_stretch(pressure: Array, *, inner_radius: Array, outer_radius: Array, 
         la, _ = inner_stretch_solve(pressure, inner_radius=inner_radius, outer_radius=outer_radius, C=C, alpha=alpha)
         return la
     la, conv, rule_ok = _call(_inverse_core, p, (A, B, C_, al))
+    if is_traced(la):  # concrete inputs inside a user's jit/vmap
+        return jnp.where(conv & rule_ok, la, jnp.nan)
     conv = np.asarray(conv)
     rule_ok = np.asarray(rule_ok)
     if conv.all() and rule_ok.all():
@@ -1151,6 +1163,8 @@ def profiles(
     fast = _one_point(inner_stretch, (inner_radius, outer_radius, C, alpha)) if type(n) is int and n >= 2 else None
     if fast is not None:
         fields, redo1 = _profiles_core(fast[0], fast[1], n)
+        if is_traced(fields):  # inside a user's jit/vmap: the one-panel fields
+            return Profiles(*fields.reshape((6,) + fast[2] + (n,)))
         if not np.asarray(redo1).any():  # one transfer of the (6, n) block, then six views
             return Profiles(*np.asarray(fields).reshape((6,) + fast[2] + (n,)))
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)

@@ -554,3 +554,29 @@ def test_the_shell_is_scale_free(scale):
     geo = dict(ref, inner_radius=scale, outer_radius=2 * scale)
     assert float(bl.pressure(2.0, **geo)) == pytest.approx(float(bl.pressure(2.0, **ref)), rel=1e-14)
     assert float(bl.inner_stretch(100.0, **geo)) == pytest.approx(float(bl.inner_stretch(100.0, **ref)), rel=1e-13)
+
+
+def test_concrete_parameters_inside_a_users_jit():
+    """Every public function called with plain-number parameters INSIDE a user's jit (only another value traced):
+    the compiled cores are staged into the user's program and their outputs are tracers; the functions return them
+    (the traced conventions: NaN where there is no state or no maximum) instead of converting them to NumPy, which
+    raised TracerArrayConversionError (`tissuemech scan blastula` with its defaults crashed on it)."""
+    g = dict(inner_radius=A, outer_radius=75e-6, C=C, alpha=0.0)
+    q = jnp.float64(0.0)
+    cases = {
+        "limit_point": (lambda: bl.limit_point(**g).pressure, bl.limit_point(**g).pressure),
+        "inner_stretch": (lambda: bl.inner_stretch(100.0, **g), bl.inner_stretch(100.0, **g)),
+        "pressure": (lambda: bl.pressure(1.5, **g), bl.pressure(1.5, **g)),
+        "pressure arrays": (lambda: bl.pressure(np.array([1.5, 2.0]), **g), bl.pressure(np.array([1.5, 2.0]), **g)),
+        "pressure_derivative": (lambda: bl.pressure_derivative(1.5, **g), bl.pressure_derivative(1.5, **g)),
+        "outer_stretch": (
+            lambda: bl.outer_stretch(1.5, inner_radius=A, outer_radius=75e-6),
+            bl.outer_stretch(1.5, inner_radius=A, outer_radius=75e-6),
+        ),
+        "profiles": (lambda: bl.profiles(1.5, **g, n=3).sigma_r, bl.profiles(1.5, **g, n=3).sigma_r),
+    }
+    for name, (traced, eager) in cases.items():
+        out = jax.jit(lambda q, f=traced: f() + q)(q)
+        np.testing.assert_allclose(np.asarray(out), np.asarray(eager), rtol=1e-13, atol=1e-12, err_msg=name)
+    past = jax.jit(lambda q: bl.inner_stretch(np.array([100.0, 300.0]), **g) + q)(q)  # 300 Pa: past the limit
+    assert np.isfinite(past[0]) and np.isnan(past[1])
