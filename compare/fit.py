@@ -915,7 +915,8 @@ def relaxation(
 def read_csv(path: str, *, displacement: float, time_column: str | int = 0, stress_column: str | int = 1) -> Record:
     """Read a relaxation record from a CSV file: a time column (s) and a nominal-stress column (Pa).
 
-    A header line is optional (columns may then be chosen by name), ``#`` lines are comments;
+    A header line is optional (columns may then be chosen by name; a unit in it, ``time_ms`` or ``stress [kPa]``,
+    is converted to SI, an unknown one refused), ``#`` lines are comments;
     ``displacement`` is the total plate approach in m. Returns a :class:`Record` ready for
     :func:`relaxation`. Raises ValueError (one line naming the file and line) for malformed files.
     """
@@ -933,4 +934,16 @@ def read_csv(path: str, *, displacement: float, time_column: str | int = 0, stre
             if c not in table.header:
                 raise ValueError(f"{path}: column {c!r} not found; it has {list(table.header)}")
             cols.append(table.header.index(c))
-    return _as_records([(table.values[:, cols[0]], table.values[:, cols[1]], displacement)])[0]
+    from tissuemech.compare.fit_cli import _UNITS, _column
+
+    scaled = []
+    for c, want in zip(cols, ("time", "stress")):
+        kind, unit = _column(table.header[c]) if c < len(table.header) else (None, None)
+        if kind not in (None, want):
+            raise ValueError(f"{path}: column {table.header[c]!r} holds {kind}, not {want}")
+        if unit is not None and unit not in _UNITS[want]:
+            raise ValueError(
+                f"{path}: column {table.header[c]!r}: unit {unit!r} is not one of {', '.join(_UNITS[want])} ({want})"
+            )
+        scaled.append(table.values[:, c] * (1.0 if unit is None else _UNITS[want][unit]))
+    return _as_records([(scaled[0], scaled[1], displacement)])[0]

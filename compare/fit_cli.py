@@ -147,13 +147,63 @@ def read_table(path: str | Path) -> Table:
     return Table(path, header, np.array(rows, dtype=float), meta, tuple(lines))
 
 
-def _is_force(table: Table, quantity: str) -> bool:
-    if quantity != "auto":
-        return quantity == "force"
-    if len(table.header) >= 2:
-        h = table.header[1].lower()
-        return "force" in h or h.endswith("_n") or h.endswith("(n)") or h.endswith("[n]")
-    return False
+# header names and units the reader knows (factor to SI); a column's unit comes as ``name_unit``, ``name [unit]``
+# or ``name (unit)``; a known name without a unit is taken in SI
+_UNITS = {
+    "time": {"s": 1.0, "ms": 1e-3, "min": 60.0, "h": 3600.0},
+    "stress": {"Pa": 1.0, "mPa": 1e-3, "kPa": 1e3, "MPa": 1e6},
+    "force": {"N": 1.0, "mN": 1e-3, "uN": 1e-6, "µN": 1e-6, "μN": 1e-6, "nN": 1e-9},
+}
+_NAMES = {
+    "time": ("t", "time"),
+    "stress": ("stress", "sigma", "nominal_stress", "stress_nominal"),
+    "force": ("force", "f", "plate_force", "load"),
+}
+
+
+def _column(name: str) -> tuple[str | None, str | None]:
+    """(quantity, unit) of a header name: quantity 'time' / 'stress' / 'force' or None (not one of these), unit as
+    written or None (none given)."""
+    m = re.match(r"^\s*(.*?)\s*[\[(]\s*([^\])]*?)\s*[\])]\s*$", name)
+    base, unit = (m.group(1), m.group(2)) if m else (name, None)
+    if m is None and "_" in name:
+        head, tail = name.rsplit("_", 1)
+        if any(tail in units for units in _UNITS.values()):
+            base, unit = head, tail
+    key = base.strip().lower().replace(" ", "_")
+    kind = next((k for k, names in _NAMES.items() if key in names), None)
+    return kind, unit
+
+
+def _columns(table: Table, quantity: str) -> tuple[int, int, float, float, bool]:
+    """(time column, value column, time factor to s, value factor to Pa or N, value is a force) of a table, from
+    its header's names and units; columns 0 and 1 in SI where the header does not name them (or there is none)."""
+    parsed = [_column(h) for h in table.header]
+    kinds = [k for k, _ in parsed]
+    ti = kinds.index("time") if "time" in kinds else 0
+    vi = next((i for i, k in enumerate(kinds) if k in ("stress", "force") and i != ti), 1 if ti != 1 else 0)
+    if vi >= table.values.shape[1] or ti >= table.values.shape[1]:
+        raise ValueError(f"{table.path}: the header {list(table.header)} names more columns than the rows have")
+    factors = []
+    for i, default in ((ti, "time"), (vi, None)):
+        kind, unit = parsed[i] if i < len(parsed) else (None, None)
+        kind = kind or default
+        if unit is None or kind is None:
+            factors.append(1.0)
+            continue
+        if unit not in _UNITS[kind]:
+            raise ValueError(
+                f"{table.path}: column {table.header[i]!r}: unit {unit!r} is not one this reader knows for {kind} "
+                f"({', '.join(_UNITS[kind])}); convert the column or rename its header"
+            )
+        factors.append(_UNITS[kind][unit])
+    named = parsed[vi][0] if vi < len(parsed) else None
+    if quantity != "auto" and named is not None and named != quantity:
+        raise ValueError(
+            f"{table.path}: --quantity {quantity} but the header names column {table.header[vi]!r} a {named}"
+        )
+    force = quantity == "force" if quantity != "auto" else named == "force"
+    return ti, vi, factors[0], factors[1], force
 
 
 def _incompressible_rmid(t: np.ndarray, radius: float, displacement: float, ramp_time: float) -> np.ndarray:
@@ -191,11 +241,11 @@ def load_records(
             d = v * UM
         else:
             raise ValueError(f"{p}: no displacement: give --displacement-um (um) or a '# displacement_um: ...' line")
-        t, y = table.values[:, 0], table.values[:, 1]
+        ti, vi, t_si, y_si, force = _columns(table, quantity)
+        t, y = table.values[:, ti] * t_si, table.values[:, vi] * y_si
         if np.any(t < 0):
             i = int(np.argmax(t < 0))
             raise ValueError(f"{p}, line {table.lines[i]}: time must not be negative (s); got {t[i]:g}")
-        force = _is_force(table, quantity)
         if force:
             y = y / (math.pi * _incompressible_rmid(t, radius, d, ramp_time) ** 2)
         recs.append((t, y, d))

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tissuemech.compare import fit_cli
+from tissuemech.compare import fit, fit_cli
 from tissuemech.compare.cli import main
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "data"
@@ -130,3 +130,50 @@ def test_example_recovered_within_intervals(tmp_path, capsys):
         if k != "alpha":  # with the FE table's model-error term two levels may bound alpha from above only
             assert d["interval_kinds"][k] == "two-sided"
     assert (out / "fit.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize(
+    "header, t_si, y_si, force",
+    [
+        ("time_ms,stress_kPa", 1e-3, 1e3, False),
+        ("time_s,force_mN", 1.0, 1e-3, True),
+        ("t [s],F [uN]", 1.0, 1e-6, True),  # `tissuemech spheroid`'s own column names
+        ("time (min); stress (Pa)", 60.0, 1.0, False),
+        ("time,stress", 1.0, 1.0, False),  # known names without units: SI
+    ],
+)
+def test_header_units_are_converted(tmp_path, header, t_si, y_si, force):
+    """The header is where a file states its units: they are converted to SI, not dropped (a `time_ms,stress_kPa`
+    file was fitted as s and Pa, `force_mN` as N, `F [uN]` as a stress in Pa, all with exit code 0)."""
+    sep = ";" if ";" in header else ","
+    f = tmp_path / "u.csv"
+    f.write_text(header + "\n" + "".join(f"{a}{sep}{b}\n" for a, b in ((0.1, 3.0), (0.2, 6.0), (30.0, 5.0))))
+    (rec,), forces = fit_cli.load_records([str(f)], radius=500e-6, displacements=[100e-6], ramp_time=0.2)
+    assert forces == [force]
+    assert np.allclose(rec[0], np.array([0.1, 0.2, 30.0]) * t_si, rtol=1e-15)
+    if not force:
+        assert np.allclose(rec[1], np.array([3.0, 6.0, 5.0]) * y_si, rtol=1e-15)
+    else:  # a force in N over the incompressible midplane area
+        t = np.array([0.1, 0.2, 30.0]) * t_si
+        x = np.minimum(t / 0.2, 1.0) * 100e-6 / 1e-3
+        assert np.allclose(rec[1], np.array([3.0, 6.0, 5.0]) * y_si / (math.pi * (500e-6 / np.sqrt(1 - x)) ** 2))
+
+
+def test_header_column_order_and_unknown_units(tmp_path):
+    """Columns are taken by their header names (a `stress_Pa,time_s` file had its columns swapped); a unit the reader
+    does not know, or a header contradicting --quantity, stops with one line naming the column."""
+    ok = tmp_path / "ok.csv"
+    ok.write_text("time_s,stress_Pa\n0.1,3\n0.2,6\n30,5\n")
+    sw = tmp_path / "sw.csv"
+    sw.write_text("stress_Pa,time_s\n3,0.1\n6,0.2\n5,30\n")
+    kw = dict(radius=500e-6, displacements=[100e-6], ramp_time=0.2)
+    (a,), _ = fit_cli.load_records([str(ok)], **kw)
+    (b,), _ = fit_cli.load_records([str(sw)], **kw)
+    assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
+    bad = tmp_path / "bad.csv"
+    bad.write_text("time [fortnights],stress [Pa]\n0.1,3\n0.2,6\n")
+    with pytest.raises(ValueError, match=r"column 'time \[fortnights\]': unit 'fortnights' is not one"):
+        fit_cli.load_records([str(bad)], **kw)
+    with pytest.raises(ValueError, match=r"--quantity force but the header names column 'stress_Pa' a stress"):
+        fit_cli.load_records([str(ok)], **kw, quantity="force")
+    assert fit.read_csv(str(sw), displacement=1e-4, time_column="time_s", stress_column="stress_Pa").time[-1] == 30.0
