@@ -710,13 +710,18 @@ def relaxation(
     if intervals not in ("profile", "wald"):
         raise ValueError(f"intervals must be 'profile' or 'wald'; got {intervals!r}")
     mc = _table(equilibrium)
-    if mc is not None:
-        x = max(r.displacement for r in recs) / (2 * radius)
-        if x > mc.x_max * (1 + 1e-12):
-            raise ValueError(
-                f"compression delta/(2 a0) = {x:.4g} is beyond the calibrated table (up to {mc.x_max:.4g}); "
-                "use equilibrium='hertz' or a shorter approach (m)"
-            )
+    x = max(r.displacement for r in recs) / (2 * radius)
+    if x >= 0.999:  # the plates would (nearly) touch: no law of this model holds there
+        raise ValueError(
+            f"the approach {max(r.displacement for r in recs):.4g} m is {x:.3g} of the ball's diameter 2 radius = "
+            f"{2 * radius:.4g} m: it must be below it (check the displacement and the radius; on the command line "
+            "--displacement-um and --radius-um)"
+        )
+    if mc is not None and x > mc.x_max * (1 + 1e-12):
+        raise ValueError(
+            f"compression delta/(2 a0) = {x:.4g} is beyond the calibrated table (up to {mc.x_max:.4g}); "
+            "use equilibrium='hertz' (small compressions only) or a shorter approach"
+        )
     if isinstance(model_error, str):
         if model_error != "auto":
             raise ValueError(

@@ -407,3 +407,12 @@ def test_wald_intervals_of_a_poorly_determined_record_do_not_overflow():
         assert 0.0 <= lo <= hi
     res2 = fit.relaxation(_reduced_records([], 2, TIMES[::6]), radius=A0, ramp_time=TR, intervals="wald")
     assert res2.intervals["C"][0] <= 150.0 <= res2.intervals["C"][1]
+
+
+def test_an_approach_past_the_diameter_is_refused_whatever_the_law():
+    """50 um on a 10 um ball is 2.5 diameters: refused for every law (with Hertz it returned C ~ 10 Pa, exit 0)."""
+    t = np.linspace(0.0, 10.0, 30)
+    y = 10.0 * (1 + np.exp(-t))
+    for law in ("hertz", "fem"):
+        with pytest.raises(ValueError, match=r"is 2\.5 of the ball's diameter .* it must be below it"):
+            fit.relaxation([(t, y, 50e-6)], radius=10e-6, ramp_time=0.2, equilibrium=law)
