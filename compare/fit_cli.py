@@ -279,7 +279,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="fit C, alpha, beta, tau with 95 %% intervals to your compression-relaxation CSV files",
         description="Fit the lumped generalized-Maxwell spheroid model (FE-calibrated equilibrium law) to "
         "measured compression-relaxation records, one CSV per compression level: time (s) and nominal "
-        "stress (Pa) or plate force (N); header optional, '#' comments. Prints the parameters with 95 %% "
+        "stress (Pa) or plate force (N); a header line may name the columns with units, '#' comments. Prints the parameters with 95 % "
         "intervals and the identifiability report; writes fit.json and fit.png to --out.",
     )
     f.add_argument("files", nargs="+", metavar="DATA.csv", help="one CSV file per compression level")
@@ -288,6 +288,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "--displacement-um",
         type=_positive,
         nargs="+",
+        action="extend",  # a repeated option adds its values (it kept only the last)
         default=None,
         help="total plate approach in um: one for all files or one per file (default: '# displacement_um:' in each file)",
     )
@@ -354,9 +355,11 @@ def _figure(recs, res, model_kw, path):
 def run(args: argparse.Namespace) -> None:
     """Carry out ``tissuemech fit`` (errors: ValueError with a one-line message)."""
     from tissuemech.compare import fit
+    from tissuemech.compare.cli.common import output_folder
 
     if args.branches < 1:
         raise ValueError(f"--branches must be at least 1; got {args.branches}")
+    output_folder("--out", args.out)  # before the fit
     radius = args.radius_um * UM
     disps = None if args.displacement_um is None else [d * UM for d in args.displacement_um]
     recs, forces = load_records(

@@ -282,6 +282,7 @@ def spheroid(
     fe_store: str | None = None,
     model: Callable | None = None,
     fe_function: Callable | None = None,
+    fe_progress: bool = True,
     points: Any = None,
     rtol: float = 1e-6,
 ) -> pd.DataFrame:
@@ -294,7 +295,8 @@ def spheroid(
     (1 - end/peak), ``t_half [s]`` (time at which the stress has fallen half-way from peak to
     end); with ``curves=True`` also a column ``sigma [Pa]`` holding each curve (and
     ``df.attrs["time [s]"]``). ``fe_checks=k``: FE runs (``fem.spheroid.compress``) at k spread
-    points, adding ``fe_sigma_peak [Pa]``, ``fe_sigma_end [Pa]`` and ``deviation [-]``.
+    points, adding ``fe_sigma_peak [Pa]``, ``fe_sigma_end [Pa]`` and ``deviation [-]``. ``fe_progress``: the FE runs' progress bar
+    (default on).
     ``model``: the reduced nominal-stress function (default ``reduced.spheroid.nominal_stress``).
     ``rtol``: the ODE tolerance of the default model for non-stiff designs (Tsit5, rtol = atol; 1e-6 keeps
     the curves within ~1e-6 of the exact ones because steps land on the output times); stiff designs
@@ -359,7 +361,7 @@ def spheroid(
     if fe_checks:
         idx = spread_indices(pts, fe_checks, seed)
         fe_pts = [dict(pts.iloc[i].to_dict(), end_time=float(np.max(times))) for i in idx]
-        fe = _run_fe(fe_function or _fe_spheroid, fe_pts, fe_executor, fe_store)
+        fe = _run_fe(fe_function or _fe_spheroid, fe_pts, fe_executor, fe_store, fe_progress)
         for name in ("fe_sigma_peak", "fe_sigma_end", "deviation"):
             df[_col(name)] = np.nan
         for i, r in zip(idx, fe):
@@ -481,10 +483,10 @@ def _polish_blastula(res: dict[str, np.ndarray], pts: pd.DataFrame) -> None:
     res["outer_stretch"][redo[ok]] = np.asarray(red.outer_stretch(la[redo[ok]], **geo))
 
 
-def _run_fe(function, points, executor, store):
+def _run_fe(function, points, executor, store, progress: bool = True):
     from tissuemech.compare import batch
 
-    return batch.run(function, points, executor=executor, store=store, raise_on_error=False)
+    return batch.run(function, points, executor=executor, store=store, raise_on_error=False, progress=progress)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -519,6 +521,7 @@ def blastula(
     fe_executor: Any = None,
     fe_store: str | None = None,
     fe_function: Callable | None = None,
+    fe_progress: bool = True,
     points: Any = None,
 ) -> pd.DataFrame:
     """Scan the exact thick-shell blastula (``reduced.blastula``) over parameters.
@@ -529,7 +532,7 @@ def blastula(
     stretch range 0.5..10 searched), ``p_limit [Pa]`` (limit pressure, NaN if none up to stretch 10) and
     ``bursts [-]`` (True where the pressure is at or above the limit pressure). ``fe_checks=k`` adds
     ``fe_inner_stretch [-]`` and ``deviation [-]`` (relative difference of the inner stretch) from
-    ``fem.blastula.inflate`` at k spread points.
+    ``fem.blastula.inflate`` at k spread points (``fe_progress``: their progress bar, default on).
     ``points``: a ready design (DataFrame or dict of arrays), as in :func:`spheroid`.
     """
     params = dict(inner_radius=inner_radius, outer_radius=outer_radius, C=C, alpha=alpha, pressure=pressure)
@@ -551,7 +554,9 @@ def blastula(
         ok = np.nonzero(~np.isnan(res["inner_stretch"]) & (pts["pressure"].to_numpy() > 0))[0]
         sub = spread_indices(pts.iloc[ok].reset_index(drop=True), fe_checks, seed)
         idx = ok[sub]
-        fe = _run_fe(fe_function or _fe_blastula, [pts.iloc[i].to_dict() for i in idx], fe_executor, fe_store)
+        fe = _run_fe(
+            fe_function or _fe_blastula, [pts.iloc[i].to_dict() for i in idx], fe_executor, fe_store, fe_progress
+        )
         df[_col("fe_inner_stretch")] = np.nan
         df[_col("deviation")] = np.nan
         for i, r in zip(idx, fe):

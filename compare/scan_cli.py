@@ -349,6 +349,7 @@ def _fe_checks(scene: str, table: pd.DataFrame, pts: pd.DataFrame, k: int, kw: d
             fe_checks=len(idx),
             fe_executor=executor,
             fe_store=store,
+            fe_progress=not args.no_progress,
             batch_size=max(len(idx), 1),
             **sub_kw,
         )
@@ -540,6 +541,9 @@ def _run(args: argparse.Namespace, scene: str) -> int:
     )
     if n_expected > 20_000_000:
         raise ScanInputError(f"--n {n}: the {design} design would have {n_expected} points (at most 20000000)")
+    curve_params = [o.name for o in options] if scene == "spheroid" else ["inner_radius", "outer_radius", "C", "alpha"]
+    if args.color_by is not None and args.color_by not in curve_params:  # before anything is computed or written
+        raise ScanInputError(f"--color-by {args.color_by}: choose from {curve_params}")
     out = Path(args.out)
     _check_out(out)  # before anything is computed
     progress = not args.no_progress
@@ -644,9 +648,6 @@ def _run(args: argparse.Namespace, scene: str) -> int:
     else:
         notes.append("No map: it needs two varied parameters.")
     color_by = args.color_by
-    curve_params = [o.name for o in options] if scene == "spheroid" else ["inner_radius", "outer_radius", "C", "alpha"]
-    if color_by is not None and color_by not in curve_params:
-        raise ScanInputError(f"--color-by {color_by}: choose from {curve_params}")
     if color_by is None:
         color_by = curve_params[0]
         cand = [k for k in varied if k in curve_params]

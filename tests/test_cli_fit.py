@@ -177,3 +177,19 @@ def test_header_column_order_and_unknown_units(tmp_path):
     with pytest.raises(ValueError, match=r"--quantity force but the header names column 'stress_Pa' a stress"):
         fit_cli.load_records([str(ok)], **kw, quantity="force")
     assert fit.read_csv(str(sw), displacement=1e-4, time_column="time_s", stress_column="stress_Pa").time[-1] == 30.0
+
+
+def test_repeated_displacement_option_and_out_checked_first(tmp_path, capsys):
+    """`--displacement-um 50 --displacement-um 200` gives both values (the last one alone was kept: both files fitted
+    at 200 um); an --out that is a file stops before the fit (it printed the fit, then failed to write)."""
+    files = [str(EXAMPLES / "spheroid_50um.csv"), str(EXAMPLES / "spheroid_200um.csv")]
+    base = ["fit", *files, "--radius-um", "500", "--ramp-time", "0.2", "--no-figure"]
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    assert main([*base, "--out", str(afile)]) == 2
+    cap = capsys.readouterr()
+    assert cap.out == "" and "--out" in cap.err and "is a file" in cap.err
+    out = tmp_path / "res"
+    assert main([*base, "--displacement-um", "50", "--displacement-um", "200", "--out", str(out)]) == 0
+    d = json.loads((out / "fit.json").read_text())["inputs"]["displacement_m"]
+    assert d == pytest.approx([50e-6, 200e-6])

@@ -43,6 +43,10 @@ def test_blastula_table_and_plot(tmp_path, capsys):
     row = [ln for ln in text.splitlines() if ln.strip().startswith("1000.0")][0]
     assert "3.01223 / 2.06471" in row
     assert "burst" in [ln for ln in text.splitlines() if ln.strip().startswith("300.0")][0]
+    # a step that does not divide the range: no row above --max-pressure (600 gave a 1200 Pa row)
+    assert cli.main(["blastula", "--out", str(out), "--step", "600"]) == 0
+    rows = [ln.split()[0] for ln in capsys.readouterr().out.splitlines() if ln[:9].strip().replace(".", "").isdigit()]
+    assert "1200.0" not in rows and "600.0" in rows
 
 
 def test_blastula_curves_solve_every_set_with_one_shape(monkeypatch):
@@ -72,8 +76,12 @@ def test_spheroid_table_and_plot(tmp_path, capsys):
     text = capsys.readouterr().out
     assert out.stat().st_size > 10_000
     # Hertz, Fig. 10 case: F(1500 s) ~ F_eq (1 + 0.4 e^-7.5) = 4.4731 uN
-    row = [ln for ln in text.splitlines() if ln.strip().startswith("1500.00")][0]
-    assert float(row.split()[1]) == pytest.approx(4.47314, abs=1e-4)  # printed with 4 decimals
+    row = [ln for ln in text.splitlines() if ln.split()[:1] == ["1500"]][0]
+    assert float(row.split()[1]) == pytest.approx(4.47314, abs=1e-4)  # printed with 5 significant digits
+    # a short ramp: every time readable (fixed 2 decimals printed 0.00 three times for a 1 ms ramp)
+    assert cli.main(["spheroid", "--out", str(out), "--equilibrium", "hertz", "--ramp-time", "0.001"]) == 0
+    times = [ln.split()[0] for ln in capsys.readouterr().out.splitlines()[2:5]]
+    assert times == ["0.00025", "0.0005", "0.001"]
 
 
 @pytest.mark.parametrize(

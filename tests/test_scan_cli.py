@@ -46,11 +46,13 @@ def test_parse_value_syntax():
         (["scan", "spheroid", "--n", "0"], "--n 0: must be at least 1"),
         (["scan", "blastula", "--map", "C,alpha"], "is not varied"),
         (["scan", "spheroid", "--alpha=-0.1:0.2", "--n", "3"], "alpha"),
+        (["scan", "blastula", "--alpha", "0:0.3", "--n", "4", "--color-by", "bogus"], "--color-by bogus: choose from"),
     ],
 )
 def test_bad_input_one_line_exit_2(tmp_path, capsys, argv, match):
     out = tmp_path / "o"
     assert cli.main(argv + ["--out", str(out), "--no-progress"]) == 2
+    assert not out.exists() or not any(out.iterdir())  # refused before anything is written
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and match in err[0] and "Traceback" not in err[0], err
     assert err[0].startswith("tissuemech scan ")

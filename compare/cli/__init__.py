@@ -93,7 +93,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         msg = str(exc).replace("Use equilibrium='hertz'", "Use --equilibrium hertz")
         msg = msg.replace("use equilibrium='hertz'", "use --equilibrium hertz").replace(" or a callable,", ",")
         if isinstance(exc, OSError) and exc.filename is not None:  # a raw errno: say which file, in words
-            msg = f"cannot write {exc.filename!r}: {exc.strerror}"
+            msg = f"{exc.filename!r}: {exc.strerror}"
         print(f"tissuemech {args.command}: error: {msg}", file=sys.stderr)
         return 2
     return rc if isinstance(rc, int) else 0

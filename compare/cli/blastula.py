@@ -90,7 +90,7 @@ def blastula_curves(C: float, inner_radius: float, max_pressure: float, step: fl
     """
     from tissuemech.reduced import blastula
 
-    pressures = np.arange(0.0, max_pressure + 0.5 * step, step)
+    pressures = np.arange(0.0, max_pressure * (1 + 1e-12) + 1e-12 * step, step)  # never above max_pressure
     out = []
     for fig, alpha, B in cases.BLASTULA_SETS:
         geo = dict(inner_radius=inner_radius, outer_radius=B)

@@ -164,7 +164,7 @@ def spheroid_table(args: Namespace) -> None:
     print(head)
     s_fe = np.asarray(fe.nominal_stress)[np.asarray(fe.time) > 0] if fe is not None else None
     for k, ts in enumerate(show):
-        row = (f"{ts:9.4g}" if s_fe is not None else f"{ts:9.2f}") + f" {F_show[k] * 1e6:10.4f} {s_show[k]:12.4f}"
+        row = f"{ts:9.4g} {F_show[k] * 1e6:10.5g} {s_show[k]:12.6g}"  # (fixed decimals read 0.00 in short ramps)
         if s_fe is not None:
             row += f" {s_fe[k]:15.4f} {s_show[k] / s_fe[k] - 1:+15.2e}"
         print(row)
