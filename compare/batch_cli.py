@@ -206,6 +206,9 @@ def resolve_function(spec: str) -> Callable[..., Any]:
     return obj
 
 
+_SI_UNITS = {"", "-", "1", "m", "s", "Pa", "N", "kg", "J"}  # units a points-table header may state
+
+
 def read_points(path: str | os.PathLike) -> list[dict[str, Any]]:
     """The points of a CSV table (header = keyword names; numbers in SI units), one dict per row, with
     Python ints/floats/strings (integral columns stay ints). Raises ValueError for an empty table."""
@@ -214,7 +217,17 @@ def read_points(path: str | os.PathLike) -> list[dict[str, Any]]:
     df = pd.read_csv(path)
     if df.empty:
         raise ValueError(f"{path}: the points table has no rows")
-    df.columns = [str(c).split(" [")[0].strip() for c in df.columns]  # 'C [Pa]' -> 'C'
+    names = []
+    for c in map(str, df.columns):  # 'C [Pa]' -> 'C'; the numbers must be SI: a unit is checked, not dropped
+        name, _, unit = c.partition(" [")
+        unit = unit.rstrip("]").strip()
+        if unit not in _SI_UNITS:
+            raise ValueError(
+                f"{path}: column {c!r}: the points are passed as they are, in SI units ({', '.join(sorted(_SI_UNITS - {''}))}); "
+                f"convert the column to SI and name it so (e.g. 'C [Pa]', 'radius [m]')"
+            )
+        names.append(name.strip())
+    df.columns = names
     return [{k: (v.item() if hasattr(v, "item") else v) for k, v in row.items()} for row in df.to_dict("records")]
 
 
@@ -328,22 +341,30 @@ def run(args: argparse.Namespace) -> int:
             args.workers, mp_context=multiprocessing.get_context("spawn"), initializer=batch.worker_init
         )
     log.info("chunk %d of %d: %d of %d points into %s", index, args.chunks, len(mine), len(points), args.store)
+    failures: dict[int, str] = {}
     try:
-        res = batch.run(
+        batch.run(
             function,
             [points[i] for i in mine],
             executor=executor,
             store=args.store,
             progress=False,
-            raise_on_error=False,
         )
+    except batch.BatchError as exc:  # the finished points are stored; the reasons of the others are here
+        failures = exc.failures
     finally:
         if args.workers > 0:
             executor.shutdown()
-    failed = [mine[k] for k, r in enumerate(res) if r is None]
+    failed = sorted(mine[k] for k in failures)
     print(f"chunk {index}/{args.chunks}: {len(mine) - len(failed)} of {len(mine)} points stored in {args.store}")
     if failed:
-        print(f"failed points (rows of {args.points}, 0-based): {failed}; rerun to retry them", file=sys.stderr)
+        print(f"failed points (rows of {args.points}, 0-based): {failed}", file=sys.stderr)
+        for k in sorted(failures)[:10]:
+            print(f"  row {mine[k]}: {failures[k]}", file=sys.stderr)
+        print(
+            "a rerun with the same store retries only these (one that failed on its inputs fails again: fix the row)",
+            file=sys.stderr,
+        )
         return 1
     return 0
 

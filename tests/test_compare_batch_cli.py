@@ -138,3 +138,28 @@ def test_jobqueue_recipe_pins_every_worker():
     assert "--nworkers 8" in script and "--nthreads 1" in script  # 8 single-threaded workers per job
     with pytest.raises(ValueError, match="multiple"):
         batch_cli.jobqueue_cluster("slurm", cores=8, memory="1GB", walltime="1:00:00", threads_per_worker=3)
+
+
+def test_units_in_the_header_are_checked_and_failures_say_why(tmp_path):
+    """A '[kPa]' column was read as SI (C = 0.2 Pa for 0.2 kPa) and failed points were listed without a reason."""
+    bad = tmp_path / "kpa.csv"
+    bad.write_text("C [kPa],x [m]\n0.2,1\n")
+    with pytest.raises(ValueError, match=r"column 'C \[kPa\]': the points are passed as they are, in SI units"):
+        batch_cli.read_points(bad)
+    ok = tmp_path / "ok.csv"
+    ok.write_text("x [m],y [-]\n1,2\n")
+    assert batch_cli.read_points(ok) == [dict(x=1, y=2)]
+    pts = tmp_path / "p.csv"
+    pts.write_text("y\n1.0\n")  # probe_threads needs x
+    p = _cli(
+        "run",
+        str(pts),
+        "--store",
+        str(tmp_path / "s"),
+        "--function",
+        "test_compare_batch_cli:probe_threads",
+        "--index",
+        "0",
+    )
+    out, err = p.communicate(timeout=120)
+    assert p.returncode == 1 and "row 0: TypeError" in err and "'y'" in err, err

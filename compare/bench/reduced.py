@@ -30,9 +30,9 @@ def main(argv: Sequence[str] | None = None) -> list[dict]:
 
     from tissuemech.compare.bench import reduced_blastula, reduced_spheroid
 
-    argparse.ArgumentParser(
-        prog="python -m tissuemech.compare.bench reduced", description=__doc__.split("\n")[0]
-    ).parse_args(list(argv or []))
+    ap = argparse.ArgumentParser(prog="python -m tissuemech.compare.bench reduced", description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="accepted for `bench all --quick`: this suite has one size")
+    ap.parse_args(list(argv or []))
     print(f"import tissuemech.reduced: {import_time():.2f} s (fresh interpreter, best of 3)")
     print_rows(reduced_blastula.api_rows() + reduced_blastula.cli_rows())
     print_rows(reduced_blastula.dispatch_rows())
