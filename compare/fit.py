@@ -731,7 +731,9 @@ def relaxation(
     else:
         eps = 0.0 if model_error is None else float(model_error)
         if not (math.isfinite(eps) and eps >= 0):
-            raise ValueError(f"model_error (relative 1-sigma error of the force, -) must be >= 0; got {model_error}")
+            raise ValueError(
+                f"model_error (relative 1-sigma error of the force, -) must be a finite number >= 0; got {model_error}"
+            )
     model = _default_model() if model is None else model
     if initial is None:
         p0 = initial_guess(recs, radius, ramp_time, n_branches)

@@ -700,5 +700,17 @@ def _reconstruct(args: argparse.Namespace, scene: str, options: Sequence[Option]
         parts += ["--end-time", str(args.end_time), "--equilibrium", args.equilibrium]
     if str(args.fe_checks) != "0":
         parts += ["--fe-checks", str(args.fe_checks)]
+        for flag, value in (("--fe-workers", args.fe_workers), ("--fe-store", args.fe_store)):
+            if value is not None:
+                parts += [flag, str(value)]
+    if args.map:
+        parts += ["--map", args.map]
+    for fix in args.fix:
+        parts += ["--fix", fix]
+    if args.color_by is not None:
+        parts += ["--color-by", args.color_by]
+    parts += ["--sens-points", str(args.sens_points)]
+    if getattr(args, "save_curves", False):
+        parts.append("--save-curves")
     parts += ["--out", str(args.out)]
     return " ".join(shlex.quote(str(p)) for p in parts)
