@@ -183,3 +183,21 @@ def test_bench_dispatch_takes_only_an_int_as_an_exit_code(monkeypatch, tmp_path)
     assert dispatch.main(["none"]) == 0
     assert dispatch.main(["usage"]) == 2
     assert dispatch.main(["all"]) == 2
+
+
+@pytest.mark.parametrize(
+    "argv, match",
+    [
+        (["blastula", "--C", "nan"], "tissuemech blastula: error: argument --C: must be positive, got nan"),
+        (["fit", "x.csv"], "tissuemech fit: error: the following arguments are required: --radius-um, --ramp-time"),
+        (["spheroid", "--alpha", "nan"], "tissuemech spheroid: error: argument --alpha: must be a finite number"),
+        (["bogus"], "tissuemech: error: argument COMMAND: invalid choice: 'bogus'"),
+    ],
+)
+def test_argparse_errors_are_one_line(capsys, argv, match):
+    """Every subcommand's bad arguments: one line, exit code 2 (argparse printed its usage block first: 4-7 lines)."""
+    with pytest.raises(SystemExit) as e:
+        cli.main(argv)
+    assert e.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(match), err

@@ -62,7 +62,24 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     for name, module in COMMANDS:
         if only is None or name == only:
             importlib.import_module(module).add_parser(sub)
+    _one_line_errors(p)
     return p
+
+
+def _one_line_errors(parser: argparse.ArgumentParser) -> None:
+    """Bad arguments of ``parser`` and of its subcommands' parsers: one line on stderr, exit code 2 (argparse
+    prints its usage block first); a parser with an error method of its own keeps it."""
+
+    def error(message: str, prog: str = parser.prog):
+        print(f"{prog}: error: {message} (see {prog} --help)", file=sys.stderr)
+        raise SystemExit(2)
+
+    if "error" not in vars(parser):
+        parser.error = error  # type: ignore[method-assign]
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for child in action.choices.values():
+                _one_line_errors(child)
 
 
 def _command_in(argv: Sequence[str]) -> str | None:
