@@ -71,6 +71,7 @@ __all__ = [
     "relaxation",
     "read_csv",
     "parameter_names",
+    "check_record",
     "model_error_of",
     "Z95",
     "DEFAULT_MODEL_ERROR_REL",
@@ -288,10 +289,10 @@ def _as_records(records: Sequence[Any]) -> list[Record]:
             raise ValueError(f"record {k}: expected (time [s], nominal_stress [Pa], displacement [m])") from None
         t = np.asarray(t, dtype=float).ravel()
         s = np.asarray(s, dtype=float).ravel()
-        if t.shape != s.shape or t.size < 2:
-            raise ValueError(
-                f"record {k}: time and nominal_stress need the same length (>= 2); got {t.size} and {s.size}"
-            )
+        if t.shape != s.shape:
+            raise ValueError(f"record {k}: time and nominal_stress need the same length; got {t.size} and {s.size}")
+        if t.size < 2:
+            raise ValueError(f"record {k}: {t.size} sample; a record needs at least 2 (time, stress) samples")
         if not (np.all(np.isfinite(t)) and np.all(np.isfinite(s))):
             raise ValueError(f"record {k}: time and stress must be finite numbers (found NaN or inf)")
         if np.any(t < 0):
@@ -306,23 +307,35 @@ def _as_records(records: Sequence[Any]) -> list[Record]:
 def _check_information(recs: Sequence[Record], names: tuple[str, ...]) -> None:
     """ValueError for records that cannot determine the parameters (one line, naming the record)."""
     for k, r in enumerate(recs):
-        if np.ptp(r.time) == 0:
-            raise ValueError(f"record {k}: all {r.time.size} samples are at the same time ({r.time[0]:g} s)")
-        if np.ptp(r.nominal_stress) == 0:
-            raise ValueError(
-                f"record {k}: the nominal stress is constant ({r.nominal_stress[0]:g} Pa at all "
-                f"{r.time.size} times): no information on the parameters"
-            )
-        if np.max(r.nominal_stress) <= 0 or np.mean(r.nominal_stress) <= 0:
-            raise ValueError(
-                f"record {k}: the nominal stress must be positive in compression (Pa); its mean is "
-                f"{np.mean(r.nominal_stress):g} Pa (negate data recorded tension-positive)"
-            )
+        check_record(r, f"record {k}")
     n = sum(r.time.size for r in recs)
     if n <= len(names):
         raise ValueError(
             f"the records hold {n} data points in all, not more than the {len(names)} parameters "
             f"{names}: at least {len(names) + 1} are needed (more for a noise estimate worth having)"
+        )
+
+
+def check_record(r: Any, what: str = "record") -> None:
+    """ValueError (one line, starting with ``what``: a record number, a file name) for one record that cannot
+    inform the fit: fewer than 2 samples, all at one time, a constant or non-positive nominal stress. ``r``: a
+    :class:`Record` or a ``(time [s], nominal_stress [Pa], displacement [m])`` tuple."""
+    if not isinstance(r, Record):
+        try:
+            r = _as_records([r])[0]
+        except ValueError as e:
+            raise ValueError(f"{what}: {str(e).removeprefix('record 0: ')}") from None
+    if np.ptp(r.time) == 0:
+        raise ValueError(f"{what}: all {r.time.size} samples are at the same time ({r.time[0]:g} s)")
+    if np.ptp(r.nominal_stress) == 0:
+        raise ValueError(
+            f"{what}: the nominal stress is constant ({r.nominal_stress[0]:g} Pa at all "
+            f"{r.time.size} times): no information on the parameters"
+        )
+    if np.max(r.nominal_stress) <= 0 or np.mean(r.nominal_stress) <= 0:
+        raise ValueError(
+            f"{what}: the nominal stress must be positive in compression (Pa); its mean is "
+            f"{np.mean(r.nominal_stress):g} Pa (negate data recorded tension-positive)"
         )
 
 

@@ -223,6 +223,8 @@ def load_records(
 
     ``displacements`` (m): one per file, one for all, or None to read ``# displacement_um:`` from each file.
     """
+    from tissuemech.compare import fit
+
     if displacements is not None and len(displacements) not in (1, len(paths)):
         raise ValueError(
             f"--displacement-um: give one value for all files or one per file ({len(paths)}); got {len(displacements)}"
@@ -246,15 +248,7 @@ def load_records(
         if np.any(t < 0):
             i = int(np.argmax(t < 0))
             raise ValueError(f"{p}, line {table.lines[i]}: time must not be negative (s); got {t[i]:g}")
-        if t.size < 2:  # (the fit's own checks would name "record k", not the file)
-            raise ValueError(f"{p}: {t.size} data row; a record needs at least 2 (time, value) rows")
-        if np.ptp(y) == 0:
-            raise ValueError(f"{p}: the value column is constant ({y[0]:g}): a relaxation record changes in time")
-        if np.max(y) <= 0 or np.mean(y) <= 0:  # (the fit's own rule, naming the file)
-            raise ValueError(
-                f"{p}: the stress or force must be positive in compression; its mean is {np.mean(y):g} "
-                "(negate data recorded tension-positive)"
-            )
+        fit.check_record((t, y, d), str(p))  # the fit's own checks, naming the file
         if force:
             y = y / (math.pi * _incompressible_rmid(t, radius, d, ramp_time) ** 2)
         recs.append((t, y, d))

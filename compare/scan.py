@@ -590,7 +590,7 @@ _LONG_NAMES = {
     "inner_stretch": "inner stretch a/A (NaN where the shell bursts or leaves 0.5..10)",
     "outer_stretch": "outer stretch b/B (NaN where the shell bursts or leaves 0.5..10)",
     "p_limit": "limit (burst) pressure of the exact shell (NaN: none up to stretch 10)",
-    "bursts": "the pressure exceeds the limit pressure",
+    "bursts": "the pressure is at or above the limit pressure",
     "fe_sigma_peak": "FE nominal stress at the end of the ramp",
     "fe_sigma_end": "FE nominal stress at the end of the hold",
     "fe_inner_stretch": "FE inner stretch a/A",

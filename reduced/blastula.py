@@ -1186,8 +1186,7 @@ def profiles(
 
 def _wall_geometry(A, B, R, alpha, C):
     """(A/R)^3-type factors of the shell inside radius R: k_R = (R/B)^3, 1 - k_R; alpha, C with a profile axis."""
-    kR = (R / B) ** 3
-    omkR = (B - R) * (B * B + R * B + R * R) / B**3
+    kR, omkR = _geometry(R, B)
     return kR, omkR, jnp.asarray(alpha, dtype=jnp.float64)[..., None], jnp.asarray(C, dtype=jnp.float64)[..., None]
 
 
@@ -1208,11 +1207,10 @@ def _profiles_core(inner_stretch, params, n):
     t = jnp.linspace(0.0, 1.0, int(n))
     R = A + (B - A) * t
     e = jnp.expm1(3.0 * jnp.log(la))
-    q = (A / R) ** 3
+    q, one_minus_q = _geometry(A, R)  # (A/R)^3 and 1 - (A/R)^3
     # l^3 = 1 + e q near lambda_a = 1 (log1p); in strong deflation 1 - q + q lambda_a^3 summed directly (1 + e q -> 0
-    # there loses every digit: l was 0 at lambda_a = 1e-10), with 1 - q = (R - A)(R^2 + R A + A^2) / R^3
+    # there loses every digit: l was 0 at lambda_a = 1e-10)
     deflated = e < -0.5
-    one_minus_q = (R - A) * (R * R + R * A + A * A) / R**3
     direct = jnp.log(jnp.where(deflated, one_minus_q + q * la**3, 1.0)) / 3.0
     lam = jnp.exp(jnp.where(deflated, direct, jnp.log1p(jnp.where(deflated, 0.0, e * q)) / 3.0))
     kR, omkR, alpha, C = _wall_geometry(A, B, R, alpha, C)

@@ -199,7 +199,7 @@ def test_record_errors_name_the_file(tmp_path):
     """A file with one row, a constant or a tension-positive column is named in the message (the fit's own checks
     said "record 2")."""
     kw = dict(radius=500e-6, displacements=[100e-6], ramp_time=0.2)
-    for body, match in (("0.1,3\n", "1 data row"), ("0.1,3\n0.2,3\n", "constant"), ("0.1,-3\n0.2,-4\n", "positive")):
+    for body, match in (("0.1,3\n", "1 sample"), ("0.1,3\n0.2,3\n", "constant"), ("0.1,-3\n0.2,-4\n", "positive")):
         f = tmp_path / "r.csv"
         f.write_text("time_s,stress_Pa\n" + body)
         with pytest.raises(ValueError, match=rf"r\.csv: .*{match}"):
