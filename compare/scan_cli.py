@@ -616,7 +616,7 @@ def _run(args: argparse.Namespace, scene: str) -> int:
         fig = sp.sensitivity_chart(
             sens,
             title=f"{scene} scan: which parameter drives which summary\n"
-            f"(exact JAX derivatives at {min(n_sens, len(table))} design points; "
+            f"(exact JAX derivatives at {min(n_sens, len(table))} design points;\n"
             "parameters scaled to their scan range; sign: direction)",
         )
         fig.savefig(out / "sensitivity.png", dpi=120)

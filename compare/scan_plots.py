@@ -462,15 +462,18 @@ def curve_bundle(
         ax.set_xlabel("inner stretch a/A (-)")
         ax.set_ylabel("pressure p (Pa)")
         ax.set_title(
-            f"pressure-stretch curves (exact shell): {len(combos)} designs, coloured by {color_by}\n"
+            f"pressure-stretch curves (exact shell): {len(combos)} design{'s' if len(combos) > 1 else ''}"
+            + (f", coloured by {color_by}" if np.ptp(cv) > 0 else "")
+            + "\n"
             "x: limit point (the shell bursts above it)",
             fontsize=10,
         )
     ax.grid(alpha=0.3, which="both")
-    cb = fig.colorbar(sm, ax=ax_n if ax_n is not None else ax)
-    cb.set_label(axis_label(color_by))
-    if isinstance(sm.norm, mpl.colors.LogNorm):
-        _plain_log_ticks(cb.ax.yaxis)
+    if np.ptp(cv) > 0:  # (one value of the colouring parameter: no scale to show)
+        cb = fig.colorbar(sm, ax=ax_n if ax_n is not None else ax)
+        cb.set_label(axis_label(color_by))
+        if isinstance(sm.norm, mpl.colors.LogNorm):
+            _plain_log_ticks(cb.ax.yaxis)
     fig.tight_layout()
     return fig
 
