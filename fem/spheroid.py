@@ -51,6 +51,11 @@ EDGE_TOL = 1e-6  # |N_edge| / F at the fitted contact edge (F is stationary in t
 # iterations: python notes/issue14_edge.py)
 SPLIT = np.radians(55.0)  # the pole block's arc: 0..55 deg from the pole (holds the edge to delta/(2 a0) ~ 0.45)
 EDGE_MAX = 0.92  # largest edge position, as a fraction of the pole block's arc
+EDGE_MIN = 1e-4  # smallest edge position tried (an approach delta/(2 a0) of ~4e-9)
+# smallest final approach delta/(2 a0) of a run (issue 14 audit): the first static state (1/8 of it) is then
+# x >= 1.25e-7, which every level converges at; at 1e-7 the coarse level's first state did not (its residual stuck
+# at round-off), and at x = 1e-6 F_FE / F_table is already 1.43 / 1.016 (coarse / default, notes/fe_small_approach.py)
+X_MIN = 1e-6
 _INNER_GRADING = 1.5  # contact-zone elements: first / last (finer at the edge)
 _DEPTH = 2.0  # outermost radial layer <= _DEPTH x the mean contact-zone element length
 
@@ -370,7 +375,7 @@ class _EdgeFit:
         secant step leaves it). ``visc(problem) -> (iso_scale, extra_S)``: the algorithmic viscoelastic stress of a
         time step on that problem's mesh (``fem.viscoelastic.algorithmic`` of the history mapped onto its Gauss
         points); None: elastic."""
-        lo, hi = 1e-4, EDGE_MAX  # phi(lo) > 0 > phi(hi) (bounds until evaluated)
+        lo, hi = EDGE_MIN, EDGE_MAX  # phi(lo) > 0 > phi(hi) (bounds until evaluated)
         e_a = float(np.clip(edge0, lo, hi))
         st_a, its, phi_a = self._state(self.problem(e_a), d, [x0], load, visc)
         n = 1
@@ -397,8 +402,8 @@ class _EdgeFit:
             if e_b != e_a and phi_b != phi_a:
                 self.slope = (phi_b - phi_a) / np.log(e_b / e_a)
             if not (lo < e_new < hi):  # outside the bracket: bisect (or expand toward the open bound)
-                e_new = 0.5 * (lo + hi) if hi < EDGE_MAX or lo > 1e-4 else e_b * (1.2 if phi_b > 0 else 0.8)
-                e_new = float(np.clip(e_new, 1e-4, EDGE_MAX))
+                e_new = 0.5 * (lo + hi) if hi < EDGE_MAX or lo > EDGE_MIN else e_b * (1.2 if phi_b > 0 else 0.8)
+                e_new = float(np.clip(e_new, EDGE_MIN, EDGE_MAX))
             if hi - lo < 1e-12 * hi:
                 break
             if n >= 6 and min(best[-3:]) > 0.5 * min(best[:-3]):
@@ -733,8 +738,8 @@ def compress(
         kappa: bulk modulus (Pa).
         branches: [(beta_m, tau_m), ...]: energy factors beta_m >= 0 (dimensionless) and relaxation
             times tau_m > 0 (s); empty for elastic.
-        displacement: the total approach delta (m, < 1.6 a0) of the two plates, reached at ``ramp_time``
-            by a linear ramp and then held to ``end_time``; or a callable delta(t) (m, t in s, delta(0) =
+        displacement: the total approach delta (m, 2e-6 a0 <= delta < 1.6 a0: below ``X_MIN`` = 1e-6 of the
+            diameter the contact force nears round-off) of the two plates, reached at ``ramp_time`` by a linear ramp and then held to ``end_time``; or a callable delta(t) (m, t in s, delta(0) =
             0): ``ramp_time`` is then the time scale of the fine initial steps and each step moves the
             plate by at most the ramp's step (steps are halved until it does).
         ramp_time: end of the ramp (s, 0 < ramp_time <= end_time; ignored when ``static``).
@@ -802,6 +807,13 @@ def compress(
     else:
         validate_positive("displacement (the total approach of the plates)", displacement, "m")
         d_max = float(displacement)
+        if d_max < X_MIN * 2 * a0:
+            raise ValueError(
+                f"displacement {d_max:g} m is delta/(2 a0) = {d_max / (2 * a0):.2g} of the diameter, below the "
+                f"smallest approach the FE resolves ({X_MIN:g} of it, {X_MIN * 2 * a0:g} m here): the contact force, "
+                "~ C a0^2 (delta/a0)^1.5, nears the round-off of the nearly incompressible residual there; use "
+                "tissuemech.reduced.spheroid (its calibrated table tends to Hertz as delta -> 0)"
+            )
         if d_max >= 1.6 * a0:
             raise ValueError(
                 f"displacement {d_max:g} m would squeeze the ball (diameter {2 * a0:g} m) to less "

@@ -230,6 +230,21 @@ def test_hertz_small_approach_on_pole_refined_mesh():
     assert 0.8 < r.contact_radius[-1] / a_hertz < 1.1
 
 
+def test_smallest_accepted_approach_converges_near_hertz_and_below_it_is_refused():
+    """At X_MIN of the diameter (1 nm here) every state converges on the coarse and the default fitted meshes, the
+    force near Hertz (1.43 / 1.016 of the table at x = 1e-6: README known limits); just below it compress refuses
+    the approach by name instead of failing in the edge search (its old hint blamed "the meshable range")."""
+    from tissuemech.fem.spheroid import X_MIN
+
+    d = X_MIN * 2 * A0
+    for mesh, tol in (("coarse", 0.5), ("default", 0.03)):
+        r = compress(radius=A0, C=150.0, alpha=0.2, displacement=d, static=True, mesh=mesh, ramp_time=1.0, end_time=1.0)
+        assert np.all(np.diff(r.force) > 0)
+        assert abs(r.force[-1] / hertz_force(d, A0, 150.0) - 1) < tol
+    with pytest.raises(ValueError, match=r"^displacement .* below the smallest approach the FE resolves"):
+        compress(radius=A0, C=150.0, alpha=0.2, displacement=0.99 * d, static=True, ramp_time=1.0, end_time=1.0)
+
+
 def test_outputs_vtu_and_plots(fig10_coarse, tmp_path):
     import matplotlib
 
