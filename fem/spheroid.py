@@ -739,9 +739,10 @@ def compress(
         branches: [(beta_m, tau_m), ...]: energy factors beta_m >= 0 (dimensionless) and relaxation
             times tau_m > 0 (s); empty for elastic.
         displacement: the total approach delta (m, 2e-6 a0 <= delta < 1.6 a0: below ``X_MIN`` = 1e-6 of the
-            diameter the contact force nears round-off) of the two plates, reached at ``ramp_time`` by a linear ramp and then held to ``end_time``; or a callable delta(t) (m, t in s, delta(0) =
-            0): ``ramp_time`` is then the time scale of the fine initial steps and each step moves the
-            plate by at most the ramp's step (steps are halved until it does).
+            diameter the contact force nears round-off) of the two plates, reached at ``ramp_time`` by a linear
+            ramp and then held to ``end_time``; or a callable delta(t) (m, t in s, delta(0) = 0): ``ramp_time`` is
+            then the time scale of the fine initial steps and each step moves the plate by at most the ramp's step
+            (steps are halved until it does).
         ramp_time: end of the ramp (s, 0 < ramp_time <= end_time; ignored when ``static``).
         end_time: end of the hold (s; ignored when ``static``).
         mesh: "coarse", "default", "fine" or a level 0..4 (0 = coarse, 1 = default, 2 = fine; ``LEVELS``
