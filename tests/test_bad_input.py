@@ -322,7 +322,12 @@ CASES = [
     ("fem compress radius negative", _fem_compress(radius=-1.0), E, r"^radius\b"),
     # below 1e-6 of the diameter the first static state's residual stuck at round-off and the edge search ended
     # in a ContactError that blamed "the meshable range" (an audit, 2026-12-02)
-    ("fem compress approach too small", _fem_compress(displacement=1e-12), E, r"^displacement 1e-12 m is delta/\(2 a0\)"),
+    (
+        "fem compress approach too small",
+        _fem_compress(displacement=1e-12),
+        E,
+        r"^displacement 1e-12 m is delta/\(2 a0\)",
+    ),
     # ---- compare.fit.read_csv, compare.batch
     ("read_csv displacement", lambda: fit.read_csv("x.csv", displacement=-1.0), E, r"^displacement\b"),
     ("batch executor", lambda: batch.run(abs, [dict(x=1)], executor="cloud", progress=False), E, r"^executor\b"),
