@@ -30,10 +30,11 @@ the plate force is the contact force on the centre point.
 from __future__ import annotations
 
 import argparse
-import os
 import time
 
 import numpy as np
+
+from tissuemech.compare.bench.common import machine_line
 
 A, B, C, ALPHA, KAPPA = 50e-6, 60e-6, 200.0, 0.2, 2.2e9
 A0 = 500e-6
@@ -350,7 +351,7 @@ def main(argv: list[str] | None = None) -> None:
         return
     repeats = a.repeats or (1 if a.quick else 3)
     print(f"# FElupe {fem.__version__} side by side (issue 14)")
-    print(f"load average (1, 5, 15 min): {', '.join(f'{v:.2f}' for v in os.getloadavg())} on {os.cpu_count()} CPUs")
+    print(machine_line())
     try:
         from threadpoolctl import threadpool_limits
 

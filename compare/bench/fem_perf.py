@@ -41,13 +41,13 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import os
 import time
 
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from tissuemech.compare.bench.common import machine_line
 from tissuemech.fem import blastula as fb
 from tissuemech.fem import newton as nw
 from tissuemech.fem import spheroid as fs
@@ -542,7 +542,7 @@ def main(argv: list[str] | None = None) -> None:
     run = set(only or SECTIONS)
     repeats = a.repeats or (1 if a.quick else 3)
     print("# fem-perf (issue 14)")
-    print(f"load average (1, 5, 15 min): {', '.join(f'{v:.2f}' for v in os.getloadavg())} on {os.cpu_count()} CPUs")
+    print(machine_line())
     try:
         from threadpoolctl import threadpool_limits
 
