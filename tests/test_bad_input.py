@@ -7,7 +7,9 @@ outcomes (clear error / other error / unclear error / silent result) before and 
 
 from __future__ import annotations
 
+import re
 import warnings
+from pathlib import Path
 
 import jax
 import jax.numpy as jnp
@@ -350,9 +352,6 @@ def test_enough_cases():
 
 def test_readme_counts_are_these_cases():
     """The README's bad-input counts are this file's (they drifted once: 171 printed, 179 run)."""
-    import re
-    from pathlib import Path
-
     text = (Path(__file__).resolve().parent.parent / "README.md").read_text()
     entry = re.search(r"(\d+) bad inputs over every entry point and (\d+) over the CLI", text)
     assert entry is not None, "README lost its bad-input sentence"
