@@ -155,10 +155,16 @@ def tabulate(
     if curve is not static_curve:  # a user/fake curve may not take n
         jobs = [{k: v for k, v in j.items() if k != "n"} for j in jobs]
     runs = batch.run(curve, jobs, executor=executor, store=store)
+    failed = [j for j, r in zip(jobs, runs, strict=True) if r is None]
+    if failed:
+        raise RuntimeError(
+            f"calibration: {len(failed)} FE curve(s) failed, first {failed[0]}; rerun with the same store to retry"
+        )
+    done = [r for r in runs if r is not None]
     na = len(alphas)
     fg = []
     for i in range(na):
-        parts = [runs[i]] + ([runs[na + i]] if len(runs) > na else [])
+        parts = [done[i]] + ([done[na + i]] if len(done) > na else [])
         merged = {
             "approach": np.concatenate([p["approach"] for p in parts]),
             "force": np.concatenate([p["force"] for p in parts]),

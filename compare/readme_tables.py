@@ -98,7 +98,9 @@ def _blastula() -> list[str]:
     t0 = time.perf_counter()
     cr = blastula_creep().iloc[0]
     _TIMINGS["FE blastula creep (issue 5 case), default mesh"] = time.perf_counter() - t0
-    lims = "; ".join(f"B = {b:g} um: {float(v[0]):.2f} Pa at lambda_a = {float(v[1]):.4f}" for b, v in lim.items())
+    lims = "; ".join(
+        f"B = {b:g} um: {float(v[0]):.2f} Pa at lambda_a = {float(v[1]):.4f}" for b, v in lim.items() if v is not None
+    )
     return [
         "| what | result |",
         "|---|---|",

@@ -45,7 +45,7 @@ def _blastula_set(alpha: float, B: float, mesh, max_pressure: float = 1000.0, n:
         )
     wall = time.perf_counter() - t0
     la = np.linspace(1.0, float(fe.inner_stretch.max()), 300)  # the exact curve, drawn as a line
-    geo = dict(inner_radius=A, outer_radius=B)
+    geo: dict[str, Any] = dict(inner_radius=A, outer_radius=B)
     p_ex = np.asarray(bl.pressure(la, **geo, C=C_BL, alpha=alpha))
     keep = fe.pressure > 0
     p_fe_ex = np.asarray(bl.pressure(fe.inner_stretch[keep], **geo, C=C_BL, alpha=alpha))
@@ -134,6 +134,7 @@ def section(traces: dict, *, quick: bool = False, progress: Callable[[str], None
     sec.table(df, "blastula_sets.csv")
     sec.summary["blastula_sets_max_err"] = float(df.max_rel_pressure_err.max())
     lim75 = bl.limit_point(inner_radius=A, outer_radius=cases.FIG4_OUTER_RADIUS, C=C_BL, alpha=cases.NEO_HOOKEAN_ALPHA)
+    assert lim75 is not None, "the neo-Hookean shell has a limit point"
     sec.save(
         figures.fig_stretch_pressure(
             sets4,

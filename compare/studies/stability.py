@@ -32,6 +32,7 @@ from __future__ import annotations
 import time
 import warnings
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -115,10 +116,11 @@ def limit_point_map(
     rows, traces = [], {}
     for b in outer_um:
         B = b * UM
-        geo = dict(inner_radius=A, outer_radius=B, C=C, alpha=alpha)
+        geo: dict[str, Any] = dict(inner_radius=A, outer_radius=B, C=C, alpha=alpha)
         bl.limit_point(**geo)  # warm-up (JIT compile)
         t0 = time.perf_counter()
         lim = bl.limit_point(**geo)
+        assert lim is not None, "the exact shell has a limit point for every alpha this study takes"
         wall = time.perf_counter() - t0
         pmax, lstar = float(lim.pressure), float(lim.inner_stretch)
         base = dict(B_um=b, p_max_exact_Pa=pmax, stretch_limit_exact=lstar)
@@ -301,7 +303,7 @@ def compression_map(
                 radius=radius,
                 C=C_,
                 alpha=alpha,
-                branches=None,
+                branches=(),
                 displacement=2 * radius * f,
                 ramp_time=1.0,
                 end_time=1.0,
@@ -316,7 +318,7 @@ def compression_map(
                     force_N=float(r.force[-1]),
                     steps=len(r.force),
                     newton_iterations=int(np.sum(r.newton_iterations)),
-                    nodal_contact_states=sum(1 for c in r.parameters.get("contact", ()) if c == "nodal"),
+                    nodal_contact_states=sum(1 for c in (r.parameters or {}).get("contact", ()) if c == "nodal"),
                     failure="",
                     wall_s=time.perf_counter() - t0,
                     note="",
