@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import logging
+import os
 import sys
 from collections.abc import Sequence
 
@@ -104,6 +105,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             format="%(levelname)s %(name)s: %(message)s",
         )
     module = dict(COMMANDS)[args.command]
+    # the command line writes files and never opens a window: the one place a backend is chosen (before
+    # matplotlib is imported; an MPLBACKEND the user set wins)
+    os.environ.setdefault("MPLBACKEND", "Agg")
     try:
         rc = importlib.import_module(module).run(args)
     except (ValueError, CLIError, OSError) as exc:
