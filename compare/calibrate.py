@@ -17,7 +17,7 @@ the discretisation error = max relative difference of f against an independent f
 
 ``python -m tissuemech.compare.calibrate [--out PATH] [--store DIR] [--n-x N] [--x-max X] [--alphas a,b,..]
 [--mesh M] [--error-mesh M] [--check-alphas a,b,..] [--reference JSON]`` regenerates it through ``compare.batch``
-(resumable with ``--store``). With ``--reference`` (converged Richardson forces, e.g. notes/issue10_reference.json)
+(resumable with ``--store``). With ``--reference`` (converged Richardson forces, e.g. tests/data/plate_reference_levels1-3.json)
 the metadata also gets ``model_error_rel`` = half the table's largest error against that reference (the relative
 1-sigma error of F_eq that ``compare.fit`` adds with ``model_error="auto"``; the finer-level check alone does not
 set it).
@@ -238,7 +238,7 @@ def reference_error(table: str | Path, reference: dict) -> tuple[float, str]:
     """Largest |f_table / f_ref - 1| of a written table over converged reference points: (error, point name).
 
     ``reference``: {"alpha A x X": {"reference": f_ref, ...}, ...} (f = F_eq/(C a0^2); the format of
-    ``compare.bench.fem_spheroid.reference``; other keys are ignored), e.g. notes/issue10_reference.json.
+    ``compare.bench.fem_spheroid.reference``; other keys are ignored), e.g. tests/data/plate_reference_levels1-3.json.
     Points outside the table's x or alpha range are skipped. Raises ValueError when none is inside.
     """
     from tissuemech.reduced import spheroid
@@ -314,7 +314,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--reference",
         default=None,
         help="JSON of converged (Richardson) reference forces {'alpha A x X': {'reference': f}} (e.g. "
-        "notes/issue10_reference.json): the table's error against it sets metadata model_error_rel = max |error| / 2",
+        "tests/data/plate_reference_levels1-3.json): the table's error against it sets metadata model_error_rel = max |error| / 2",
     )
     a = ap.parse_args(list(sys.argv[1:] if argv is None else argv))
     try:

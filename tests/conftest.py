@@ -14,11 +14,11 @@ from pathlib import Path
 
 import pytest
 
+from tissuemech.compare import cases as _cases
+
 os.environ.setdefault("MPLBACKEND", "Agg")
 _ROOT = Path(__file__).resolve().parents[1]
 sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != _ROOT]
-
-from tissuemech.compare import cases as _cases
 
 
 @pytest.fixture(scope="session")

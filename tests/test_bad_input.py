@@ -1,8 +1,7 @@
 """No silent wrong number: bad or extreme inputs at every public entry point and the CLI.
 
 Every case asserts the exception type and that the message names the quantity (its keyword, or the
-word the message uses for it). ``CASES`` is also what ``notes/issue13_sweep.py`` runs to count the
-outcomes (clear error / other error / unclear error / silent result) before and after issue 13.
+word the message uses for it).
 """
 
 from __future__ import annotations

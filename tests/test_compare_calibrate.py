@@ -95,21 +95,23 @@ def test_shipped_table_arrays_and_its_model_error():
     assert meta["discretisation_error_f"] < 2e-5  # level 3 against level 4
     assert meta["model_error_rel"] == pytest.approx(1.486e-5, rel=1e-3)
     assert model_error_of("fem") == meta["model_error_rel"]
-    ref = Path(__file__).resolve().parent.parent / "notes" / "issue10_reference.json"
-    if ref.exists():
-        err, at = calibrate.reference_error(calibrate.DEFAULT_OUT, json.loads(ref.read_text()))
-        assert err / 2 == pytest.approx(meta["model_error_rel"], rel=0.02) and at == "alpha 0 x 0.35"
+    ref = Path(__file__).resolve().parent / "data" / "plate_reference_levels1-3.json"
+    err, at = calibrate.reference_error(calibrate.DEFAULT_OUT, json.loads(ref.read_text()))
+    assert err / 2 == pytest.approx(meta["model_error_rel"], rel=0.02) and at == "alpha 0 x 0.35"
 
 
 @pytest.mark.slow
 def test_shipped_table_is_the_level_3_static_force():
     """At a table node (x = 0.1, alpha = 0.2) the shipped f equals a fresh static run on level 3 (the contact edge
     solved to 1e-6 either way: only the solver tolerances differ), not the level-2 value 1.2e-5 below it."""
-    from tissuemech.compare.bench.fem_spheroid import static_force
+    from tissuemech.fem.spheroid import compress
     from tissuemech.reduced.spheroid import master_curve
 
+    a0, C = 500e-6, 200.0
+    run = compress(radius=a0, C=C, alpha=0.2, branches=(), displacement=2 * a0 * 0.1, ramp_time=1.0, end_time=1.0,
+                   static=True, mesh=3, n_static=2)  # fmt: skip
     table = float(master_curve().f(0.1, 0.2))
-    assert table / static_force(0.1, 0.2, 3) - 1 == pytest.approx(0.0, abs=2e-8)
+    assert table / float(run.force[-1] / (C * a0**2)) - 1 == pytest.approx(0.0, abs=2e-8)
 
 
 def test_reference_error_of_a_written_table(tmp_path):

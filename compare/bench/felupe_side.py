@@ -234,7 +234,7 @@ def blastula(fem, repeats: int, quick: bool) -> None:
 XS = (0.1, 0.2, 0.3)  # delta / (2 a0) where the spheroid forces are compared
 # F_inf / (C a0^2) at XS (alpha 0.2, kappa / C = 1.1e7): Richardson over the fitted levels 1-3 with the observed
 # orders 2.62 / 2.36 / 2.18, from `python -m tissuemech.compare.bench fem-spheroid --reference --quick --json
-# notes/issue10_reference.json` (2026-12-01, contact edge to 1e-6; rows "alpha 0.2 x 0.1/0.2/0.3"); level 3 is
+# tests/data/plate_reference_levels1-3.json` (2026-12-01, contact edge to 1e-6; rows "alpha 0.2 x 0.1/0.2/0.3"); level 3 is
 # within 2.5e-5 of it, level 2 within 6.0e-5
 F_RICHARDSON = (0.38561971557907837, 1.2248148630459943, 2.6394039448318822)
 

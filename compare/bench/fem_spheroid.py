@@ -331,7 +331,7 @@ def figure(path: str, r) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """Options: --quick (fewer meshes/repeats), --figure PATH.png (seed Figs 8-9 + VTU), --reference (only
-    the reference table) with --json PATH (also write it, the format of notes/issue10_reference.json)."""
+    the reference table) with --json PATH (also write it, the format of tests/data/plate_reference_levels1-4.json)."""
     argv = list(argv or [])
     quick = "--quick" in argv
     json_path = None

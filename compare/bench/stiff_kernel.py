@@ -1,6 +1,6 @@
 """How accurate is the lumped spheroid force's exact-kernel quadrature for stiff branches? (Hertz law.)
 
-``python notes/stiff_kernel_scan.py [--eta]``
+``python -m tissuemech.compare.bench stiff-kernel`` (or ``tissuemech bench stiff-kernel``)
 
 ``reduced.spheroid.force`` (method "quadrature", Hertz equilibrium, C = 150 Pa, a0 = 500 um, 10 %
 approach in a 0.2 s ramp, one branch beta = 3, the largest of ``tests/test_properties.py``'s range:
@@ -8,8 +8,7 @@ the relative error grows with beta) at t = 0.05, 0.1, 0.2, 0.3 and 2 s, against 
 F_eq + beta int_0^t e^{-(t-s)/tau} dF_eq/ds ds, whose integral is tau^1.5 (sqrt(X) - D(sqrt(X))) with
 X = min(t, t_r)/tau and D Dawson's integral (``scipy.special.dawsn``), and by ``scipy.integrate.quad``
 (epsrel 1e-13) where that form cancels (X < 0.1). Scans tau / t_r over [1e-4, 1e3] (701 values, log
-spaced) and prints the largest relative error per decade and overall. ``--eta`` first switches the
-quadrature back to Gauss-Legendre in eta (the nodes before this change) for the comparison.
+spaced) and prints the largest relative error per decade and overall.
 """
 
 from __future__ import annotations
@@ -38,13 +37,8 @@ def exact(t: float, tau: float) -> float:
     return C * A0**2 * (32.0 / 3.0) * (X_APP * te / TR) ** 1.5 + BETA * k * integral * np.exp(-(t - te) / tau)
 
 
-def main(argv: list[str]) -> None:
-    if "--eta" in argv:  # Gauss-Legendre in eta itself (before the zeta = sqrt(eta) grading)
-        g, w = np.polynomial.legendre.leggauss(16)
-        sp._ETA, sp._W_ETA = (g + 1.0) / 2.0, w / 2.0
-        print("nodes: Gauss-Legendre in eta (the rule before the grading)")
-    else:
-        print("nodes: Gauss-Legendre in zeta = sqrt(eta) (the rule in use)")
+def main(argv: list[str] | None = None) -> int:
+    print("nodes: Gauss-Legendre in zeta = sqrt(eta) (the rule in use)")
     ratios = np.logspace(-4, 3, 701)
     errs = []
     for r in ratios:
@@ -62,7 +56,8 @@ def main(argv: list[str]) -> None:
         print(f"tau / t_r in [1e{lo}, 1e{lo + 1}]: largest |F / F_exact - 1| = {errs_a[sel].max():.1e}")
     i = int(np.argmax(errs_a))
     print(f"overall: {errs_a[i]:.2e} at tau / t_r = {ratios[i]:.3g}")
+    return 0
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:])
+    raise SystemExit(main(sys.argv[1:]))
