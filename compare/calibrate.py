@@ -25,9 +25,7 @@ set it).
 
 from __future__ import annotations
 
-import argparse
 import json
-import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -261,119 +259,7 @@ def reference_error(table: str | Path, reference: dict) -> tuple[float, str]:
     return worst, at
 
 
-def _count(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if v < 2:
-        raise argparse.ArgumentTypeError(f"must be at least 2, got {v}")
-    return v
+if __name__ == "__main__":  # kept: python -m tissuemech.compare.calibrate is tissuemech calibrate
+    from tissuemech.compare.cli.calibrate import main
 
-
-def _fraction(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not 0 < v < 0.8:
-        raise argparse.ArgumentTypeError(f"must be in (0, 0.8), got {v}")
-    return v
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m tissuemech.compare.calibrate``: tabulate F_eq and r_mid from static FE runs (see --help)."""
-    ap = argparse.ArgumentParser(prog="python -m tissuemech.compare.calibrate", description=__doc__.split("\n")[0])
-    ap.add_argument(
-        "--out",
-        default="spheroid_master.npz",
-        help="table to write (default: %(default)s in the current folder; the shipped table "
-        f"{DEFAULT_OUT} is replaced only with --install)",
-    )
-    ap.add_argument("--install", action="store_true", help="write the shipped table reduced/data/spheroid_master.npz")
-    ap.add_argument("--store", default=None, help="folder for per-run results (resume)")
-    ap.add_argument("--n-x", type=_count, default=37, help="states of the main run, from x = 0 (default: %(default)s)")
-    ap.add_argument(
-        "--x-max",
-        type=_fraction,
-        default=0.36,
-        help="largest x = delta/(2 a0) of the table, in (0, 0.8) (default: %(default)s)",
-    )
-    ap.add_argument(
-        "--alphas",
-        default=",".join(str(a) for a in DEFAULT_ALPHAS),
-        help="comma list of Fung exponents alpha >= 0 to tabulate (default: %(default)s)",
-    )
-    ap.add_argument("--mesh", default="2", help="FE level of the table (default: %(default)s)")
-    ap.add_argument(
-        "--error-mesh", default="3", help="finer level of the independent check ('' to skip; default: %(default)s)"
-    )
-    ap.add_argument("--check-alphas", default=",".join(str(a) for a in CHECK_ALPHAS))
-    ap.add_argument("--degree", type=int, default=8, help="degree in sqrt(x) of the small-x basis fit (a check)")
-    ap.add_argument(
-        "--reference",
-        default=None,
-        help="JSON of converged (Richardson) reference forces {'alpha A x X': {'reference': f}} (e.g. "
-        "tests/data/plate_reference_levels1-3.json): the table's error against it sets metadata model_error_rel = max |error| / 2",
-    )
-    a = ap.parse_args(list(sys.argv[1:] if argv is None else argv))
-    try:
-        alphas = [float(v) for v in a.alphas.split(",")]
-        chk = [float(v) for v in a.check_alphas.split(",")]
-    except ValueError:
-        ap.error(f"--alphas / --check-alphas must be comma lists of numbers, got {a.alphas!r} / {a.check_alphas!r}")
-    if any(not (v >= 0) for v in alphas):
-        ap.error(f"--alphas must be >= 0, got {a.alphas!r}")
-    if any(c not in alphas for c in chk):
-        ap.error(f"--check-alphas must be a subset of --alphas, got {a.check_alphas!r}")
-    if a.install:
-        a.out = str(DEFAULT_OUT)
-    lev = lambda v: int(v) if str(v).isdigit() else v  # a fem.spheroid level number or name
-    a.mesh, a.error_mesh = lev(a.mesh), lev(a.error_mesh)
-    kw = dict(n_x=a.n_x, x_max=a.x_max)
-    raw = tabulate(alphas=alphas, mesh=a.mesh, store=a.store, **kw)
-    _, change = smooth(raw, a.degree) if a.degree > 0 else (raw, float("nan"))
-    err, err_x = None, None
-    if a.error_mesh != "":
-        fine = tabulate(alphas=chk, mesh=a.error_mesh, store=a.store, **kw)
-        rows = [alphas.index(c) for c in chk]
-        rel = np.abs(raw.f[rows][:, 1:] / fine.f[:, 1:] - 1.0)
-        err = float(rel.max())
-        err_x = float(raw.x[1:][np.argmax(rel.max(axis=0))])
-    meta = dict(
-        mesh=a.mesh,
-        error_mesh=a.error_mesh or None,
-        check_alphas=a.check_alphas,
-        discretisation_error_f=err,
-        discretisation_error_at_x=err_x,
-        interpolation="f = f_Hertz(x) h(sqrt(x), alpha), h natural cubic splines in s = sqrt(x) and alpha",
-        sqrt_basis_degree=a.degree,
-        sqrt_basis_max_residual_f=change,
-        command="python -m tissuemech.compare.calibrate " + " ".join(sys.argv[1:] if argv is None else argv),
-        radius_m=RADIUS,
-        C_Pa=C_REF,
-        kappa_Pa=KAPPA,
-        definition="f = F_eq/(C a0^2), g = r_mid/a0, x = delta/(2 a0) (total approach delta)",
-    )
-    write(a.out, raw, meta)
-    if a.reference:
-        ref_err, ref_at = reference_error(a.out, json.loads(Path(a.reference).read_text()))
-        # the relative 1-sigma error of F_eq the fits add to their noise model (compare.fit model_error="auto"):
-        # the largest error against the converged reference, taken as a 2-sigma bound
-        meta.update(
-            model_error_rel=ref_err / 2,
-            model_error_basis=f"half the largest |f_table / f_ref - 1| = {ref_err:.3g} (at {ref_at}) over the "
-            f"converged reference {a.reference}, taken as a 2-sigma bound",
-        )
-        write(a.out, raw, meta)
-        print(f"error against the converged reference {a.reference}: {ref_err:.2e} at {ref_at}")
-    print(
-        f"wrote {a.out}: {len(raw.alpha)} alphas x {len(raw.x)} points (x up to {raw.x[-1]:g}); "
-        f"discretisation error of f vs level {a.error_mesh}: {err if err is not None else 'not estimated'}"
-        f"{'' if err_x is None else f' (largest at x = {err_x:g})'}; sqrt(x)-basis fit residual {change:.2e}"
-    )
-    return 0
-
-
-if __name__ == "__main__":
     raise SystemExit(main())

@@ -38,6 +38,7 @@ COMMANDS: list[tuple[str, str]] = [
     ("batch", "tissuemech.compare.batch_cli"),
     ("fit", "tissuemech.compare.fit_cli"),
     ("scan", "tissuemech.compare.scan_cli"),
+    ("calibrate", "tissuemech.compare.cli.calibrate"),
 ]
 
 
