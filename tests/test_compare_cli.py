@@ -156,11 +156,9 @@ def test_bench_reference_json_needs_its_path_and_reference(capsys):
 
 
 def test_checks_cli_rejects_bad_options(capsys):
-    from tissuemech.compare.studies import checks
-
     for argv in (["--mesh", "bogus"], ["--spheroid-random", "-3"], ["--skip", "foo"]):
         with pytest.raises(SystemExit) as e:
-            checks.main(argv)
+            cli.main(["checks", *argv])
         assert e.value.code == 2
     assert "unknown table(s) foo" in capsys.readouterr().err
 

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from tissuemech.compare import readme_tables
+from tissuemech.compare.report import readme_tables
 
 README = Path(__file__).resolve().parent.parent / "README.md"
 

@@ -39,6 +39,8 @@ COMMANDS: list[tuple[str, str]] = [
     ("fit", "tissuemech.compare.fit_cli"),
     ("scan", "tissuemech.compare.scan_cli"),
     ("calibrate", "tissuemech.compare.cli.calibrate"),
+    ("checks", "tissuemech.compare.cli.checks"),
+    ("readme-tables", "tissuemech.compare.cli.readme_tables"),
 ]
 
 

@@ -1,9 +1,58 @@
-"""``tissuemech report``: the argparse wiring lives with the report (:mod:`tissuemech.compare.report`)."""
+"""``tissuemech report``: the seed's figures, accuracy-vs-speed charts and the stability map in one folder
+(:func:`tissuemech.compare.report.build` does the work)."""
 
 from __future__ import annotations
 
-from tissuemech.compare.report import add_parser, run_cli
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
 
-run = run_cli
+from tissuemech.compare.report import build
 
-__all__ = ["add_parser", "run"]
+__all__ = ["add_parser", "run", "run_cli", "main"]
+
+
+def add_parser(sub: Any) -> argparse.ArgumentParser:
+    """Register the ``report`` subcommand on an argparse subparsers object."""
+    r = sub.add_parser(
+        "report",
+        help="regenerate the seed's figures, accuracy-vs-speed charts and the stability map into a folder",
+        description="Runs the reduced and FE models for both scenes and writes PNG figures, CSV tables and "
+        "report.md (with the measured numbers and the comparison with the seed) into --out.",
+    )
+    r.add_argument("--out", default="tissuemech-report", help="output folder (default: %(default)s)")
+    r.add_argument("--quick", action="store_true", help="coarse meshes, fewer levels (under 3 minutes)")
+    return r
+
+
+def run(args: argparse.Namespace) -> None:
+    """``tissuemech report``: check the folder, build it and print where it went."""
+    from tissuemech.compare.cli.common import output_folder
+
+    output_folder("--out", args.out)
+    summary = build(args.out, quick=args.quick)
+    out = Path(args.out).resolve()
+    print(
+        f"wrote {len(summary['files'])} files to {out} (report: {out / 'report.md'}) in {summary['total_wall_s']:.0f} s"
+    )
+    if not summary["spheroid_available"]:
+        print("note: spheroid sections not available (fem.spheroid / reduced.spheroid missing)")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m tissuemech.compare.report [--out DIR] [--quick]``."""
+    p = argparse.ArgumentParser(prog="python -m tissuemech.compare.report")
+    sub = p.add_subparsers(dest="command")
+    add_parser(sub)
+    args = p.parse_args(["report", *(argv if argv is not None else sys.argv[1:])])
+    run(args)
+    return 0
+
+
+run_cli = run  # the earlier name
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

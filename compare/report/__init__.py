@@ -5,15 +5,17 @@ One module per section (:mod:`.seed_comparison`, :mod:`.blastula`, :mod:`.accura
 runs them and writes the folder. See :func:`build`.
 """
 
-from tissuemech.compare.report.build import (
-    FIGURES,
-    SPHEROID_FIGURES,
-    SPHEROID_TABLES,
-    TABLES,
-    add_parser,
-    build,
-    main,
-    run_cli,
-)
+from typing import Any
 
-__all__ = ["build", "add_parser", "run_cli", "main", "FIGURES", "TABLES", "SPHEROID_FIGURES", "SPHEROID_TABLES"]
+from tissuemech.compare.report.build import FIGURES, SPHEROID_FIGURES, SPHEROID_TABLES, TABLES, build
+
+__all__ = ["build", "FIGURES", "TABLES", "SPHEROID_FIGURES", "SPHEROID_TABLES"]
+
+
+def __getattr__(name: str) -> Any:
+    """The command-line entry points moved to :mod:`tissuemech.compare.cli.report`; the old names still work."""
+    if name in ("add_parser", "run_cli", "main"):
+        from tissuemech.compare.cli import report as cli_report
+
+        return getattr(cli_report, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

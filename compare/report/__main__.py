@@ -1,5 +1,5 @@
-"""``python -m tissuemech.compare.report [--out DIR] [--quick]``."""
+"""``python -m tissuemech.compare.report [--out DIR] [--quick]`` (the same as ``tissuemech report``)."""
 
-from tissuemech.compare.report.build import main
+from tissuemech.compare.cli.report import main
 
 raise SystemExit(main())

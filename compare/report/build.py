@@ -26,13 +26,11 @@ markdown in document order: seed comparison, blastula (Figs 3-5), blastula accur
 
 from __future__ import annotations
 
-import argparse
 import json
 import platform
-import sys
 import time
 import traceback
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -40,7 +38,7 @@ import numpy as np
 
 from tissuemech.compare.report.common import Section
 
-__all__ = ["build", "main", "add_parser", "run_cli", "FIGURES", "TABLES", "SPHEROID_FIGURES", "SPHEROID_TABLES"]
+__all__ = ["build", "FIGURES", "TABLES", "SPHEROID_FIGURES", "SPHEROID_TABLES"]
 
 FIGURES = (
     "fig3_blastula_von_mises.png",
@@ -155,7 +153,7 @@ def build(out_dir: str | Path = "tissuemech-report", *, quick: bool = False, pro
     total = time.perf_counter() - t_start
     summary["total_wall_s"] = total
     summary["spheroid_available"] = reason is None
-    summary["files"] = sorted(set(written))
+    summary["files"] = sorted(set(written) | {"report.md", "summary.json"})  # every file this run writes
     head = [
         "# tissuemech report" + (" (quick)" if quick else ""),
         "",
@@ -187,40 +185,3 @@ def json_safe(o: Any) -> Any:
     if o is None or isinstance(o, str):
         return o
     return str(o)
-
-
-def add_parser(sub: Any) -> argparse.ArgumentParser:
-    """Register the ``report`` subcommand on an argparse subparsers object."""
-    r = sub.add_parser(
-        "report",
-        help="regenerate the seed's figures, accuracy-vs-speed charts and the stability map into a folder",
-        description="Runs the reduced and FE models for both scenes and writes PNG figures, CSV tables and "
-        "report.md (with the measured numbers and the comparison with the seed) into --out.",
-    )
-    r.add_argument("--out", default="tissuemech-report", help="output folder (default: %(default)s)")
-    r.add_argument("--quick", action="store_true", help="coarse meshes, fewer levels (under 3 minutes)")
-    return r
-
-
-def run_cli(args: argparse.Namespace) -> None:
-    """``tissuemech report``: check the folder, build it and print where it went."""
-    from tissuemech.compare.cli.common import output_folder
-
-    output_folder("--out", args.out)
-    summary = build(args.out, quick=args.quick)
-    out = Path(args.out).resolve()
-    print(
-        f"wrote {len(summary['files'])} files to {out} (report: {out / 'report.md'}) in {summary['total_wall_s']:.0f} s"
-    )
-    if not summary["spheroid_available"]:
-        print("note: spheroid sections not available (fem.spheroid / reduced.spheroid missing)")
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m tissuemech.compare.report [--out DIR] [--quick]``."""
-    p = argparse.ArgumentParser(prog="python -m tissuemech.compare.report")
-    sub = p.add_subparsers(dest="command")
-    add_parser(sub)
-    args = p.parse_args(["report", *(argv if argv is not None else sys.argv[1:])])
-    run_cli(args)
-    return 0

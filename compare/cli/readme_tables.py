@@ -1,0 +1,74 @@
+"""``tissuemech readme-tables``: print the README's result tables from the commands that make them, or check a
+README against them (the work is done by :mod:`tissuemech.compare.report.readme_tables`)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import tissuemech.compare.report.readme_tables as lib
+
+__all__ = ["add_parser", "run", "main"]
+
+DESCRIPTION = (lib.__doc__ or "").strip().split("\n")[0]
+
+
+def _options(ap: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    ap.add_argument("--only", default=",".join(lib.BLOCKS), help="comma list of: " + ",".join(lib.BLOCKS))
+    ap.add_argument(
+        "--check", metavar="README.md", help="compare the deterministic blocks of this file; exit 1 if any differs"
+    )
+    return ap
+
+
+def _execute(a: argparse.Namespace, error: Any) -> int:
+    names = [n for n in a.only.split(",") if n]
+    bad = [n for n in names if n not in lib.BLOCKS]
+    if bad:
+        error(f"unknown table(s) {', '.join(bad)}; choose from {', '.join(lib.BLOCKS)}")
+    if a.check:
+        if not Path(a.check).is_file():
+            error(f"--check {a.check!r}: no such file")
+        present = lib.blocks_in(Path(a.check).read_text())
+        diffs = lib.check(a.check, names)
+        for d in diffs:
+            print(d)
+        checked = [n for n in names if n in present and n in lib.DETERMINISTIC]
+        print(f"checked {', '.join(checked) or 'no blocks'}: {'all match' if not diffs else f'{len(diffs)} differ'}")
+        return 1 if diffs else 0
+    for n in names:
+        print(lib.render(n) + "\n")
+    return 0
+
+
+def _refuse(message: str) -> None:
+    raise ValueError(message)  # tissuemech's main prints it as one line, exit code 2
+
+
+def add_parser(sub: Any) -> argparse.ArgumentParser:
+    """Register ``readme-tables`` on an argparse subparsers object."""
+    return _options(
+        sub.add_parser(
+            "readme-tables",
+            help="print the README's result tables from the commands that make them (or check a README against them)",
+            description=DESCRIPTION,
+        )
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    """``tissuemech readme-tables [options]``."""
+    return _execute(args, _refuse)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``tissuemech readme-tables`` as a function (also ``python -m tissuemech.compare.readme_tables``)."""
+    ap = _options(argparse.ArgumentParser(prog="tissuemech readme-tables", description=DESCRIPTION))
+    return _execute(ap.parse_args(list(sys.argv[1:] if argv is None else argv)), ap.error)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
