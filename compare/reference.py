@@ -1,6 +1,6 @@
 r"""Independent references, defined once: what the models are checked against.
 
-* ``shell_pressure(la, ...)``: the exact incompressible Fung thick shell (physics.md),
+* ``shell_pressure(la, ...)``: the exact incompressible Fung thick shell (docs/physics.md),
 
       p(lambda_a) = int_{lambda_b}^{lambda_a} 4 C exp(alpha (2 l^2 + l^-4 - 3)) (l^3 + 1) / l^5 dl,
       lambda_b^3 = 1 + (lambda_a^3 - 1) (A/B)^3,

@@ -1,7 +1,8 @@
-"""compare.readme_tables: the README's deterministic result tables are what their commands print.
+"""report.readme_tables: the deterministic result tables of the README and the validation page are what their
+commands print.
 
-Each generated block of README.md (between ``<!-- readme_tables:NAME -->`` markers) is recomputed and
-must match exactly. The blastula and Hertz blocks take seconds; the spheroid block runs the 12 FE
+Each generated block of README.md and docs/validation.md (between ``<!-- readme_tables:NAME -->`` markers) is
+recomputed and must match exactly. The blastula and Hertz blocks take seconds; the spheroid block runs the 12 FE
 checks cases (slow).
 """
 
@@ -11,16 +12,20 @@ import pytest
 
 from tissuemech.compare.report import readme_tables
 
-README = Path(__file__).resolve().parent.parent / "README.md"
+ROOT = Path(__file__).resolve().parent.parent
+PAGE = ROOT / "docs" / "validation.md"
+README = ROOT / "README.md"
 
 
 def _readme_block(name: str) -> str:
-    blocks = readme_tables.blocks_in(README.read_text())
-    assert blocks, (
-        "README.md has no readme_tables blocks: paste the output of python -m tissuemech.compare.readme_tables"
-    )
-    assert name in blocks, f"README.md lacks the generated block {name!r} (python -m tissuemech.compare.readme_tables)"
+    blocks = readme_tables.blocks_in(PAGE.read_text())
+    assert name in blocks, f"docs/validation.md lacks the generated block {name!r} (tissuemech readme-tables)"
     return blocks[name]
+
+
+def test_the_readme_shows_the_spheroid_block_of_the_validation_page():
+    assert list(readme_tables.blocks_in(README.read_text())) == ["spheroid"]
+    assert readme_tables.blocks_in(README.read_text())["spheroid"] == _readme_block("spheroid")
 
 
 def test_blocks_round_trip_through_the_parser():

@@ -1,7 +1,7 @@
 """Benchmark of the FE blastula: accuracy vs the exact solution, convergence table, seed sets, speed.
 
 ``python -m tissuemech.compare.bench fem-blastula [--quick] [--figure PATH.png]`` prints the tables. The exact reference is the
-incompressible thick-shell integral of physics.md (scipy quad + brentq); for the creep table
+incompressible thick-shell integral of docs/physics.md (scipy quad + brentq); for the creep table
 (``fem.blastula.creep``, issue 5's ramp-and-hold) it is the reduced viscoelastic shell ``reduced.viscoshell``. Timings exclude imports and
 the first (warm-up) call; the machine is shared, so they are pessimistic.
 """

@@ -1,9 +1,9 @@
-r"""The README's result tables, printed from the commands that make them (so they cannot drift).
+r"""The result tables of the README and the validation page, printed from the commands that make them.
 
-    python -m tissuemech.compare.readme_tables [--only hertz,blastula,spheroid,timings] [--check README.md]
+    tissuemech readme-tables [--only hertz,blastula,spheroid,timings] [--check docs/validation.md]
 
 Each table is a markdown block between ``<!-- readme_tables:NAME -->`` and ``<!-- /readme_tables:NAME -->``
-lines; paste the printed blocks into README.md. ``--check FILE`` recomputes every deterministic block
+lines; paste the printed blocks into README.md (the spheroid block) or docs/validation.md (all of them). ``--check FILE`` recomputes every deterministic block
 that FILE contains and exits 1 (printing the difference) when one differs: ``tests/test_compare_readme_tables.py``
 runs it in CI. Blocks (all deterministic: float64 FE and quadrature, printed to 2-3 digits):
 
@@ -11,8 +11,7 @@ runs it in CI. Blocks (all deterministic: float64 FE and quadrature, printed to 
 * ``blastula``: exact neo-Hookean limit pressures, FE error vs the exact shell on the default mesh,
   locking at kappa/C = 1e7, viscoelastic creep FE vs ``reduced.viscoshell`` (``studies.checks.blastula_creep``);
 * ``spheroid``: calibrated reduced model vs FE sigma~(t) at the FE step times, Fig. 10, Figs 8-9 and 10
-  random cases on the default mesh (``studies.checks.spheroid``, the table ``python -m
-  tissuemech.compare.checks`` prints);
+  random cases on the default mesh (``studies.checks.spheroid``, the table ``tissuemech checks`` prints);
 * ``timings`` (not checked: machine-dependent): the FE wall times of the runs above, with the
   machine and the date.
 """
@@ -46,7 +45,7 @@ def _hertz() -> list[str]:
     cols = list(df.columns)
     head = ["delta/(2 a0) [-]"] + [c.replace("F_Hertz/F_FE ", "") for c in cols[1:]]
     lines = [
-        "F_Hertz / F_FE (FE-calibrated master curve, `python -m tissuemech.compare.checks --skip blastula,creep,spheroid`):",
+        "F_Hertz / F_FE (FE-calibrated master curve, `tissuemech checks --skip blastula,creep,spheroid`):",
         "",
         "| " + " | ".join(head) + " |",
         "|" + "---|" * len(head),
@@ -123,7 +122,7 @@ def _spheroid() -> list[str]:
     seed = d[d.case.isin(list(cases.SPHEROID_CHECK_CASES))]
     return [
         'Calibrated reduced model (`equilibrium="fem"`) vs FE sigma~(t), compared at the FE step times '
-        "(`python -m tissuemech.compare.checks`, default mesh):",
+        "(`tissuemech checks`, default mesh):",
         "",
         "| cases | max deviation after the ramp | max deviation during the ramp | Hertz law, after the ramp |",
         "|---|---|---|---|",
