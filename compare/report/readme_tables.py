@@ -5,7 +5,8 @@ r"""The result tables of the README and the validation page, printed from the co
 Each table is a markdown block between ``<!-- readme_tables:NAME -->`` and ``<!-- /readme_tables:NAME -->``
 lines; paste the printed blocks into README.md (the spheroid block) or docs/validation.md (all of them).
 ``--check FILE`` recomputes every deterministic block that FILE contains and exits 1 (printing the
-difference) when one differs: ``tests/test_compare_readme_tables.py`` runs it in CI. Blocks (all deterministic: float64 FE and quadrature, printed to 2-3 digits):
+difference) when one differs: ``tests/test_compare_readme_tables.py`` runs it in CI. Blocks (all
+deterministic: float64 FE and quadrature, printed to 2-3 digits):
 
 * ``hertz``: F_Hertz / F_FE from the shipped calibrated master curve (``studies.checks.hertz_table``);
 * ``blastula``: exact neo-Hookean limit pressures, FE error vs the exact shell on the default mesh,
