@@ -350,13 +350,13 @@ def test_enough_cases():
 
 
 def test_readme_counts_are_these_cases():
-    """The README's bad-input counts are this file's (they drifted once: 171 printed, 179 run)."""
-    text = (Path(__file__).resolve().parent.parent / "README.md").read_text()
+    """The validation page's bad-input counts are this file's (they drifted once: 171 printed, 179 run)."""
+    text = (Path(__file__).resolve().parent.parent / "docs" / "validation.md").read_text()
     entry = re.search(r"(\d+) bad inputs over every entry point and (\d+) over the CLI", text)
-    assert entry is not None, "README lost its bad-input sentence"
+    assert entry is not None, "docs/validation.md lost its bad-input sentence"
     assert (int(entry[1]), int(entry[2])) == (len(CASES), len(CLI_CASES))
     row = re.search(r"\| bad input \| (\d+) bad inputs over every public entry point: all (\d+) raise", text)
-    assert row is not None, "README lost its bad-input results row"
+    assert row is not None, "docs/validation.md lost its bad-input results row"
     assert int(row[1]) == int(row[2]) == len(CASES)
 
 
