@@ -17,15 +17,26 @@ import numpy as np
 from tissuemech.fem import viscoelastic as ve
 from tissuemech.fem.continuation import LimitPointError, arc_length, load_control
 from tissuemech.fem.forms import Material
+from tissuemech.fem.linalg import Reuse, Symmetric, sparse_solve
 from tissuemech.fem.mesh import AxiMesh, shell_section
-from tissuemech.fem.newton import KeptFactor, NewtonError, newton, sparse_solve, symmetric_factor
+from tissuemech.fem.newton import NewtonError, newton
 from tissuemech.fem.output import BlastulaField, BlastulaResult
 from tissuemech.fem.problem import BLASTULA_MARGIN, SceneProblem, check_mesh, mesh_spec, roundoff_floor, secant
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
 from tissuemech.reduced.material import validate_branches, validate_material, validate_positive, validate_radii
 from tissuemech.reduced.validation import validate_choice, validate_finite
 
-__all__ = ["inflate", "creep", "MESHES", "LimitPointError", "NewtonError", "LockingWarning"]
+__all__ = [
+    "inflate",
+    "creep",
+    "shell_problem",
+    "ShellProblem",
+    "MESHES",
+    "SHELL_ORDERING",
+    "LimitPointError",
+    "NewtonError",
+    "LockingWarning",
+]
 
 MESHES = {"coarse": (2, 4), "default": (4, 8), "fine": (8, 16)}
 LOCKING_RATIO = 100.0  # displacement-only elements lock (overly stiff) beyond kappa/C ~ 1e2
@@ -35,18 +46,16 @@ class LockingWarning(UserWarning):
     """formulation='displacement' with a nearly incompressible material: the answer is locked (too stiff)."""
 
 
-def _factor(K):
-    """The blastula's linear solver: SuperLU in symmetric mode (issue 14: 2x fewer fill-ins than COLAMD) with
-    the supervariable minimum-degree ordering (20-45 % fewer factorisation flops than MMD on the fine shells:
-    ``python -m tissuemech.compare.bench fem-perf``), the same answer to round-off; returns solve(b) -> x
-    (``newton`` keeps it for the corrections after the residual has converged)."""
-    return symmetric_factor(K, ordering="supervariable")
+# The blastula's linear solver: SuperLU in symmetric mode (issue 14: 2x fewer fill-ins than COLAMD) with the
+# supervariable minimum-degree ordering (20-45 % fewer factorisation flops than MMD on the fine shells:
+# ``python -m tissuemech.compare.bench fem-perf``), the same answer to round-off; kept across the steps of a run.
+SHELL_ORDERING = "supervariable"
 
 
 # The Gauss rule of the scene's Q2 shell meshes: 3 x 3 points (degree 4), as FElupe's biquadratic quads. Against the
 # 4 x 4 rule (degree 6, the mesh builder's default), on the seed's six sets: 4x8 off a 24x48 reference by 3.2e-6 -
 # 4.8e-5 (4 x 4: 3.2e-6 - 5.3e-5), 8x16 by 1.8e-7 - 3.8e-6 (4 x 4: 1.8e-7 - 3.9e-6), 10-30 % less time per sweep
-# (`python notes/issue14_shell_gauss.py`); the Richardson limit of 8x16 / 16x32 / 32x64 moves by 1.3e-10
+# (measured in issue 14); the Richardson limit of 8x16 / 16x32 / 32x64 moves by 1.3e-10
 # (`python -m tissuemech.compare.bench felupe --blastula-reference`).
 SHELL_GAUSS_DEGREE = 4
 
@@ -71,7 +80,7 @@ class _Stretches(NamedTuple):
     outer: float  # b/B
 
 
-class _Problem(SceneProblem):
+class ShellProblem(SceneProblem):
     """The scaled blastula equations r(u, p) = f_int(u) - p f_p(u) on the free dofs.
 
     ``iso_scale``/``extra_S`` (``fem.viscoelastic.algorithmic``) add the Maxwell branch stresses of a
@@ -84,7 +93,9 @@ class _Problem(SceneProblem):
         self.inner = m.edges["inner"]
         self.ref = float(np.linalg.norm(self.rk(np.zeros(self.free.size), 0.0, tangent=False)[2]))
         self.floor = roundoff_floor(mat.kappa, self.ref, BLASTULA_MARGIN)
-        self.keep = KeptFactor()  # the factorisation kept across the steps of a run (chord steps first)
+        # the factorisation kept across the steps of a run (quasi-Newton steps first)
+        self.linear = Reuse(Symmetric(ordering=SHELL_ORDERING))
+        self.keep = self.linear.kept
 
     def rk(self, uf, p, tangent=True, iso_scale: float = 1.0, extra_S=None):
         u = self.full(uf)
@@ -104,8 +115,7 @@ class _Problem(SceneProblem):
             atol=self.floor * (1 + lam),
             admissible=self.admissible,
             load=load,
-            factor=_factor,
-            keep=self.keep,
+            linear=self.linear,
         )
 
     def load_tangent(self, lam, uf):
@@ -113,8 +123,9 @@ class _Problem(SceneProblem):
         pressure): K dx/dlam = f_p with the factorisation kept from the solve that just ended (the tangent of a
         state on its Newton path: ``load_control``'s Euler predictor); None when that solve factored nothing
         (Broyden steps on an older factorisation, whose slope predicts worse than the secant)."""
-        solve = self.keep.solve
-        if solve is None or self.keep.n != uf.size or self.keep.age != 0:
+        kept = self.linear.kept
+        solve = kept.solve if kept is not None else None
+        if kept is None or solve is None or kept.n != uf.size or kept.age != 0:
             return None
         fp, _ = self.asm._follower_values(self.full(uf), 1.0, self.inner, tangent=False)
         try:
@@ -188,14 +199,16 @@ class _StepStress(NamedTuple):
 _ELASTIC = _StepStress(None, 1.0, None)
 
 
-def _setup(inner_radius, outer_radius, C, alpha, kappa, mesh, formulation: str = "mixed", beta=(), tau=()) -> _Problem:
-    """Validate the shell inputs and build the scaled problem (lengths / A, stresses / C; branches
-    ``beta``, ``tau`` [s] for creep)."""
+def shell_problem(
+    inner_radius, outer_radius, C, alpha, kappa=2.2e9, mesh="default", formulation: str = "mixed", beta=(), tau=()
+) -> ShellProblem:
+    """The scaled shell problem (lengths / A, stresses / C) of :func:`inflate`'s arguments (validated: radii [m],
+    C [Pa], alpha, kappa [Pa], mesh, formulation; Maxwell branches ``beta``, ``tau`` [s] for creep)."""
     validate_radii(inner_radius, outer_radius)
     validate_material(C, alpha, kappa)
     A, B = float(inner_radius), float(outer_radius)
     m = _make_mesh(mesh, A, B)
-    return _Problem(m, Material(1.0, float(alpha), float(kappa) / float(C)), formulation, beta, tau)
+    return ShellProblem(m, Material(1.0, float(alpha), float(kappa) / float(C)), formulation, beta, tau)
 
 
 def inflate(
@@ -255,7 +268,8 @@ def inflate(
     """
     validate_choice("method", method, ("load", "arclength"))
     if pressures is not None:
-        p = np.atleast_1d(validate_finite("pressures (the pressure levels to reach)", pressures, "Pa"))
+        checked = validate_finite("pressures (the pressure levels to reach)", pressures, "Pa")
+        p = np.atleast_1d(np.asarray(pressures if checked is None else checked, float))
         if p.ndim != 1 or p.size == 0 or not np.all(np.isfinite(p)):
             raise ValueError("pressures must be a non-empty 1D list of finite values in Pa")
         if np.any(p < 0):
@@ -280,7 +294,7 @@ def inflate(
             LockingWarning,
             stacklevel=2,
         )
-    prob = _setup(inner_radius, outer_radius, C, alpha, kappa, mesh, formulation)
+    prob = shell_problem(inner_radius, outer_radius, C, alpha, kappa, mesh, formulation)
     u0 = np.zeros(prob.free.size)
     ref, floor = prob.ref, prob.floor
 
@@ -292,8 +306,8 @@ def inflate(
             solve, p / C, u0, monitor=prob.inner_stretch, unit=" Pa", scale=C, tangent=prob.load_tangent
         )
         lam = np.array([s.load for s in steps])
-        xs = [s.solution.x for s in steps]
-        its = np.array([s.solution.iterations for s in steps])
+        xs = [s.x for s in steps]
+        its = np.array([s.newton_iterations for s in steps])
         wall = np.array([s.wall_time for s in steps])
     else:
         pos = p[p > 0] if pressures is not None else np.array([])
@@ -409,7 +423,7 @@ def creep(
         raise ValueError(f"times (extra output times) must be finite and in (0, end_time = {end_time} s]")
     beta = np.array([float(b) for b, _ in br])
     tau = np.array([float(t) for _, t in br])
-    prob = _setup(inner_radius, outer_radius, C, alpha, kappa, mesh, beta=beta, tau=tau)
+    prob = shell_problem(inner_radius, outer_radius, C, alpha, kappa, mesh, beta=beta, tau=tau)
     C, p0, tr = float(C), float(pressure), float(ramp_time)
     schedule = ramp_hold_schedule(
         tr, float(end_time), n_ramp=int(n_ramp), n_hold=int(n_hold), first_hold=first_hold, breakpoints=list(ts)
@@ -485,3 +499,8 @@ def creep(
             end_time=float(end_time),
         ),
     )
+
+
+# the names of release 0.1 (compare.bench.fem_perf reaches into them)
+_Problem = ShellProblem
+_setup = shell_problem

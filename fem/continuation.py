@@ -10,7 +10,8 @@ r"""Path following: adaptive load control and Riks arc-length (through limit poi
     where ``tangent(lam, x) -> dx/dlam or None`` is given and has a slope at the converged state, for a step
     no longer than the last converged one; else the secant of the last two converged states (none of the
     first two after a cut; ``scale``/``unit`` only format messages). Returns a list
-    of ``LoadStep(load, solution, wall_time)``, one per requested load. If it fails where the
+    of ``LoadStep`` = ``fem.stepping.Step(load, x, newton_iterations, wall_time)`` (``.solution``: the
+    ``NewtonResult`` of release 0.1), one per requested load. If it fails where the
     load-response curve flattens (monitor slope below 2 % of the initial one or falling), raises
     ``LimitPointError`` naming the last converged load.
 
@@ -19,7 +20,7 @@ r"""Path following: adaptive load control and Riks arc-length (through limit poi
     constraint t . (x - x_pred, lam - lam_pred) = 0 in the metric |x|^2 / c^2 + lam^2 (c from the
     first tangent), bordered sparse system solved directly (regular at limit points). Step length
     adapted to the Newton iteration count; ``stop(x, lam)`` ends the trace. Returns a list of
-    ``ArcStep(load, x, newton_iterations, wall_time)``.
+    ``ArcStep`` = ``fem.stepping.Step(load, x, newton_iterations, wall_time)``.
 """
 
 from __future__ import annotations
@@ -27,33 +28,21 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable, Sequence
-from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
 
-from tissuemech.fem.newton import NewtonError, NewtonResult, sparse_solve
+from tissuemech.fem.newton import NewtonError, sparse_solve
+from tissuemech.fem.stepping import Step
 
-__all__ = ["LimitPointError", "LoadStep", "ArcStep", "load_control", "arc_length"]
+__all__ = ["LimitPointError", "LoadStep", "ArcStep", "load_control", "arc_length", "monitor_quadratic"]
 
 log = logging.getLogger(__name__)
 
 
-class LoadStep(NamedTuple):
-    """One requested load of :func:`load_control`, reached."""
-
-    load: float  # the requested (scaled) load
-    solution: NewtonResult  # x, Newton iterations summed over the sub-steps, (no residual history)
-    wall_time: float  # s, all sub-steps to this load
-
-
-class ArcStep(NamedTuple):
-    """One converged step of :func:`arc_length`."""
-
-    load: float  # the (scaled) load lam on the path
-    x: np.ndarray
-    newton_iterations: int
-    wall_time: float  # s
+# one converged-step type for every path (fem.stepping): the names of release 0.1 are aliases of it
+LoadStep = Step  # Step[np.ndarray]: time = the requested load, state = x, newton_iterations summed over sub-steps
+ArcStep = Step  # Step[np.ndarray]: time = the load lam on the path, state = x
 
 
 class LimitPointError(NewtonError):
@@ -65,13 +54,13 @@ class LimitPointError(NewtonError):
     last_converged: float = float("nan")
 
 
-def _monitor_quadratic(hist: list, lam_t: float) -> np.ndarray | None:
+def monitor_quadratic(hist: list, lam_t: float) -> np.ndarray | None:
     """Predictor through the last three converged states (lam_i, m_i, x_i), m the monitor: the load as a quadratic
     in m, lam(m), solved for lam(m*) = lam_t (the root next to the secant's m), then x(m*) by Lagrange
     interpolation in m. Near an inflection of the load-response curve (a blastula that inflates fast before the
     Fung law stiffens it) x bends less in m than in lam: past the bend errors 0.025-0.13 of the step against
-    0.076-0.16 for Euler's exact slope (75 um shell, 8x16, 600-1000 Pa; ``python
-    notes/issue14_monitor_predictor.py``). None when there is no such root nearby or the monitor does not increase."""
+    0.076-0.16 for Euler's exact slope (75 um shell, 8x16, 600-1000 Pa;
+    measured in issue 14). None when there is no such root nearby or the monitor does not increase."""
     if len(hist) < 3:
         return None
     (l0, m0, x0), (l1, m1, x1), (l2, m2, x2) = hist
@@ -118,7 +107,7 @@ def _solve_from(solve: Callable, lam: float, guess: np.ndarray, x_c: np.ndarray)
 
 def load_control(
     solve: Callable,
-    loads: Sequence[float],
+    loads: Sequence[float] | np.ndarray,
     x0: np.ndarray,
     *,
     lam0: float = 0.0,
@@ -127,12 +116,12 @@ def load_control(
     unit: str = "",
     scale: float = 1.0,
     tangent: Callable | None = None,
-) -> list[LoadStep]:
+) -> list[Step[np.ndarray]]:
     """Reach every load of ``loads`` (scaled, increasing) from (lam0, x0) by Newton solves ``solve(lam, guess)``,
     halving a failed step; see the module docstring. ``tangent(lam, x)``: dx/dlam at a converged state, or None
     (then the secant predicts). Returns one ``LoadStep`` per requested load.
     Raises ``LimitPointError`` where the path flattens, ``NewtonError`` after ``max_cuts`` cuts otherwise."""
-    out: list[LoadStep] = []
+    out: list[Step[np.ndarray]] = []
     x_prev, lam_prev = np.array(x0, float), float(lam0)
     x_old: np.ndarray | None = None
     lam_old = 0.0
@@ -154,7 +143,7 @@ def load_control(
                 and x_old is not None
                 and 0 < lam_t - lam_c <= (lam_c - lam_old) * (1 + 1e-9)
             )
-            curve = _monitor_quadratic(hist, lam_t) if cuts == 0 else None
+            curve = monitor_quadratic(hist, lam_t) if cuts == 0 else None
             t_c = tangent(lam_c, x_c) if curve is None and euler and tangent is not None else None
             if curve is not None:
                 guess = curve
@@ -217,7 +206,7 @@ def load_control(
         if not out and target == lam_prev:  # a zero first load: solve it once
             res = solve(target, x_c)
             x_c, iters = res.x, res.iterations
-        out.append(LoadStep(float(target), NewtonResult(x_c, iters, []), time.perf_counter() - t0))
+        out.append(Step(float(target), x_c, iters, time.perf_counter() - t0))
         x_prev, lam_prev = x_c, lam_c
     return out
 
@@ -238,7 +227,7 @@ def arc_length(
     target_iter: int = 5,
     ds_max: float | None = None,
     ds_min: float | None = None,
-) -> list[ArcStep]:
+) -> list[Step[np.ndarray]]:
     """Riks arc-length; returns a list of ``ArcStep(load, x, newton_iterations, wall_time)`` from the start (excluded)."""
     x, lam = np.array(x0, float), float(lam0)
     r, K, rl = fun(x, lam)
@@ -249,7 +238,7 @@ def arc_length(
     tx, tl = tx / n0, 1.0 / n0
     ds_max = 8 * ds if ds_max is None else ds_max
     ds_min = ds * 1e-4 if ds_min is None else ds_min
-    out: list[ArcStep] = []
+    out: list[Step[np.ndarray]] = []
     for _step in range(max_steps):
         t0 = time.perf_counter()
         while True:
@@ -289,7 +278,7 @@ def arc_length(
         n = nrm(dxs, dls)
         tx, tl = dxs / n, dls / n
         x, lam = xi, li
-        out.append(ArcStep(lam, x, it, time.perf_counter() - t0))
+        out.append(Step(lam, x, it, time.perf_counter() - t0))
         ds = min(ds_max, ds * np.clip(np.sqrt(target_iter / it), 0.5, 2.0))
         if stop(x, lam):
             break

@@ -31,9 +31,19 @@ from typing import NamedTuple
 
 import numpy as np
 import skfem
+from scipy.optimize import brentq
 from scipy.spatial import cKDTree
 
-__all__ = ["AxiMesh", "shell_section", "ball_section", "graded_points"]
+__all__ = [
+    "AxiMesh",
+    "shell_section",
+    "ball_section",
+    "graded_points",
+    "fitted_mesh",
+    "FITTED_LEVELS",
+    "FITTED_SPLIT",
+    "FITTED_EDGE_MAX",
+]
 
 
 @dataclass
@@ -47,6 +57,17 @@ class AxiMesh:
     nodes: dict = field(default_factory=dict)
     edges: dict = field(default_factory=dict)
     _cache: dict = field(default_factory=dict, repr=False, compare=False)  # derived data (e.g. search trees)
+
+    def search_trees(self) -> tuple[cKDTree, cKDTree]:
+        """(k-d tree of the quadrature points, k-d tree of the element centres) in reference coordinates, built
+        once per mesh (``fem.transfer`` locates points in the mesh with them)."""
+        if "search_trees" not in self._cache:
+            xe = self.basis.doflocs[:, self.basis.element_dofs]
+            self._cache["search_trees"] = (
+                cKDTree(self.quadrature_points.reshape(2, -1).T),
+                cKDTree(xe.mean(axis=1).T),
+            )
+        return self._cache["search_trees"]
 
     @property
     def quadrature_points(self) -> np.ndarray:
@@ -335,3 +356,63 @@ def _moved_ball(topo: _BallTopology, P: np.ndarray, radius: float) -> AxiMesh:
     nodes = {k: v.copy() for k, v in t.nodes.items()}
     edges = {k: v.copy() for k, v in t.edges.items()}
     return AxiMesh(m, basis, t.order, float(radius), nodes, edges)
+
+
+# ---- contact-edge-fitted ball meshes (fem.spheroid) ------------------------------------------------------
+# level -> (n_core, n_radial, surface grading, n_contact, n_equator) of ``fitted_mesh``: the surface nodes of
+# the pole block are placed so that node n_contact sits exactly on the contact edge (n_contact elements across
+# the contact zone, n_core - n_contact beyond it, graded toward the edge; radial layers thin enough for the
+# contact size; n_equator divisions of the equator block). Levels 1..4 are one self-similar sequence
+# (h ~ 1/n_core): compare.bench fem-spheroid.
+FITTED_LEVELS = {
+    0: (8, 3, 2.0, 4, 3),
+    1: (16, 6, 2.0, 7, 6),
+    2: (32, 12, 2.0, 14, 12),
+    3: (48, 18, 2.0, 21, 18),
+    4: (64, 24, 2.0, 28, 24),
+}
+FITTED_SPLIT = np.radians(55.0)  # the pole block's arc: 0..55 deg from the pole (holds the edge to delta/(2 a0) ~ 0.45)
+FITTED_EDGE_MAX = 0.92  # largest edge position, as a fraction of the pole block's arc
+_INNER_GRADING = 1.5  # contact-zone elements: first / last (finer at the edge)
+_DEPTH = 2.0  # outermost radial layer <= _DEPTH x the mean contact-zone element length
+
+
+def _geometric(n: int, length: float, first: float) -> np.ndarray:
+    """n + 1 points on [0, length]: n geometric intervals, the first one ``first`` long."""
+    if n == 1:
+        return np.array([0.0, length])
+    if abs(first * n - length) <= 1e-14 * length:
+        return np.linspace(0.0, length, n + 1)
+    q = brentq(lambda q: first * (q**n - 1) / (q - 1) - length, 1e-3, 1e3) if first * n != length else 1.0
+    iv = first * q ** np.arange(n)
+    return np.r_[0.0, np.cumsum(iv)] * (length / iv.sum())
+
+
+def fitted_mesh(radius: float, level: int, edge: float) -> AxiMesh:
+    """The level's ball_section mesh with a surface node on the contact edge.
+
+    ``edge``: reference position of the edge node as a fraction of the pole block's arc (the surface angle
+    from the pole is FITTED_SPLIT * edge, FITTED_SPLIT = 55 deg), in (0, FITTED_EDGE_MAX]. Every edge gives the
+    same topology and node numbering.
+    """
+    if level not in FITTED_LEVELS:
+        raise ValueError(f"mesh level must be an integer 0..4 (0 coarse, 1 default, 2 fine), got {level!r}")
+    if not (0 < edge <= FITTED_EDGE_MAX):
+        raise ValueError(
+            f"the contact edge at {np.degrees(FITTED_SPLIT) * edge:.3g} deg from the pole is outside the meshable range "
+            f"(0, {np.degrees(FITTED_SPLIT) * FITTED_EDGE_MAX:.3g}] deg; reduce the approach"
+        )
+    nc, nr, gr, k = FITTED_LEVELS[level][:4]
+    neq = FITTED_LEVELS[level][4] if len(FITTED_LEVELS[level]) > 4 else None
+    inner = edge * graded_points(k, 1.0 / _INNER_GRADING)
+    he = inner[-1] - inner[-2]
+    outer = edge + _geometric(nc - k, 1.0 - edge, min(he, (1.0 - edge) / (nc - k)))
+    v = graded_points(nr, 1.0 / gr)
+    c_thick = 1.0 - 0.55 * np.sqrt(2) * np.cos(FITTED_SPLIT)  # pole-block thickness at the axis (ball_section)
+    hc = _DEPTH * edge * FITTED_SPLIT / k
+    if hc < c_thick * (v[-1] - v[-2]):
+        v = 1.0 - _geometric(nr, 1.0, hc / c_thick)[::-1]
+    return ball_section(
+        radius, nc, nr, pole_points=np.r_[inner, outer[1:]], radial_points=v, n_equator=neq, split_angle=FITTED_SPLIT,
+        intorder=4,
+    )  # fmt: skip

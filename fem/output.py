@@ -1,4 +1,4 @@
-r"""Result containers, VTU / PVD export (ParaView) and the von Mises figure on the deformed section.
+r"""Result containers and VTU / PVD export (ParaView); the figures are drawn by ``compare.plots.fields``.
 
 API: ``SpheroidResult`` (spheroid compression, see its docstring), ``SpheroidField``,
 ``BlastulaResult`` (dataclass; arrays per converged step: ``pressure`` [Pa], ``inner_stretch``,
@@ -314,23 +314,11 @@ def write_vtu(path: str, mesh, displacement: np.ndarray, cell_data: dict | None 
 
 
 def plot_von_mises(mesh, displacement: np.ndarray, vm: np.ndarray, ax=None):
-    """Colour each deformed element by its von Mises stress (Pa); axes in um."""
-    import matplotlib.pyplot as plt
-    from matplotlib.collections import PolyCollection
+    """Colour each deformed element by its von Mises stress (Pa); axes in um (drawn by
+    ``tissuemech.compare.plots.fields.element_von_mises``; fem itself draws nothing)."""
+    from tissuemech.compare.plots.fields import element_von_mises
 
-    if ax is None:
-        _, ax = plt.subplots(figsize=(5, 5))
-    L = mesh.length_scale
-    nv = mesh.mesh.nvertices
-    x = (mesh.X[:, :nv].T * L + displacement[:nv]) * 1e6
-    pc = PolyCollection(x[_quads(mesh)], array=np.asarray(vm), cmap="viridis", edgecolors="face")
-    ax.add_collection(pc)
-    ax.autoscale()
-    ax.set_aspect("equal")
-    ax.set_xlabel("r (um)")
-    ax.set_ylabel("z (um)")
-    ax.figure.colorbar(pc, ax=ax, label="von Mises stress (Pa)")
-    return ax
+    return element_von_mises(mesh, displacement, vm, ax=ax)
 
 
 @dataclass
@@ -466,21 +454,8 @@ class SpheroidResult:
         return ax
 
     def plot_relaxation(self, axes=None):
-        """Nominal stress F/A_mid and mean von Mises stress vs time (seed Figs 9-10)."""
-        import matplotlib.pyplot as plt
+        """Nominal stress F/A_mid and mean von Mises stress vs time (seed Figs 9-10; drawn by
+        ``tissuemech.compare.plots.fields.relaxation_curves``)."""
+        from tissuemech.compare.plots.fields import relaxation_curves
 
-        if axes is None:
-            _, axes = plt.subplots(1, 2, figsize=(10, 4))
-        t = self.time
-        for ax, y, lab in zip(
-            axes,
-            (self.nominal_stress, self.mean_von_mises),
-            ("nominal stress F / A_mid (Pa)", "mean von Mises stress (Pa)"),
-        ):
-            ax.plot(t, y, "o-", ms=3)
-            ax.set_xlabel("pseudo-time" if self.static else "time t (s)")
-            ax.set_ylabel(lab)
-            if not self.static and t[0] > 0 and t[-1] / t[0] > 100:
-                ax.set_xscale("log")
-            ax.grid(alpha=0.3)
-        return axes
+        return relaxation_curves(self, axes=axes)

@@ -43,7 +43,7 @@ __all__ = [
 # Head-room of the residual's round-off floor over eps kappa/C times the force scale (roundoff_floor).
 # One rule, two values, kept so that every published number reproduces bit for bit: the blastula measures
 # its residual against |f_p| (the nodal force of a unit pressure, 1.83 on the default mesh) with 1e3; the
-# spheroid against a unit force (C a0^2) with 1e2. Measured (the before/after dump of notes/i9fem.md):
+# spheroid against a unit force (C a0^2) with 1e2. Measured (a before/after dump of the scenes' outputs, issue 9):
 # the blastula with 1e2 takes a different arc-length path (37 instead of 36 steps to a/A = 2, coarse
 # mesh: Newton's last iteration moves, the step-length control follows); the spheroid with 1e3 gives the
 # same bits in the three compressions checked, but its fine-mesh reference runs were not re-checked.

@@ -18,7 +18,8 @@ API: ``ramp_hold_schedule(ramp_time, end_time, *, n_ramp=6, n_hold=20, first_hol
 breakpoints=())``, ``march(step, state0, times, *, t0=0.0, max_cuts=10, growth=1.5, too_large=None)``
 with ``step(t_old, state_old, t_new, previous) -> (state_new, newton_iterations)`` (``previous`` =
 ``TimedState(time, state)`` of the step before t_old, or None: for predictors). Returns a list of
-``Step(time, state, newton_iterations, wall_time)``, one per converged (sub)step. Times in s.
+``Step(time, state, newton_iterations, wall_time)`` (``fem.stepping``), one per converged (sub)step, or with
+``substeps=False`` one per requested time. Times in s.
 """
 
 from __future__ import annotations
@@ -26,44 +27,18 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable, Sequence
-from typing import NamedTuple
+from typing import TypeVar
 
 import numpy as np
 
 from tissuemech.fem.newton import NewtonError
+from tissuemech.fem.stepping import Step, TimedState
 
 log = logging.getLogger(__name__)
 
-__all__ = ["Step", "TimedState", "ramp_hold_schedule", "march"]
+S = TypeVar("S")
 
-
-class Step(NamedTuple):
-    """One converged (sub)step of :func:`march`."""
-
-    time: float  # s, the step's end time
-    state: object  # what ``step`` returned
-    newton_iterations: int
-    wall_time: float  # s spent in ``step`` for this (sub)step
-
-    # the names of release 0.1 (read-only aliases)
-    @property
-    def t(self) -> float:
-        return self.time
-
-    @property
-    def iterations(self) -> int:
-        return self.newton_iterations
-
-    @property
-    def wall_s(self) -> float:
-        return self.wall_time
-
-
-class TimedState(NamedTuple):
-    """A converged state and its time (s): the ``previous`` argument of the step function."""
-
-    time: float
-    state: object
+__all__ = ["Step", "TimedState", "ramp_hold_schedule", "march"]  # Step, TimedState: from fem.stepping
 
 
 def ramp_hold_schedule(
@@ -114,30 +89,35 @@ def ramp_hold_schedule(
 
 
 def march(
-    step: Callable,
-    state0,
-    times: Sequence[float],
+    step: Callable[[float, S, float, TimedState[S] | None], tuple[S, int]],
+    state0: S,
+    times: Sequence[float] | np.ndarray,
     *,
     t0: float = 0.0,
     max_cuts: int = 10,
     growth: float = 1.5,
-    too_large: Callable | None = None,
-) -> list[Step]:
+    too_large: Callable[[float, float], bool] | None = None,
+    substeps: bool = True,
+) -> list[Step[S]]:
     """Advance from (t0, state0) through every time in ``times`` (s, increasing), halving a failed step.
 
     ``step(t_old, state_old, t_new, previous) -> (state_new, newton_iterations)`` raises ``NewtonError``
     when it fails; ``previous`` is the ``TimedState`` before t_old (None at the start). Returns one
     ``Step(time, state, newton_iterations, wall_time)`` per converged (sub)step. Raises ``NewtonError``
     (naming the step) after ``max_cuts`` cuts, ValueError for times that do not increase.
+    ``substeps=False``: one ``Step`` per requested time only (its newton_iterations and wall_time summed
+    over its sub-steps), for callers whose cuts are internal (static load paths).
     """
-    out: list[Step] = []
-    t_c, s_c, prev = float(t0), state0, None
+    out: list[Step[S]] = []
+    t_c, s_c = float(t0), state0
+    prev: TimedState[S] | None = None
     for target in np.asarray(times, float):
         if target <= t_c:
             raise ValueError(f"step times must increase: {target} s after {t_c} s")
         dt = target - t_c
         cuts = 0
         last_res: list = []
+        its_sum, wall_sum = 0, 0.0
         while t_c < target - 1e-12 * max(abs(target), 1.0):
             t_new = min(target, t_c + dt)
             if target - t_new < 1e-9 * dt:
@@ -166,10 +146,15 @@ def march(
                     "time step %.6g s -> %.6g s failed (%s); cut back to dt = %.3g s", t_c, t_new, err.args[0], dt
                 )
                 continue
-            out.append(Step(t_new, s_new, int(its), time.perf_counter() - w0))
+            wall = time.perf_counter() - w0
+            its_sum, wall_sum = its_sum + int(its), wall_sum + wall
+            if substeps:
+                out.append(Step(t_new, s_new, int(its), wall))
+            elif t_new == target:
+                out.append(Step(t_new, s_new, its_sum, wall_sum))
             prev = TimedState(t_c, s_c)
             t_c, s_c = t_new, s_new
-            log.debug("converged t = %.6g s in %d iterations (%.3g s)", t_new, its, out[-1].wall_time)
+            log.debug("converged t = %.6g s in %d iterations (%.3g s)", t_new, its, wall)
             if cuts:
                 dt *= growth
     return out

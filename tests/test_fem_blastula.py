@@ -194,17 +194,17 @@ def test_euler_predictor_same_answers_fewer_factorisations(monkeypatch):
     from tissuemech.fem import continuation as ct
 
     counts = _count_factorisations(monkeypatch)
-    monkeypatch.setattr(ct, "_monitor_quadratic", lambda hist, lam: None)  # Euler vs secant alone
+    monkeypatch.setattr(ct, "monitor_quadratic", lambda hist, lam: None)  # Euler vs secant alone
     kw = dict(inner_radius=A, outer_radius=B, C=C, alpha=0.2, pressures=np.linspace(100.0, 1000.0, 10), mesh=(4, 8))
     euler = inflate(**kw)
     lu_euler, counts["lu"] = counts["lu"], 0
     with monkeypatch.context() as m:
-        m.setattr(fb._Problem, "load_tangent", lambda self, lam, uf: None)
+        m.setattr(fb.ShellProblem, "load_tangent", lambda self, lam, uf: None)
         secant = inflate(**kw)
     np.testing.assert_allclose(euler.inner_stretch, secant.inner_stretch, rtol=1e-9, atol=0)
     assert lu_euler < 0.7 * counts["lu"]
     assert np.sum(euler.newton_iterations) <= np.sum(secant.newton_iterations)
-    prob = fb._setup(A, B, C, 0.2, 2.2e9, (2, 4))
+    prob = fb.shell_problem(A, B, C, 0.2, 2.2e9, (2, 4))
     x = prob.solve(1.0, np.zeros(prob.free.size), 1e-10, "test").x
     assert prob.keep.age == 0 and prob.load_tangent(1.0, x) is not None
     prob.keep.age = 1  # a later solve that factored nothing: the kept factorisation is older
@@ -220,7 +220,7 @@ def test_euler_predictor_same_answers_fewer_factorisations(monkeypatch):
     kw["pressures"] = [200.0, 500.0, 1000.0]
     jumps = inflate(**kw)
     with monkeypatch.context() as m:
-        m.setattr(fb._Problem, "load_tangent", lambda self, lam, uf: None)
+        m.setattr(fb.ShellProblem, "load_tangent", lambda self, lam, uf: None)
         jumps_secant = inflate(**kw)
     assert np.sum(jumps.newton_iterations) == np.sum(jumps_secant.newton_iterations)
 
@@ -237,12 +237,12 @@ def test_monitor_quadratic_predictor_exact_on_a_quadratic_path_and_fewer_factori
     x = lambda m: np.array([m, m**2 - 1.0, 3.0 - 0.5 * m**2])
     hist = [(lam(m), m, x(m)) for m in (0.1, 0.5, 0.8)]
     m_t = 1.3
-    np.testing.assert_allclose(ct._monitor_quadratic(hist, lam(m_t)), x(m_t), rtol=1e-13, atol=1e-13)
+    np.testing.assert_allclose(ct.monitor_quadratic(hist, lam(m_t)), x(m_t), rtol=1e-13, atol=1e-13)
     lin = [(lam(m), m, 2.0 * x(m)) for m in (0.1, 0.5, 0.8)]  # lam quadratic, x(m) exact too
-    np.testing.assert_allclose(ct._monitor_quadratic(lin, lam(1.0)), 2.0 * x(1.0), rtol=1e-13, atol=1e-13)
-    assert ct._monitor_quadratic(hist[:2], lam(m_t)) is None  # fewer than three states
-    assert ct._monitor_quadratic([hist[0], hist[2], hist[1]], lam(m_t)) is None  # monitor not increasing
-    assert ct._monitor_quadratic(hist, lam(2.5) + 0.01) is None  # beyond the maximum of lam(m)
+    np.testing.assert_allclose(ct.monitor_quadratic(lin, lam(1.0)), 2.0 * x(1.0), rtol=1e-13, atol=1e-13)
+    assert ct.monitor_quadratic(hist[:2], lam(m_t)) is None  # fewer than three states
+    assert ct.monitor_quadratic([hist[0], hist[2], hist[1]], lam(m_t)) is None  # monitor not increasing
+    assert ct.monitor_quadratic(hist, lam(2.5) + 0.01) is None  # beyond the maximum of lam(m)
     counts = _count_factorisations(monkeypatch)
     for outer in (B, 60e-6):
         kw = dict(inner_radius=A, outer_radius=outer, C=C, alpha=0.2, pressures=np.linspace(100.0, 1000.0, 10))
@@ -250,7 +250,7 @@ def test_monitor_quadratic_predictor_exact_on_a_quadratic_path_and_fewer_factori
         curve = inflate(**kw, mesh=(4, 8))
         lu_curve, counts["lu"] = counts["lu"], 0
         with monkeypatch.context() as m:
-            m.setattr(ct, "_monitor_quadratic", lambda hist, lam: None)
+            m.setattr(ct, "monitor_quadratic", lambda hist, lam: None)
             plain = inflate(**kw, mesh=(4, 8))
         np.testing.assert_allclose(curve.inner_stretch, plain.inner_stretch, rtol=1e-9, atol=0)
         assert lu_curve < 0.9 * counts["lu"]

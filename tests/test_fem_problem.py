@@ -63,12 +63,12 @@ def test_roundoff_floor_rule_and_the_scenes_values():
     eps = np.finfo(float).eps
     assert roundoff_floor(1.1e7, 2.5, 1e3) == 1e3 * eps * 1.1e7 * 2.5
     assert roundoff_floor(0.5) == SPHEROID_MARGIN * eps  # kappa/C below 1: the floor of a unit modulus
-    from tissuemech.fem.blastula import _setup
-    from tissuemech.fem.spheroid import _Problem
+    from tissuemech.fem.blastula import shell_problem
+    from tissuemech.fem.spheroid import BallProblem
 
-    pb = _setup(A, B, 200.0, 0.2, 2.2e9, "coarse")
+    pb = shell_problem(A, B, 200.0, 0.2, 2.2e9, "coarse")
     assert pb.floor == BLASTULA_MARGIN * eps * max(pb.mat.kappa, 1.0) * pb.ref  # the 0.1 rule, bit for bit
-    ps = _Problem(ball_section(500e-6, 4, 3), Material(1.0, 0.2, 2.2e9 / 150.0), [], [], 1e-10)
+    ps = BallProblem(ball_section(500e-6, 4, 3), Material(1.0, 0.2, 2.2e9 / 150.0), [], [], 1e-10)
     assert ps.floor == SPHEROID_MARGIN * eps * max(ps.mat.kappa, 1.0)
 
 
@@ -127,14 +127,15 @@ def test_mesh_specs_and_mesh_objects():
 
 
 def test_spheroid_observation_is_named_and_balanced():
-    from tissuemech.fem.spheroid import Observation, _Problem, _State
+    from tissuemech.fem.contact import PlateState
+    from tissuemech.fem.spheroid import BallProblem, Observation
 
     a0 = 500e-6
-    prob = _Problem(ball_section(a0, 4, 3), Material(1.0, 0.2, 2.2e9 / 150.0), [0.4], [2.0], 1e-10)
+    prob = BallProblem(ball_section(a0, 4, 3), Material(1.0, 0.2, 2.2e9 / 150.0), [0.4], [2.0], 1e-10)
     n = prob.asm.ndof
     act = np.zeros(prob.plane.nodes.size, bool)
     act[0] = True  # the pole
-    s0 = _State(np.zeros(n), act, prob.maxwell_initial(), 0.0, np.zeros(n), 1.0, None, 0)
+    s0 = PlateState(np.zeros(n), act, prob.maxwell_initial(), 0.0, np.zeros(n), 1.0, None, 0)
     s1, its = prob.step(s0, 0.02, 0.1, None, "test")
     ob = prob.observe(s1)
     assert isinstance(ob, Observation) and its > 0

@@ -4,6 +4,11 @@ The FE results store one value per element (the element mean of, e.g., von Mises
 recovers nodal values (the area-weighted mean of the elements that share a node) and evaluates the
 element's 9-node Q2 map on an ``n_sub`` x ``n_sub`` sub-grid, so both the geometry (curved edges) and
 the field are drawn as the Q2 interpolation, not as flat facets.
+
+The FE results' own figures (``fem.output``: ``BlastulaResult.plot``, ``SpheroidResult.plot_von_mises`` and
+``plot_relaxation``, ``fem.output.plot_von_mises``) are drawn here: ``element_von_mises`` (one flat colour per
+deformed element) and ``relaxation_curves`` (nominal and mean von Mises stress against time). They draw on the
+given axes, or on new ones of the current pyplot backend (no backend is chosen here).
 """
 
 from __future__ import annotations
@@ -14,7 +19,7 @@ import numpy as np
 
 from tissuemech.compare.cases import UM
 
-__all__ = ["nodal_average", "q2_triangulation", "draw_field"]
+__all__ = ["nodal_average", "q2_triangulation", "draw_field", "element_von_mises", "relaxation_curves"]
 
 
 def _ref_area(mesh: Any) -> np.ndarray:
@@ -91,3 +96,47 @@ def draw_field(
     coll = ax.tripcolor(xs, ys, ts, vs, shading="gouraud", cmap=cmap, vmin=lo, vmax=hi, rasterized=True)
     ax.set_aspect("equal")
     return coll
+
+
+def element_von_mises(mesh: Any, displacement: np.ndarray, vm: np.ndarray, ax: Any = None) -> Any:
+    """Colour each deformed element by its von Mises stress (Pa); axes in um. Returns the axes."""
+    from matplotlib.collections import PolyCollection
+
+    if ax is None:
+        import matplotlib.pyplot as plt
+
+        _, ax = plt.subplots(figsize=(5, 5))
+    L = mesh.length_scale
+    nv = mesh.mesh.nvertices
+    x = (mesh.X[:, :nv].T * L + displacement[:nv]) / UM
+    quads = mesh.mesh.t[:4].T  # corner nodes (counterclockwise) of each element
+    pc = PolyCollection(x[quads], array=np.asarray(vm), cmap="viridis", edgecolors="face")
+    ax.add_collection(pc)
+    ax.autoscale()
+    ax.set_aspect("equal")
+    ax.set_xlabel("r (um)")
+    ax.set_ylabel("z (um)")
+    ax.figure.colorbar(pc, ax=ax, label="von Mises stress (Pa)")
+    return ax
+
+
+def relaxation_curves(result: Any, axes: Any = None) -> Any:
+    """Nominal stress F/A_mid and mean von Mises stress of a ``fem.output.SpheroidResult`` against time (seed
+    Figs 9-10), on two axes (new ones when None). Returns the axes."""
+    if axes is None:
+        import matplotlib.pyplot as plt
+
+        _, axes = plt.subplots(1, 2, figsize=(10, 4))
+    t = result.time
+    for ax, y, lab in zip(
+        axes,
+        (result.nominal_stress, result.mean_von_mises),
+        ("nominal stress F / A_mid (Pa)", "mean von Mises stress (Pa)"),
+    ):
+        ax.plot(t, y, "o-", ms=3)
+        ax.set_xlabel("pseudo-time" if result.static else "time t (s)")
+        ax.set_ylabel(lab)
+        if not result.static and t[0] > 0 and t[-1] / t[0] > 100:
+            ax.set_xscale("log")
+        ax.grid(alpha=0.3)
+    return axes
