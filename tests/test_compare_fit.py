@@ -349,7 +349,7 @@ def test_to_dict_is_json_ready():
 def test_hertz_law_alpha_flagged_noise_free_flagged():
     """reduced.spheroid with equilibrium='hertz' (independent of alpha): exact data are flagged noise-free
     (NaN intervals, not success) with alpha 'not identified'; 1 % noise: C, beta, tau cover the truth."""
-    from tissuemech.compare import coverage
+    from tissuemech.compare.studies import coverage
 
     truth = dict(C=150.0, alpha=0.2, beta=0.4, tau=200.0)
     clean = coverage.reduced_records(truth, equilibrium="hertz")

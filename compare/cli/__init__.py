@@ -6,6 +6,8 @@
     tissuemech bench NAME [options]             (benchmark suites)
     tissuemech scan spheroid|blastula [--C 100:400] [--tau 10:1000:log] ... [--out DIR]   (parameter scans)
     tissuemech fit DATA.csv [...] --radius-um R --displacement-um D --ramp-time T   (fit your data)
+    tissuemech design [--noise 0.01] [--check N]  (experiment design: predicted interval widths)
+    tissuemech coverage [--no-fe] [--n-reduced N] (coverage study of the fit's 95 % intervals)
     tissuemech batch run|collect ...            (FE batches for job arrays)
     tissuemech --version
 
@@ -36,7 +38,9 @@ COMMANDS: list[tuple[str, str]] = [
     ("report", "tissuemech.compare.cli.report"),
     ("bench", "tissuemech.compare.cli.bench"),
     ("batch", "tissuemech.compare.batch_cli"),
-    ("fit", "tissuemech.compare.fit_cli"),
+    ("fit", "tissuemech.compare.cli.fit"),
+    ("design", "tissuemech.compare.cli.design"),
+    ("coverage", "tissuemech.compare.cli.coverage"),
     ("scan", "tissuemech.compare.scan_cli"),
     ("calibrate", "tissuemech.compare.cli.calibrate"),
     ("checks", "tissuemech.compare.cli.checks"),

@@ -1,4 +1,4 @@
-"""compare.coverage: the study's bookkeeping, and a small reduced-made run with honest coverage."""
+"""compare.studies.coverage: the study's bookkeeping, and a small reduced-made run with honest coverage."""
 
 from __future__ import annotations
 
@@ -6,17 +6,17 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from tissuemech.compare import coverage
+from tissuemech.compare.studies import coverage
 
 
 def test_wilson_interval():
-    lo, hi = coverage._wilson(19, 20)
+    lo, hi = coverage.wilson(19, 20)
     # closed form: (p + z^2/2n -+ z sqrt(p(1-p)/n + z^2/4n^2)) / (1 + z^2/n)
     z, n, p = 1.959963984540054, 20, 0.95
     c = (p + z * z / (2 * n)) / (1 + z * z / n)
     h = z * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
     assert (lo, hi) == pytest.approx((c - h, c + h), rel=1e-14)
-    assert coverage._wilson(0, 10)[0] == pytest.approx(0.0, abs=1e-15)
+    assert coverage.wilson(0, 10)[0] == pytest.approx(0.0, abs=1e-15)
 
 
 def test_summarise_counts():
@@ -56,3 +56,18 @@ def test_small_reduced_made_study_covers():
     assert len(df) == 16 * 4 and set(table["parameter"]) == set(coverage.NAMES)
     assert (table["coverage %"] >= 100 * 13 / 16).all(), table
     assert (table["failed"] == 0).all()
+
+
+def test_coverage_command_and_its_old_module_path(capsys):
+    """``tissuemech coverage`` is registered (``python -m tissuemech.compare.coverage`` is its thin alias); bad counts
+    are one-line errors."""
+    from tissuemech.compare import coverage as old
+    from tissuemech.compare.cli import main
+
+    assert old.summarise is coverage.summarise
+    assert main(["coverage", "--n-reduced", "-1", "--no-fe"]) == 2
+    assert "--n-reduced" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:  # argparse's own errors: one line, exit code 2
+        old.main(["--noise", "0"])
+    assert exc.value.code == 2
+    assert "must be positive" in capsys.readouterr().err

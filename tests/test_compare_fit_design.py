@@ -1,4 +1,4 @@
-"""compare.design: Fisher-matrix predictions of interval widths (exact identities, and agreement with
+"""compare.fit.design: Fisher-matrix predictions of interval widths (exact identities, and agreement with
 the fit's own covariance)."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tissuemech.compare import design
+from tissuemech.compare.fit import design
 
 PC = design.Protocol()  # 50 + 200 um, 0.2 s ramp, 70 samples, 1 % noise
 
@@ -65,7 +65,8 @@ def test_protocol_validation():
 def test_prediction_matches_the_fit_covariance():
     """A fit to one noisy record set of the same protocol: its Gauss-Newton sd (with the estimated noise)
     agrees with the predicted sd to the sampling error of the noise estimate (~10 % for 140 points)."""
-    from tissuemech.compare import coverage, fit
+    from tissuemech.compare import fit
+    from tissuemech.compare.studies import coverage
 
     truth = design.DEFAULT_TRUTH
     prot = dict(radius=PC.radius, levels=PC.levels, ramp_time=PC.ramp_time, times=PC.times)
@@ -75,3 +76,19 @@ def test_prediction_matches_the_fit_covariance():
     sd_fit = np.sqrt(np.diag(res.covariance))
     for i, n in enumerate(design.NAMES):
         assert sd_fit[i] == pytest.approx(pred.sd[n], rel=0.3), n
+
+
+def test_design_command_and_its_old_module_path(tmp_path, capsys):
+    """``tissuemech design`` (and ``python -m tissuemech.compare.design``, a thin alias): the predicted widths, the
+    best levels, the scan table and the figure; a bad --out stops before any computation."""
+    from tissuemech.compare import design as old
+    from tissuemech.compare.cli import main
+
+    assert old.predict is design.predict and old.Protocol is design.Protocol
+    out = tmp_path / "d.png"
+    assert main(["design", "--first-um", "50", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "predicted 95 % width" in text and "best 2 level(s) for alpha" in text and "alpha width %" in text
+    assert out.stat().st_size > 10_000
+    assert old.main(["--out", str(tmp_path / "no" / "d.png")]) == 2
+    assert "does not exist" in capsys.readouterr().err

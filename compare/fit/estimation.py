@@ -1,0 +1,284 @@
+"""The fit itself: :func:`relaxation` (weighted least squares in log-parameters, per-record noise, the
+model-error factors, 95 % intervals; the statistics are in :mod:`tissuemech.compare.fit`'s doc)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import jax.numpy as jnp
+import numpy as np
+
+from tissuemech.compare.fit.intervals import LOG_SPAN, Profiler, exp_or_inf, identifiability, inverse_eigenvalues
+from tissuemech.compare.fit.model import (
+    BETA_BOUNDS,
+    default_model,
+    initial_guess,
+    model_error_of,
+    parameter_names,
+    residual_builder,
+    search_bounds,
+    stated_accuracy,
+    table_of,
+)
+from tissuemech.compare.fit.problem import Problem, masked_solver, safe
+from tissuemech.compare.fit.records import as_records, check_information
+from tissuemech.compare.fit.result import FitResult
+from tissuemech.reduced.material import validate_positive
+
+__all__ = ["relaxation", "NOISE_FREE_REL"]
+
+NOISE_FREE_REL = 1e-9  # RMS residual below this fraction of the record's peak: noise-free (synthetic) data
+
+
+def relaxation(
+    records: Sequence[Any],
+    *,
+    radius: float,
+    ramp_time: float,
+    n_branches: int = 1,
+    equilibrium: Any = "fem",
+    initial: dict[str, float] | Sequence[float] | None = None,
+    model: Callable | None = None,
+    max_nfev: int = 200,
+    model_error: float | str | None = "auto",
+    intervals: str = "profile",
+) -> FitResult:
+    r"""Fit ``(C, alpha, beta_m, tau_m)`` to compression-relaxation records (module doc: the statistics).
+
+    records      list of ``(time [s], nominal_stress [Pa], displacement [m])``, one per compression
+                 level (``displacement`` is the total plate approach reached at the end of the ramp).
+    radius       reference ball radius a0 (m); ramp_time the loading ramp duration (s).
+    n_branches   number of Maxwell branches (parameters ``beta``, ``tau`` or ``beta_1.., tau_1..``).
+    equilibrium  the equilibrium law passed to the model ("fem" table, "hertz", an (x, f) table, a callable).
+    initial      optional starting values (dict by name, or a sequence in :func:`parameter_names` order).
+    model        ``model(t, *, radius, C, alpha, branches, displacement, ramp_time, equilibrium)`` ->
+                 nominal stress (Pa), JAX-traceable; default ``reduced.spheroid.nominal_stress``.
+    model_error  relative 1-sigma error of the model's force per record (e.g. 0.005), ``"auto"``
+                 (:func:`model_error_of`: the FE table's ``model_error_rel``), or None/0 for none.
+    intervals    "profile" (Wald checked against, and where poor replaced by, the profile likelihood)
+                 or "wald" (Gauss-Newton ellipse only; fast, for large studies of well-posed problems).
+
+    Returns a :class:`FitResult` (95 % intervals, flags and the identifiability report).
+    Raises ValueError for malformed or uninformative records (fewer points than parameters, constant
+    or non-positive stress, compression beyond the table) and RuntimeError when the model fails at
+    the starting point.
+    """
+    recs = as_records(records)
+    validate_positive("radius (of the spheroid)", radius, "m")
+    validate_positive("ramp_time (duration of the loading ramp)", ramp_time, "s")
+    names = parameter_names(n_branches)
+    check_information(recs, names)
+    if intervals not in ("profile", "wald"):
+        raise ValueError(f"intervals must be 'profile' or 'wald'; got {intervals!r}")
+    mc = table_of(equilibrium)
+    x = max(r.displacement for r in recs) / (2 * radius)
+    if x >= 0.999:  # the plates would (nearly) touch: no law of this model holds there
+        raise ValueError(
+            f"the approach {max(r.displacement for r in recs):.4g} m is {x:.3g} of the ball's diameter 2 radius = "
+            f"{2 * radius:.4g} m: it must be below it (check the displacement and the radius; on the command line "
+            "--displacement-um and --radius-um)"
+        )
+    if mc is not None and x > mc.x_max * (1 + 1e-12):
+        raise ValueError(
+            f"compression delta/(2 a0) = {x:.4g} is beyond the calibrated table (up to {mc.x_max:.4g}); "
+            "use equilibrium='hertz' (small compressions only) or a shorter approach"
+        )
+    if isinstance(model_error, str):
+        if model_error != "auto":
+            raise ValueError(
+                f"model_error must be a number (relative, e.g. 0.005), 'auto' or None; got {model_error!r}"
+            )
+        eps = model_error_of(equilibrium)
+    else:
+        eps = 0.0 if model_error is None else float(model_error)
+        if not (math.isfinite(eps) and eps >= 0):
+            raise ValueError(
+                f"model_error (relative 1-sigma error of the force, -) must be a finite number >= 0; got {model_error}"
+            )
+    model = default_model() if model is None else model
+    if initial is None:
+        p0 = initial_guess(recs, radius, ramp_time, n_branches)
+    elif isinstance(initial, dict):
+        guess = initial_guess(recs, radius, ramp_time, n_branches)
+        p0 = np.array([float(initial.get(n, g)) for n, g in zip(names, guess)])
+    else:
+        p0 = np.asarray(initial, dtype=float)
+        if p0.shape != (len(names),):
+            raise ValueError(f"initial needs {len(names)} values in the order {names}; got {p0.size}")
+    if np.any(p0 <= 0) or not np.all(np.isfinite(p0)):
+        raise ValueError(f"initial values must be positive and finite; got {dict(zip(names, p0))}")
+    P, R = len(names), len(recs)
+    lo_t, hi_t = search_bounds(
+        names, n_branches, equilibrium, float(ramp_time), max(float(np.max(r.time)) for r in recs)
+    )
+    theta0 = np.clip(np.log(p0), lo_t + 1e-9, hi_t - 1e-9)
+
+    res_fn, jac_fn, scale = residual_builder(recs, float(radius), float(ramp_time), n_branches, equilibrium, model)
+    if not np.all(np.isfinite(np.asarray(res_fn(jnp.asarray(theta0))))):
+        raise RuntimeError(
+            f"the model returned NaN/inf at the starting point {dict(zip(names, p0))}. "
+            "Hint: give initial=... closer to the data, or check units (m, Pa, s)."
+        )
+    prob = Problem(recs, res_fn, jac_fn, scale, P, eps)
+    extra = prob.nz - P
+    lo = np.concatenate([lo_t, np.full(extra, -np.inf)])
+    hi = np.concatenate([hi_t, np.full(extra, np.inf)])
+    peaks = np.array([np.max(np.abs(r.nominal_stress)) for r in recs])
+    floor = NOISE_FREE_REL * 1e-3 * peaks  # keeps the weights finite for noise-free data
+    fun = safe(prob.resid)
+    jac = lambda z: np.nan_to_num(prob.jac(z), nan=0.0, posinf=0.0, neginf=0.0)
+
+    # pass 1: common weights; noise estimate per record; pass 2: weighted by each record's noise
+    prob.sig = np.full(prob.y.size, 0.01 * scale)
+    z0 = np.concatenate([theta0, np.zeros(extra)])
+    # a parameter the model does not depend on (alpha with the Hertz law) is held at its start value
+    norm0 = np.linalg.norm(jac(z0)[: prob.y.size, :P], axis=0)
+    dead0 = [i for i in range(P) if norm0[i] <= 1e-10 * max(float(np.max(norm0)), 1e-300)]
+    free = np.array([i not in dead0 for i in range(prob.nz)])
+    solve = masked_solver(fun, jac, z0, free, lo, hi)
+    sol = solve(z0, max_nfev)
+    nfev = int(sol.nfev)
+    noise = prob.set_noise(sol.x, floor)
+    if R > 1 or extra:
+        for _ in range(2):  # weights from the previous pass's residuals; the last pass is optimal for its weights
+            sol = solve(sol.x, max_nfev)
+            nfev += int(sol.nfev)
+            noise_prev, noise = noise, prob.set_noise(sol.x, floor)
+            if np.all(np.abs(noise - noise_prev) <= 0.01 * noise_prev):
+                break
+        prob.sig = np.maximum(noise_prev, floor)[prob.idx]  # the weights z is the optimum for
+    z = sol.x
+    flags: list[str] = []
+    noise_free = bool(np.any(noise < NOISE_FREE_REL * peaks))
+    if noise_free:
+        flags.append(
+            "the residuals are at round-off level (noise-free, synthetic data?): there is no noise to "
+            "estimate, so no confidence interval can be given (intervals are NaN); add the measurement noise"
+        )
+    r = prob.resid(z)
+    chi2 = float(r @ r)
+    Jz = prob.jac(z)
+    if not np.all(np.isfinite(Jz)):
+        flags.append("the model's sensitivities are not finite at the estimate: the intervals cannot be trusted")
+        Jz = np.nan_to_num(Jz, nan=0.0, posinf=0.0, neginf=0.0)
+    N = prob.y.size
+    dof = N - P
+    from scipy.stats import t as student_t
+
+    tq = float(student_t.ppf(0.975, dof))
+    q = tq * tq
+    fisher_z = Jz.T @ Jz
+    lam, V = np.linalg.eigh(0.5 * (fisher_z + fisher_z.T))
+    cov_z = (V * inverse_eigenvalues(lam)) @ V.T
+    cov = cov_z[:P, :P]
+    colnorm = np.linalg.norm(Jz[:N, :P], axis=0)
+    dead = sorted(set(dead0) | {i for i in range(P) if colnorm[i] <= 1e-10 * max(float(np.max(colnorm)), 1e-300)})
+    lam_t, V_t = np.linalg.eigh(0.5 * (cov + cov.T))
+    fisher_t = (V_t * inverse_eigenvalues(lam_t)) @ V_t.T  # marginal Fisher of theta
+    for i in dead:
+        fisher_t[i, :] = fisher_t[:, i] = 0.0
+    ident = identifiability(fisher_t, names, dead)
+    at_bound = [names[i] for i in range(P) if min(z[i] - lo[i], hi[i] - z[i]) < 1e-6 and i not in dead]
+    if at_bound:
+        ident.report += (
+            "\n  -> at a bound of the search: "
+            + ", ".join(at_bound)
+            + f" (alpha in [{math.exp(lo[1]):.3g}, {math.exp(hi[1]):.3g}], beta in {BETA_BOUNDS}, tau in "
+            f"[{math.exp(lo[2 + n_branches]):.3g}, {math.exp(hi[2 + n_branches]):.3g}] s); e.g. alpha "
+            "at its lower bound means the data are consistent with a neo-Hookean law (alpha = 0), tau at its upper "
+            "bound that a branch does not relax within the records (beta then trades off against C)."
+        )
+    if not sol.success:
+        flags.append(f"the optimizer did not converge: {sol.message}")
+    acc = stated_accuracy(equilibrium) or 0.0
+    too_clean = [] if noise_free else [j for j in range(R) if noise[j] < acc * peaks[j]]
+    if too_clean:
+        flags.append(
+            f"record(s) {', '.join(str(j + 1) for j in too_clean)} scatter about the model by less (noise sd "
+            f"{min(noise[j] / peaks[j] for j in too_clean):.2g} of the peak stress) than the equilibrium table is "
+            f"accurate ({acc:.2g}, its model_error_rel): the residuals are then the records' own discretisation "
+            "error and the model's, not noise, and the intervals can miss the truth (noise-free synthetic data?); "
+            "add the measurement noise"
+        )
+
+    sd = np.sqrt(np.abs(np.diag(cov)))
+    p = np.exp(z[:P])
+    ivals: dict[str, tuple[float, float]] = {}
+    kinds: dict[str, str] = {}
+    methods: dict[str, str] = {}
+    phys_lo = np.where(np.isfinite(lo_t), 0.0, 0.0)  # a lower search bound stands for the limit 0
+
+    def to_linear(i, th, how, side):
+        if how in ("bound", "open"):
+            if side < 0:
+                return float(phys_lo[i])
+            return math.inf if how == "open" else exp_or_inf(th)
+        return exp_or_inf(th)
+
+    prof = Profiler(prob, z, chi2, cov_z, lo, hi)
+    prof.free = free.copy()
+    prof.free[dead] = False
+    for i, nm in enumerate(names):
+        if i in dead:
+            ivals[nm] = (float(phys_lo[i]), float(math.exp(hi_t[i])) if np.isfinite(hi_t[i]) else math.inf)
+            kinds[nm], methods[nm] = "none", "bound"
+            continue
+        if noise_free:
+            ivals[nm], kinds[nm], methods[nm] = (math.nan, math.nan), "n/a", "n/a"
+            continue
+        h = tq * sd[i]
+        ends, hows = [], []
+        for side in (-1, 1):
+            if intervals == "wald":
+                c = z[i] + side * h
+                edge = hi[i] if side > 0 else lo[i]
+                if side * (c - edge) >= 0:
+                    c, how = edge, "bound"
+                elif not np.isfinite(c):
+                    c, how = z[i] + side * LOG_SPAN, "open"
+                else:
+                    how = "wald"
+            else:
+                c, how = prof.end(i, side, h, q)
+            ends.append(to_linear(i, c, how, side))
+            hows.append(how)
+        lo_open = hows[0] in ("bound", "open")
+        hi_open = hows[1] in ("bound", "open")
+        kinds[nm] = "none" if (lo_open and hi_open) else "upper" if lo_open else "lower" if hi_open else "two-sided"
+        real = [h_ for h_ in hows if h_ in ("wald", "profile")]
+        methods[nm] = "profile" if "profile" in real else "wald" if real else "bound"
+        ivals[nm] = (ends[0], ends[1])
+    if prof.better is not None:
+        flags.append(
+            "the profile search met parameters fitting better than the reported optimum (a local "
+            "minimum): refit with initial= near the profile's values"
+        )
+    for nm in names:
+        if kinds[nm] == "upper":
+            ident.report += f"\n  -> {nm}: only an upper bound at 95 %: {nm} < {ivals[nm][1]:.4g}"
+        elif kinds[nm] == "lower":
+            ident.report += f"\n  -> {nm}: only a lower bound at 95 %: {nm} > {ivals[nm][0]:.4g}"
+        elif kinds[nm] == "none" and names.index(nm) not in dead:
+            ident.report += f"\n  -> {nm}: not bounded by these records at 95 % (any value in the search range fits)"
+    rdata = prob.data_residual(z)
+    success = bool(sol.success) and not noise_free and not too_clean and prof.better is None
+    return FitResult(
+        params={nm: float(v) for nm, v in zip(names, p)},
+        intervals=ivals,
+        residual=float(np.sqrt(np.mean(rdata**2))),
+        identifiability=ident,
+        covariance=cov,
+        success=success,
+        message=str(sol.message) + "".join(f"; {f}" for f in flags),
+        nfev=nfev,
+        names=names,
+        kinds=kinds,
+        methods=methods,
+        noise=tuple(float(s) for s in noise),
+        model_error=eps,
+        flags=tuple(flags),
+        dof=int(dof),
+        model_error_factors=tuple(float(v) for v in np.exp(z[P:])) if extra else (),
+    )

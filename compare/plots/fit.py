@@ -1,0 +1,52 @@
+"""The figure of ``tissuemech fit``: the records, the fitted model and the residuals."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from tissuemech.compare.plots import pyplot as _plt
+
+__all__ = ["fit_figure"]
+
+UM = 1e-6
+
+
+def fit_figure(
+    records: Sequence[tuple], result: Any, *, radius: float, ramp_time: float, equilibrium: Any, midplane: Any
+):
+    """Data and model (top, symlog time axis) and residuals (bottom) of a fit; ``records`` as fitted (time s,
+    nominal stress Pa, displacement m), ``result`` its :class:`~tissuemech.compare.fit.FitResult`, the keywords
+    those of the model (SI). Returns the figure (nothing is shown or saved here)."""
+    from tissuemech.reduced import spheroid
+
+    plt = _plt()
+    p = result.params
+    bn = [n for n in result.names if n.startswith("beta")]
+    tn = [n for n in result.names if n.startswith("tau")]
+    branches = [(p[b], p[t]) for b, t in zip(bn, tn)]
+    fig, (ax, axr) = plt.subplots(2, 1, figsize=(7, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
+    for j, (t, y, d) in enumerate(records):
+        kw = dict(radius=radius, C=p["C"], alpha=p["alpha"], branches=branches, displacement=d)
+        kw.update(ramp_time=ramp_time, equilibrium=equilibrium, midplane=midplane)
+        tt = np.unique(np.concatenate([np.linspace(0, max(t.max(), 1e-9), 400), t]))
+        m_dense = np.asarray(spheroid.nominal_stress(tt, **kw))
+        m = np.asarray(spheroid.nominal_stress(t, **kw))
+        if result.model_error_factors:
+            m_dense = m_dense * result.model_error_factors[j]
+            m = m * result.model_error_factors[j]
+        line = ax.plot(t, y, ".", ms=3, label=f"data, {d / UM:.4g} um")[0]
+        ax.plot(tt, m_dense, "-", color=line.get_color(), lw=1.2, label=f"model, {d / UM:.4g} um")
+        axr.plot(t, y - m, ".", ms=3, color=line.get_color())
+    ax.set_xscale("symlog", linthresh=max(ramp_time, 1e-6))
+    ax.set_ylabel("nominal stress F / A_mid (Pa)")
+    txt = ", ".join(f"{n} = {p[n]:.4g}" for n in result.names)
+    ax.set_title("tissuemech fit: " + txt, fontsize=8)
+    ax.legend(fontsize=7, ncol=2)
+    axr.axhline(0.0, color="k", lw=0.6)
+    axr.set_ylabel("residual (Pa)")
+    axr.set_xlabel("time (s)")
+    fig.tight_layout()
+    return fig
