@@ -34,9 +34,9 @@ COMMANDS: list[tuple[str, str]] = [
     ("spheroid", "tissuemech.compare.cli.spheroid"),
     ("report", "tissuemech.compare.cli.report"),
     ("bench", "tissuemech.compare.cli.bench"),
-    ("batch", "tissuemech.compare.batch_cli"),
+    ("batch", "tissuemech.compare.cli.batch"),
     ("fit", "tissuemech.compare.fit_cli"),
-    ("scan", "tissuemech.compare.scan_cli"),
+    ("scan", "tissuemech.compare.cli.scan"),
 ]
 
 

@@ -1,4 +1,4 @@
-"""compare.batch: ordered results, stored per point, resume after a kill, executors (process, dask)."""
+"""compare.batch (runner, store, pool): ordered results, stored per point, resume after a kill, executors (process, dask)."""
 
 from __future__ import annotations
 
@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from tissuemech.compare import batch
+from tissuemech.compare.batch import store as batch_store
 
 
 class Out(NamedTuple):
@@ -101,7 +102,7 @@ def test_resume_after_kill(tmp_path, executor):
     pts = [dict(a=float(a), log=str(log), delay=0.25) for a in range(10)]
     ex = "'serial'" if executor == "serial" else "None"
     code = (
-        "import sys; sys.path.insert(0, %r); import test_compare_batch as t; from tissuemech.compare import batch\n"
+        "import sys; sys.path.insert(0, %r); import test_batch as t; from tissuemech.compare import batch\n"
         "if __name__ == '__main__': batch.run(t.square, %r, executor=%s, store=%r, progress=False)"
         % (str(Path(__file__).parent), pts, ex, str(store))
     )
@@ -152,10 +153,10 @@ def _calls(log: Path) -> int:
 
 def test_key_holds_version_and_code(monkeypatch):
     k = batch.point_key(square, dict(a=1.0))
-    monkeypatch.setattr(batch, "_version", lambda: "0.0.0-other")
+    monkeypatch.setattr(batch_store, "code_version", lambda: "0.0.0-other")
     assert batch.point_key(square, dict(a=1.0)) != k  # another version of the code: not reused
     monkeypatch.undo()
-    monkeypatch.setattr(batch, "_code_hash", lambda f: "changed")
+    monkeypatch.setattr(batch_store, "code_hash", lambda f: "changed")
     assert batch.point_key(square, dict(a=1.0)) != k
 
 
@@ -210,13 +211,13 @@ def test_read_only_store_fails_before_computing(tmp_path, monkeypatch):
     def refuse(*a, **k):
         raise PermissionError(13, "Permission denied")
 
-    monkeypatch.setattr(batch, "open", refuse, raising=False)
+    monkeypatch.setattr(batch_store, "open", refuse, raising=False)
     with pytest.raises(batch.StoreError, match="not writable"):
         batch.run(square, pts, executor="serial", store=store, progress=False)
     assert _calls(log) == 0  # nothing was computed
     monkeypatch.undo()
     done = batch.run(square, pts, executor="serial", store=store, progress=False)
-    monkeypatch.setattr(batch, "open", refuse, raising=False)  # all stored: reading needs no write access
+    monkeypatch.setattr(batch_store, "open", refuse, raising=False)  # all stored: reading needs no write access
     again = batch.run(square, pts, executor="serial", store=store, progress=False)
     assert [float(r.total) for r in again] == [float(r.total) for r in done]
 
@@ -235,7 +236,7 @@ def test_stale_lock_of_a_dead_process_is_taken_over(tmp_path):
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
     dead.wait()
     lock = store / f"{batch.point_key(square, pt)}.lock"
-    lock.write_text(f'{{"pid": {dead.pid}, "host": "{batch._HOST}"}}')
+    lock.write_text(f'{{"pid": {dead.pid}, "host": "{batch_store.HOST}"}}')
     (store / f"{batch.point_key(square, pt)}.npz.{dead.pid}.abc.part").write_bytes(b"half")
     res = batch.run(square, [pt], executor="serial", store=store, progress=False)
     assert float(res[0].total) == 10.0
@@ -253,16 +254,16 @@ def test_a_lock_never_appears_without_its_owner_and_an_ownerless_one_expires(tmp
     store = tmp_path / "store"
     store.mkdir()
     lock = store / "k.lock"
-    assert batch._claim(lock, 24 * 3600.0)
+    assert batch_store.claim(lock, 24 * 3600.0)
     assert json.loads(lock.read_text())["pid"] == os.getpid()  # the owner is there from the start
-    assert not list(store.glob("*.part")) and not batch._claim(lock, 24 * 3600.0)  # held: refused
-    batch._release(lock)
+    assert not list(store.glob("*.part")) and not batch_store.claim(lock, 24 * 3600.0)  # held: refused
+    batch_store.release(lock)
     # an ownerless lock: young = being written (kept), older than the grace = its writer died (taken over)
     lock.write_text("")
-    assert not batch._lock_is_stale(lock, 24 * 3600.0)
-    old = time.time() - batch.UNWRITTEN_LOCK_GRACE - 5
+    assert not batch_store.lock_is_stale(lock, 24 * 3600.0)
+    old = time.time() - batch_store.UNWRITTEN_LOCK_GRACE - 5
     os.utime(lock, (old, old))
-    assert batch._lock_is_stale(lock, 24 * 3600.0)
+    assert batch_store.lock_is_stale(lock, 24 * 3600.0)
     # end to end: a store holding such a lock for a point of the batch finishes and computes that point
     pt = dict(a=3.0)
     empty = store / f"{batch.point_key(square, pt)}.lock"
@@ -278,14 +279,14 @@ def test_a_lock_never_appears_without_its_owner_and_an_ownerless_one_expires(tmp
     assert out, "the batch waited on an ownerless lock"
     assert float(out[0][0].total) == 15.0 and not empty.exists()
     # where the file system refuses hard links, the lock is created exclusively and then filled
-    monkeypatch.setattr(batch.os, "link", lambda *a: (_ for _ in ()).throw(PermissionError("no hard links")))
-    assert batch._claim(lock, 24 * 3600.0) and json.loads(lock.read_text())["host"] == batch._HOST
+    monkeypatch.setattr(batch_store.os, "link", lambda *a: (_ for _ in ()).throw(PermissionError("no hard links")))
+    assert batch_store.claim(lock, 24 * 3600.0) and json.loads(lock.read_text())["host"] == batch_store.HOST
 
 
 WRITER = """
 import sys, json
 sys.path.insert(0, {tests!r})
-import test_compare_batch as t
+import test_batch as t
 from tissuemech.compare import batch
 if __name__ == "__main__":
     pts = [dict(a=float(a), log={log!r}) for a in range({n})]

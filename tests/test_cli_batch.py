@@ -9,7 +9,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from tissuemech.compare import batch_cli
+from tissuemech.compare import batch
+from tissuemech.compare.cli import batch as batch_cli
 
 HERE = Path(__file__).resolve().parent
 
@@ -20,32 +21,32 @@ def probe_threads(*, x: float) -> dict:
                 xla_single="--xla_cpu_multi_thread_eigen=false" in os.environ.get("XLA_FLAGS", ""), pid=os.getpid())  # fmt: skip
 
 
-def _cli(*args, env=None):
+def _cli(*args, env=None, module="tissuemech.compare.cli.batch"):
     e = dict(os.environ, PYTHONPATH=str(HERE) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     for k in ("SLURM_ARRAY_TASK_ID", "PBS_ARRAY_INDEX", "PBS_ARRAYID", "SGE_TASK_ID", "LSB_JOBINDEX"):
         e.pop(k, None)
     e.update(env or {})
     return subprocess.Popen(
-        [sys.executable, "-m", "tissuemech.compare.batch_cli", *args], env=e, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        [sys.executable, "-m", module, *args], env=e, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
     )  # fmt: skip
 
 
 def test_chunks_partition_the_points():
     n, N = 23, 5
-    seen = sorted(i for k in range(N) for i in batch_cli.chunk(n, k, N))
+    seen = sorted(i for k in range(N) for i in batch.chunk(n, k, N))
     assert seen == list(range(n))
-    assert batch_cli.chunk(n, 2, N) == [2, 7, 12, 17, 22]
+    assert batch.chunk(n, 2, N) == [2, 7, 12, 17, 22]
     with pytest.raises(ValueError, match="--index"):
-        batch_cli.chunk(n, 5, N)
+        batch.chunk(n, 5, N)
 
 
 def test_worker_env_pins_blas_and_xla():
-    env = batch_cli.worker_env(1)
+    env = batch.worker_env(1)
     assert env["OMP_NUM_THREADS"] == env["OPENBLAS_NUM_THREADS"] == env["MKL_NUM_THREADS"] == "1"
     assert "intra_op_parallelism_threads=1" in env["XLA_FLAGS"]
-    assert batch_cli.worker_env(4)["MKL_NUM_THREADS"] == "4"
+    assert batch.worker_env(4)["MKL_NUM_THREADS"] == "4"
     with pytest.raises(ValueError, match="threads"):
-        batch_cli.worker_env(0)
+        batch.worker_env(0)
 
 
 def test_two_array_tasks_fill_one_store_then_collect(tmp_path):
@@ -58,7 +59,7 @@ def test_two_array_tasks_fill_one_store_then_collect(tmp_path):
         "--store",
         str(store),
         "--function",
-        "test_compare_batch_cli:probe_threads",
+        "test_cli_batch:probe_threads",
     ]
     # task 0 takes its index from SLURM, task 1 from PBS, on its own spawned worker; both at once
     a = _cli(*common, "--chunks", "2", env=dict(SLURM_ARRAY_TASK_ID="0"))
@@ -71,7 +72,7 @@ def test_two_array_tasks_fill_one_store_then_collect(tmp_path):
     assert "chunk 0/2: 4 of 4 points stored" in outs[0] and "chunk 1/2: 3 of 3 points stored" in outs[1]
     assert len(list(store.glob("*.npz"))) == 7
 
-    table = batch_cli.collect(batch_cli.read_points(tmp_path / "points.csv"), store, probe_threads)
+    table = batch.collect(batch.read_points(tmp_path / "points.csv"), store, probe_threads)
     assert table["stored"].all()
     assert np.allclose(table["x2"], 2 * table["x"])
     assert (table["omp"] == 1).all() and (table["openblas"] == 1).all() and table["xla_single"].all()
@@ -86,8 +87,17 @@ def test_two_array_tasks_fill_one_store_then_collect(tmp_path):
 
     # the command-line collect writes the same table
     out = tmp_path / "table.csv"
-    d = _cli("collect", str(tmp_path / "points.csv"), "--store", str(store), "--function",
-             "test_compare_batch_cli:probe_threads", "--out", str(out))  # fmt: skip
+    d = _cli(
+        "collect",
+        str(tmp_path / "points.csv"),
+        "--store",
+        str(store),
+        "--function",
+        "test_cli_batch:probe_threads",
+        "--out",
+        str(out),
+        module="tissuemech.compare.batch_cli",
+    )  # the old path
     so, se = d.communicate(timeout=300)
     assert d.returncode == 0, se
     assert "7 of 7 points stored" in so
@@ -103,7 +113,7 @@ def test_fe_blastula_chunk_matches_the_exact_shell(tmp_path):
     pts.to_csv(tmp_path / "p.csv", index=False)
     args = ["run", str(tmp_path / "p.csv"), "--store", str(tmp_path / "s"), "--function", "fe-blastula", "--index", "0"]
     assert batch_cli.main(args) == 0
-    table = batch_cli.collect(batch_cli.read_points(tmp_path / "p.csv"), tmp_path / "s", batch_cli.fe_blastula)
+    table = batch.collect(batch.read_points(tmp_path / "p.csv"), tmp_path / "s", batch.fe_blastula)
     exact = blastula.inner_stretch(
         300.0, inner_radius=50e-6, outer_radius=table["outer_radius"].to_numpy(), C=200.0, alpha=0.2
     )
@@ -121,7 +131,7 @@ def test_bad_arguments_exit_2_with_one_line(tmp_path, capsys):
 
 def test_jobqueue_recipe_pins_every_worker():
     pytest.importorskip("dask_jobqueue")
-    with batch_cli.jobqueue_cluster(
+    with batch.jobqueue_cluster(
         "slurm",
         cores=8,
         memory="16GB",
@@ -137,7 +147,7 @@ def test_jobqueue_recipe_pins_every_worker():
     assert lines.index("export OMP_NUM_THREADS='1'") < lines.index("source ~/venv/bin/activate")
     assert "--nworkers 8" in script and "--nthreads 1" in script  # 8 single-threaded workers per job
     with pytest.raises(ValueError, match="multiple"):
-        batch_cli.jobqueue_cluster("slurm", cores=8, memory="1GB", walltime="1:00:00", threads_per_worker=3)
+        batch.jobqueue_cluster("slurm", cores=8, memory="1GB", walltime="1:00:00", threads_per_worker=3)
 
 
 def test_units_in_the_header_are_checked_and_failures_say_why(tmp_path):
@@ -145,10 +155,10 @@ def test_units_in_the_header_are_checked_and_failures_say_why(tmp_path):
     bad = tmp_path / "kpa.csv"
     bad.write_text("C [kPa],x [m]\n0.2,1\n")
     with pytest.raises(ValueError, match=r"column 'C \[kPa\]': the points are passed as they are, in SI units"):
-        batch_cli.read_points(bad)
+        batch.read_points(bad)
     ok = tmp_path / "ok.csv"
     ok.write_text("x [m],y [-]\n1,2\n")
-    assert batch_cli.read_points(ok) == [dict(x=1, y=2)]
+    assert batch.read_points(ok) == [dict(x=1, y=2)]
     pts = tmp_path / "p.csv"
     pts.write_text("y\n1.0\n")  # probe_threads needs x
     p = _cli(
@@ -157,7 +167,7 @@ def test_units_in_the_header_are_checked_and_failures_say_why(tmp_path):
         "--store",
         str(tmp_path / "s"),
         "--function",
-        "test_compare_batch_cli:probe_threads",
+        "test_cli_batch:probe_threads",
         "--index",
         "0",
     )
