@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import builtins
 import os
 import signal
 import subprocess
@@ -208,8 +209,10 @@ def test_read_only_store_fails_before_computing(tmp_path, monkeypatch):
             store.chmod(0o755)
         assert _calls(log) == 0
 
-    def refuse(*a, **k):
-        raise PermissionError(13, "Permission denied")
+    def refuse(file, mode="r", *a, **k):  # writing refused, reading allowed
+        if any(c in mode for c in "wax+"):
+            raise PermissionError(13, "Permission denied")
+        return builtins.open(file, mode, *a, **k)
 
     monkeypatch.setattr(batch_store, "open", refuse, raising=False)
     with pytest.raises(batch.StoreError, match="not writable"):

@@ -19,11 +19,27 @@ from __future__ import annotations
 
 from tissuemech.compare.batch import points
 from tissuemech.compare.batch.cluster import jobqueue_cluster, pin_threads, worker_env
-from tissuemech.compare.batch.jobs import array_index, chunk, collect, read_points, resolve_function
+from tissuemech.compare.batch.jobs import (
+    UserFunctionWarning,
+    array_index,
+    array_task,
+    chunk,
+    collect,
+    read_points,
+    resolve_function,
+)
 from tissuemech.compare.batch.points import FUNCTIONS, fe_blastula, fe_spheroid
 from tissuemech.compare.batch.pool import process_pool, worker_init
 from tissuemech.compare.batch.runner import BatchError, run
-from tissuemech.compare.batch.store import STORE_FORMAT, Stored, StoreError, StoreWarning, load, point_key
+from tissuemech.compare.batch.store import (
+    STORE_FORMAT,
+    CorruptResultError,
+    Stored,
+    StoreError,
+    StoreWarning,
+    load,
+    point_key,
+)
 
 __all__ = [
     "run",
@@ -35,6 +51,8 @@ __all__ = [
     "BatchError",
     "StoreError",
     "StoreWarning",
+    "CorruptResultError",
+    "UserFunctionWarning",
     "STORE_FORMAT",
     "points",
     "fe_spheroid",
@@ -46,6 +64,7 @@ __all__ = [
     "read_points",
     "chunk",
     "array_index",
+    "array_task",
     "collect",
     "resolve_function",
 ]

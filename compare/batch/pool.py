@@ -9,6 +9,9 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import multiprocessing
+import os
+import threading
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -16,21 +19,42 @@ import numpy as np
 
 from tissuemech.compare.batch.store import to_fields
 
-__all__ = ["worker_init", "process_pool", "as_executor", "evaluate", "Serial", "DEFAULT_WORKERS"]
+__all__ = ["worker_init", "watch_parent", "process_pool", "as_executor", "evaluate", "Serial", "DEFAULT_WORKERS"]
 
 DEFAULT_WORKERS = 2
+PARENT_POLL = 0.5  # s between a worker's looks at its parent process
 
 _BLAS_LIMIT: list = []  # the worker's threadpoolctl limit, kept alive for the worker's life
 
 
 def worker_init() -> None:
-    """Worker start-up of :func:`process_pool`: one BLAS thread per worker (pass it as ``initializer=`` to a
-    pool of your own). The FE gains nothing from a second BLAS thread on its small dense blocks, and 2 workers
-    x 2 OpenBLAS threads on 2 cores made a 6-run Fig. 10 batch 1.4-2.0x slower (13.0-14.3 s vs 7.1-9.1 s with
-    one thread each)."""
+    """Worker start-up of :func:`process_pool` (pass it as ``initializer=`` to a pool of your own):
+
+    * one BLAS thread per worker. The FE gains nothing from a second BLAS thread on its small dense blocks, and
+      2 workers x 2 OpenBLAS threads on 2 cores made a 6-run Fig. 10 batch 1.4-2.0x slower (13.0-14.3 s vs
+      7.1-9.1 s with one thread each);
+    * the worker ends itself when its parent process is gone (killed, even by SIGKILL), within
+      ``PARENT_POLL`` s, so a killed batch leaves no worker computing on."""
     from threadpoolctl import threadpool_limits
 
     _BLAS_LIMIT.append(threadpool_limits(limits=1, user_api="blas"))
+    watch_parent()
+
+
+def watch_parent(poll: float = PARENT_POLL) -> threading.Thread:
+    """Start a daemon thread that ends this process (``os._exit``) once its parent process is gone (the process is
+    then re-parented, and ``os.getppid()`` changes). Returns the thread."""
+    parent = os.getppid()
+
+    def watch() -> None:
+        while True:
+            time.sleep(poll)
+            if os.getppid() != parent:
+                os._exit(70)  # EX_SOFTWARE: no cleanup, nobody is left to report to
+
+    t = threading.Thread(target=watch, name="tissuemech-parent-watch", daemon=True)
+    t.start()
+    return t
 
 
 def process_pool(workers: int = DEFAULT_WORKERS) -> cf.ProcessPoolExecutor:

@@ -17,6 +17,7 @@ fields as NumPy arrays: NamedTuples, dataclasses, dicts, scalars and arrays are 
 from __future__ import annotations
 
 import concurrent.futures as cf
+import logging
 import os
 import time
 from collections.abc import Callable, Iterable, Mapping
@@ -30,7 +31,7 @@ from tissuemech.compare.batch.store import (
     check_writable,
     claim,
     clean_parts,
-    function_name,
+    describe_owner,
     jsonable,
     load_or_quarantine,
     lock_is_stale,
@@ -39,7 +40,11 @@ from tissuemech.compare.batch.store import (
     save,
 )
 
-__all__ = ["run", "BatchError"]
+__all__ = ["run", "BatchError", "WAIT_REPORT"]
+
+log = logging.getLogger(__name__)
+
+WAIT_REPORT = 60.0  # s between log messages while waiting for points another run computes
 
 
 class BatchError(RuntimeError):
@@ -94,7 +99,7 @@ def run(
         if folder.exists() and not folder.is_dir():
             raise StoreError(f"store {folder} exists and is not a folder")
         for i, k in enumerate(keys):
-            results[i] = load_or_quarantine(folder / f"{k}.npz")
+            results[i] = load_or_quarantine(folder / f"{k}.npz", k)
     todo = [i for i, r in enumerate(results) if r is None]
     failures: dict[int, str] = {}
     if not todo:
@@ -108,13 +113,14 @@ def run(
     for i in todo:
         first_of.setdefault(keys[i], i)
     pending = [first_of[k] for k in dict.fromkeys(keys[i] for i in todo)]
-    name = function_name(function)
     ex, owned = as_executor(executor)
     window = 1 if isinstance(ex, Serial) else max(4, 2 * (getattr(ex, "_max_workers", 4) or 4))
     bar = tqdm(total=len(pts), initial=len(pts) - len(todo), disable=not progress, desc="batch")
     held: set[str] = set()
     try:
         waiting: list[int] = []  # points another run holds: looked at again later
+        announced: set[str] = set()  # keys whose wait was logged
+        next_report = time.monotonic() + WAIT_REPORT
         futures: dict[Any, int] = {}
         queue = list(pending)
 
@@ -123,7 +129,7 @@ def run(
                 i = queue.pop(0)
                 if folder is not None:
                     f = folder / f"{keys[i]}.npz"
-                    got = load_or_quarantine(f)
+                    got = load_or_quarantine(f, keys[i])
                     if got is not None:  # finished meanwhile by a concurrent run
                         results[i] = got
                         bar.update(1)
@@ -131,8 +137,13 @@ def run(
                     lock = folder / f"{keys[i]}.lock"
                     if not claim(lock, stale_after):
                         waiting.append(i)
+                        if keys[i] not in announced:
+                            announced.add(keys[i])
+                            log.info(
+                                "point %d %s is being computed by %s: waiting for it", i, pts[i], describe_owner(lock)
+                            )
                         continue
-                    got = load_or_quarantine(f)  # finished between the look and the claim
+                    got = load_or_quarantine(f, keys[i])  # finished between the look and the claim
                     if got is not None:
                         release(lock)
                         results[i] = got
@@ -149,7 +160,7 @@ def run(
                 failures[i] = f"{type(e).__name__}: {e}"
             else:
                 if folder is not None:
-                    save(folder / f"{keys[i]}.npz", fields, pts[i], name)
+                    save(folder / f"{keys[i]}.npz", fields, pts[i], function)
                 results[i] = Stored(fields, __point__=jsonable(pts[i]))
             finally:
                 if folder is not None and keys[i] in held:
@@ -171,7 +182,7 @@ def run(
                 assert folder is not None  # only a store's locks put points in waiting
                 still = []
                 for i in waiting:
-                    got = load_or_quarantine(folder / f"{keys[i]}.npz")
+                    got = load_or_quarantine(folder / f"{keys[i]}.npz", keys[i])
                     if got is not None:
                         results[i] = got
                         bar.update(1)
@@ -182,6 +193,16 @@ def run(
                     else:  # the other run gave up (failed point, or died): compute it here
                         queue.append(i)
                 waiting[:] = still
+                if waiting and time.monotonic() > next_report:
+                    next_report = time.monotonic() + WAIT_REPORT
+                    lock = folder / f"{keys[waiting[0]]}.lock"
+                    log.warning(
+                        "still waiting for %d point(s) another run is computing in store %s (point %d: %s)",
+                        len(waiting),
+                        folder,
+                        waiting[0],
+                        describe_owner(lock),
+                    )
                 if waiting and not queue:
                     time.sleep(poll)
     finally:

@@ -21,6 +21,7 @@ The store survives corruption and concurrency:
 from __future__ import annotations
 
 import dataclasses
+import errno
 import hashlib
 import inspect
 import json
@@ -39,12 +40,14 @@ import numpy as np
 __all__ = [
     "STORE_FORMAT",
     "StoreError",
+    "CorruptResultError",
     "StoreWarning",
     "Stored",
     "point_key",
     "save",
     "load",
     "load_or_quarantine",
+    "describe",
     "claim",
     "release",
     "lock_is_stale",
@@ -56,14 +59,23 @@ __all__ = [
     "jsonable",
     "to_fields",
     "HOST",
+    "BOOT_ID",
+    "process_start",
+    "lock_owner",
+    "owner_alive",
+    "describe_owner",
     "UNWRITTEN_LOCK_GRACE",
 ]
 
-STORE_FORMAT = 2  # version of the file layout (fields + __point__ + __meta__ with the checksum)
+STORE_FORMAT = 3  # version of the file layout (fields + __point__ + __meta__: key, function, code, version, checksum)
 
 
 class StoreError(ValueError):
     """The result store cannot be used (not writable, or a stored file is unreadable or altered)."""
+
+
+class CorruptResultError(StoreError):
+    """A stored result file is damaged, not a result file, or the result of another point or version of the code."""
 
 
 class StoreWarning(UserWarning):
@@ -144,8 +156,11 @@ def to_fields(result: Any) -> dict[str, np.ndarray]:
     return out
 
 
-def checksum(fields: Mapping[str, np.ndarray], point_json: str) -> str:
+def checksum(fields: Mapping[str, np.ndarray], point_json: str, identity: str = "") -> str:
+    """SHA-256 of a result: its fields (names, dtypes, shapes, bytes), its point (JSON) and its identity (the JSON
+    of key, function, code hash and version; format 3)."""
     h = hashlib.sha256(point_json.encode())
+    h.update(identity.encode())
     for k in sorted(fields):
         a = np.ascontiguousarray(fields[k])
         h.update(f"{k}|{a.dtype.str}|{a.shape}|".encode())
@@ -153,15 +168,39 @@ def checksum(fields: Mapping[str, np.ndarray], point_json: str) -> str:
     return h.hexdigest()
 
 
-def save(path: Path, fields: dict[str, np.ndarray], point: Mapping[str, Any], function: str = "") -> None:
+def _identity(meta: Mapping[str, Any]) -> str:
+    return json.dumps({k: meta.get(k) for k in ("key", "function", "code", "tissuemech")}, sort_keys=True)
+
+
+def _key_of(meta: Mapping[str, Any], point: Any) -> str:
+    """The key of a stored result, recomputed from what it says it is (function, code, version, point)."""
+    text = json.dumps(
+        {"f": meta.get("function"), "c": meta.get("code"), "v": meta.get("tissuemech"), "p": point}, sort_keys=True
+    )
+    return hashlib.sha256(text.encode()).hexdigest()[:24]
+
+
+def _describe(meta: Mapping[str, Any], point: Any) -> str:
+    text = ", ".join(f"{k}={v!r}" for k, v in point.items()) if isinstance(point, dict) else repr(point)
+    if len(text) > 160:
+        text = text[:157] + "..."
+    return f"{meta.get('function') or 'an unnamed function'} at ({text}), tissuemech {meta.get('tissuemech')}"
+
+
+def save(path: Path, fields: dict[str, np.ndarray], point: Mapping[str, Any], function: Callable) -> None:
+    """Write the result ``fields`` of ``function(**point)`` to ``path`` (``<store>/<key>.npz``) with its identity
+    (key, function, code hash, version) and checksum: to a unique temporary file first, then renamed (atomic), so a
+    failed write (full disk) leaves no truncated result. Raises :class:`StoreError` naming the store and file."""
     point_json = json.dumps(jsonable(dict(point)))
-    meta = dict(
+    meta: dict[str, Any] = dict(
         format=STORE_FORMAT,
+        key=point_key(function, point),
+        function=function_name(function),
+        code=code_hash(function),
         tissuemech=code_version(),
-        function=function,
-        sha256=checksum(fields, point_json),
         written=time.time(),
     )
+    meta["sha256"] = checksum(fields, point_json, _identity(meta))
     # a unique temporary name per writer: concurrent writers of one key never collide (not matched by *.npz)
     tmp = path.with_name(f"{path.name}.{os.getpid()}.{uuid.uuid4().hex[:12]}.part")
     try:
@@ -170,57 +209,128 @@ def save(path: Path, fields: dict[str, np.ndarray], point: Mapping[str, Any], fu
             fh.flush()
             os.fsync(fh.fileno())
         os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        why = exc.strerror or str(exc)
+        hint = " (the disk is full: free space or give another store)" if exc.errno == errno.ENOSPC else ""
+        raise StoreError(f"store {path.parent}: cannot write result file {path.name}: {why}{hint}") from None
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
 
 
-def load(path: str | os.PathLike) -> Stored:
+def load(path: str | os.PathLike, *, key: str | None = None) -> Stored:
     """Read one stored result file (``<key>.npz``); the point is under ``"__point__"`` (a dict).
 
-    Raises :class:`StoreError` (naming the file) when it is truncated, empty, not a result file, or
-    its numbers do not match the checksum written with them.
+    key  the key the file must hold (:func:`point_key` of the requested function and point): the file's function,
+         code hash, tissuemech version and point must hash to it (a valid result of another point, function or
+         version of the code copied under this name is refused).
+    Raises :class:`CorruptResultError` (naming the store and the file) when it is truncated, empty, not a result
+    file, altered (checksum) or, with ``key``, the result of something else; :class:`StoreError` when it cannot be
+    read (permissions, I/O error).
     """
     path = Path(path)
+    where = f"store {path.parent}: result file {path.name}"
     try:
-        with np.load(path, allow_pickle=False) as z:
+        fh = open(path, "rb")
+    except OSError as exc:
+        raise StoreError(f"{where} cannot be read: {exc.strerror or exc}") from None
+    try:
+        with fh, np.load(fh, allow_pickle=False) as z:
             files = set(z.files)
             if "__point__" not in files or "__meta__" not in files:
-                raise StoreError(f"result file {path} is not a tissuemech store file (no __point__/__meta__)")
+                raise CorruptResultError(f"{where} is not a tissuemech result (an .npz without __point__/__meta__)")
             point_json = str(z["__point__"])
             meta = json.loads(str(z["__meta__"]))
             fields = {k: z[k] for k in z.files if k not in ("__point__", "__meta__")}
-    except StoreError:
+            point = json.loads(point_json)
+    except CorruptResultError:
         raise
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as exc:
-        raise StoreError(f"result file {path} is unreadable (truncated, empty or not an .npz): {exc}") from None
-    if meta.get("sha256") != checksum(fields, point_json):
-        raise StoreError(f"result file {path} does not match its checksum (its numbers were altered or damaged)")
+    except OSError as exc:
+        if exc.errno is not None:  # the disk, not the content
+            raise StoreError(f"{where} cannot be read: {exc.strerror or exc}") from None
+        raise CorruptResultError(
+            f"{where} is unreadable: truncated, empty or not an .npz written by compare.batch"
+        ) from None
+    except (ValueError, EOFError, zipfile.BadZipFile, KeyError, TypeError):  # numpy: "... allow_pickle=False" etc.
+        raise CorruptResultError(
+            f"{where} is unreadable: truncated, empty or not an .npz written by compare.batch"
+        ) from None
+    if not isinstance(meta, dict):
+        raise CorruptResultError(f"{where} is not a tissuemech result (its metadata is not a record)")
+    identity = _identity(meta) if meta.get("format", 0) >= 3 else ""
+    if meta.get("sha256") != checksum(fields, point_json, identity):
+        raise CorruptResultError(f"{where} does not match its checksum (its numbers were altered or damaged)")
+    if key is not None:
+        if meta.get("format", 0) < 3:
+            raise CorruptResultError(
+                f"{where} was written by an older store format ({meta.get('format')}) that does not record what it "
+                "belongs to; it cannot be verified"
+            )
+        if meta.get("key") != key or _key_of(meta, point) != key:
+            raise CorruptResultError(
+                f"{where} holds the result of {_describe(meta, point)}, not of the point requested (key {key})"
+            )
     out = Stored(fields)
-    out["__point__"] = json.loads(point_json)
+    out["__point__"] = point
     return out
 
 
-def load_or_quarantine(path: Path) -> Stored | None:
-    """The stored result, or None if absent; a corrupt file is moved aside (with a StoreWarning)."""
+def load_or_quarantine(path: Path, key: str | None = None) -> Stored | None:
+    """The stored result (verified against ``key``, see :func:`load`), or None if absent; a corrupt or foreign file
+    is moved aside to ``<name>.corrupt`` (with a :class:`StoreWarning`). Read errors raise :class:`StoreError`."""
     if not path.exists():
         return None
     try:
-        return load(path)
-    except StoreError as exc:
+        return load(path, key=key)
+    except CorruptResultError as exc:
         if not path.exists():  # replaced meanwhile by a concurrent writer: read it again
-            return load_or_quarantine(path) if path.exists() else None
+            return load_or_quarantine(path, key) if path.exists() else None
         try:
             os.replace(path, path.with_name(path.name + ".corrupt"))
         except OSError:
             pass
-        warnings.warn(f"{exc}; recomputing this point", StoreWarning, stacklevel=3)
+        warnings.warn(f"{exc}; moved aside to {path.name}.corrupt, recomputing this point", StoreWarning, stacklevel=3)
         return None
+
+
+def describe(folder: str | os.PathLike) -> dict[str, int]:
+    """What a store holds: function name -> number of result files (unreadable files under ``"(unreadable)"``)."""
+    out: dict[str, int] = {}
+    for f in sorted(Path(folder).glob("*.npz")):
+        try:
+            with np.load(f, allow_pickle=False) as z:
+                name = str(json.loads(str(z["__meta__"])).get("function") or "(unnamed)")
+        except Exception:
+            name = "(unreadable)"
+        out[name] = out.get(name, 0) + 1
+    return out
 
 
 # ---------------------------------------------------------------- per-point claims (lock files)
 
 HOST = socket.gethostname()
+
+
+def _boot_id() -> str:
+    """This machine's boot id (Linux: a new one at every boot), '' where there is none."""
+    try:
+        return Path("/proc/sys/kernel/random/boot_id").read_text().strip()
+    except OSError:
+        return ""
+
+
+def process_start(pid: int) -> int | None:
+    """Start time of process ``pid`` (clock ticks since boot, Linux ``/proc/<pid>/stat``), None where unknown: with
+    the pid it names one process (a pid is reused by later processes, its start time is not)."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+        return int(stat[stat.rindex(")") + 2 :].split()[19])
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+BOOT_ID = _boot_id()
 
 
 def pid_alive(pid: int) -> bool:
@@ -236,7 +346,36 @@ def pid_alive(pid: int) -> bool:
 UNWRITTEN_LOCK_GRACE = 60.0  # s: a lock file still without content after this lost its writer (see claim)
 
 
+def lock_owner(lock: Path) -> dict[str, Any] | None:
+    """The owner a lock file names (pid, host, boot, start, run, time), None if it has none (or is gone)."""
+    try:
+        text = lock.read_text()
+        info = json.loads(text) if text.strip() else None
+    except (OSError, ValueError):
+        return None
+    return info if isinstance(info, dict) else None
+
+
+def owner_alive(info: Mapping[str, Any]) -> bool | None:
+    """Whether the process a lock names still runs: True/False on this host (same host and boot, the pid alive and,
+    where recorded, started at the recorded time: a reused pid is another process); None for another host."""
+    if info.get("host") != HOST or not isinstance(info.get("pid"), int):
+        return None
+    if info.get("boot") and BOOT_ID and info["boot"] != BOOT_ID:
+        return False  # this machine rebooted since: every process of before is gone
+    if not pid_alive(info["pid"]):
+        return False
+    start = info.get("start")
+    if isinstance(start, int):
+        now = process_start(info["pid"])
+        if now is not None and now != start:
+            return False  # the pid belongs to a later process
+    return True
+
+
 def lock_is_stale(lock: Path, stale_after: float) -> bool:
+    """Whether ``lock`` was abandoned: its owner (this host) no longer runs (:func:`owner_alive`), an owner on another
+    host has held it longer than ``stale_after`` s, or it has had no owner for ``UNWRITTEN_LOCK_GRACE`` s."""
     try:
         text = lock.read_text()
         age = time.time() - lock.stat().st_mtime
@@ -251,9 +390,20 @@ def lock_is_stale(lock: Path, stale_after: float) -> bool:
         # file system has no hard links, or a lock of an older version); the writer fills it within
         # microseconds, so after the grace period nobody will
         return age > UNWRITTEN_LOCK_GRACE
-    if info.get("host") == HOST and isinstance(info.get("pid"), int):
-        return not pid_alive(info["pid"])
+    alive = owner_alive(info)
+    if alive is not None:
+        return not alive
     return age > stale_after
+
+
+def describe_owner(lock: Path) -> str:
+    """Who holds ``lock``, in words (for messages about waiting on it)."""
+    info = lock_owner(lock)
+    if info is None:
+        return f"lock {lock} (no owner written yet)"
+    since = info.get("time")
+    when = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(since)) if isinstance(since, (int, float)) else "?"
+    return f"process {info.get('pid')} on host {info.get('host')} since {when} (lock {lock})"
 
 
 _RUN_ID = uuid.uuid4().hex
@@ -264,7 +414,10 @@ def claim(lock: Path, stale_after: float) -> bool:
 
     The lock appears with its owner (pid, host) already in it (:func:`place_lock`), so a process killed at any
     instant never leaves a lock without an owner."""
-    owner = json.dumps({"pid": os.getpid(), "host": HOST, "run": _RUN_ID, "time": time.time()})
+    pid = os.getpid()
+    owner = json.dumps(
+        {"pid": pid, "host": HOST, "boot": BOOT_ID, "start": process_start(pid), "run": _RUN_ID, "time": time.time()}
+    )
     part = lock.with_name(f"{lock.name}.{os.getpid()}.{uuid.uuid4().hex[:12]}.part")  # clean_parts' pattern
     part.write_text(owner)
     try:

@@ -24,13 +24,18 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import sys
+import warnings
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 from tissuemech.compare.batch import (
     BatchError,
-    array_index,
+    StoreWarning,
+    UserFunctionWarning,
+    array_task,
     chunk,
     collect,
     pin_threads,
@@ -81,21 +86,39 @@ def run(args: argparse.Namespace) -> int:
     cmd = getattr(args, "batch_command", None)
     if cmd not in ("run", "collect"):
         raise ValueError("batch needs a subcommand: 'run' or 'collect'")
-    function = resolve_function(args.function)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", UserFunctionWarning)
+        function = resolve_function(args.function)
+    for w in caught:
+        print(f"tissuemech batch: warning: {w.message}", file=sys.stderr)
     points = read_points(args.points)
     if cmd == "collect":
-        table = collect(points, args.store, function)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", StoreWarning)
+            table = collect(points, args.store, function)
+        for w in caught:
+            print(f"tissuemech batch: warning: {w.message}", file=sys.stderr)
         if args.out:
-            table.to_csv(args.out, index=False)
+            _write_csv(table, Path(args.out))
             print(f"wrote {args.out}: {int(table['stored'].sum())} of {len(table)} points stored")
         else:
             print(table.to_string(index=False))
         return 0
 
     pin_threads(args.threads)
-    index = args.index if args.index is not None else array_index()
-    if index is None:
-        raise ValueError("--index not given and no job-array index (SLURM_ARRAY_TASK_ID, PBS_ARRAY_INDEX, ...) set")
+    source = "--index"
+    if args.index is not None:
+        index = args.index
+    else:
+        task = array_task()
+        if task is None:
+            raise ValueError("--index not given and no job-array index (SLURM_ARRAY_TASK_ID, PBS_ARRAY_INDEX, ...) set")
+        index, source = task
+    if source != "--index" and not 0 <= index < args.chunks:
+        raise ValueError(
+            f"{source}={os.environ[source]} is chunk {index} (0-based), but --chunks {args.chunks} has chunks "
+            f"0..{args.chunks - 1}: give --chunks the number of array tasks"
+        )
     mine = chunk(len(points), index, args.chunks)
     executor: Any = "serial"
     if args.workers < 0:
@@ -129,6 +152,18 @@ def run(args: argparse.Namespace) -> int:
         )
         return 1
     return 0
+
+
+def _write_csv(table: Any, path: Path) -> None:
+    """``table`` as CSV at ``path``, written to a temporary file next to it and renamed: a failed write (full disk)
+    leaves no truncated table. Raises ValueError naming the file."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.part")
+    try:
+        table.to_csv(tmp, index=False)
+        os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise ValueError(f"--out {path}: cannot write the table ({exc.strerror or exc})") from None
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -64,6 +64,8 @@ BLASTULA_OPTIONS = (
     Option("--pressure", "pressure", "Pa", 1.0, "0:1000", "internal pressure p"),
 )
 
+_TINY = float(np.finfo(np.float64).tiny)  # the smallest normal float64
+
 _SYNTAX = (
     "Each model parameter is a VALUE, a range LOW:HIGH, a log-scaled range LOW:HIGH:log, or a list "
     "A,B,C (grid design only), in the unit its option names (a range from a negative number: --opt=-1:2)."
@@ -98,6 +100,11 @@ def parse_value(text: str, opt: Option) -> Parsed:
             ) from None
         if not math.isfinite(v):
             raise ScanInputError(f"{where}: values must be finite numbers ({unit})")
+        if v != 0 and min(abs(v), abs(v * opt.factor)) < _TINY:
+            raise ScanInputError(
+                f"{where}: {s} is too small to compute with (below {_TINY:.3g}, the smallest normal float64 "
+                f"number, the arithmetic underflows); give values of ordinary size ({unit})"
+            )
         return v
 
     t = text.strip()
@@ -449,6 +456,14 @@ def _run(args: argparse.Namespace, scene: str) -> int:
     for o in options:
         if isinstance(specs[o.name].value, list) and design != "grid":
             raise ScanInputError(f"{o.flag} {specs[o.name].text}: a list of values needs --design grid")
+    if scene == "blastula":  # the shell is inflated from rest: the curves run from 0 to the largest pressure
+        spec = specs["pressure"]
+        values = spec.value if isinstance(spec.value, (tuple, list)) else [spec.value]
+        if not max(values) > 0:
+            raise ScanInputError(
+                f"--pressure {spec.text}: the largest pressure must be positive (Pa): the shell is inflated from rest "
+                "(0 Pa) to each pressure of the scan"
+            )
     n = _int(args, "n", 1)
     seed = _int(args, "seed", 0)
     k_fe = _int(args, "fe-checks", 0)
@@ -510,8 +525,75 @@ def _run(args: argparse.Namespace, scene: str) -> int:
                 f"{k_fe - n_fe} of the {k_fe} FE spot-checks did not run or failed (no deviation at those points)."
             )
 
+    t3 = time.perf_counter()
+    import matplotlib
+
+    matplotlib.use("Agg")  # the command writes files; it never opens a window
+    import matplotlib.pyplot as plt
+
+    files: list[tuple[str, str]] = []
+    figures: list[tuple[str, Any, str]] = []  # (file, figure, description), written at the end
+    sens = None
+    if varied:
+        sens = scan.sensitivities(
+            table,
+            n_points=n_sens,
+            seed=seed,
+            log=log,
+            **({"equilibrium": args.equilibrium} if scene == "spheroid" else {}),
+        )
+        fig = sp.sensitivity_chart(
+            sens,
+            title=f"{scene} scan: which parameter drives which summary\n"
+            f"(exact JAX derivatives at {min(n_sens, len(table))} design points;\n"
+            "parameters scaled to their scan range; sign: direction)",
+        )
+        figures.append(("sensitivity.png", fig, "share of each parameter in the derivative of each summary"))
+    timings["sensitivities (JAX derivatives)"] = time.perf_counter() - t3
+
+    t4 = time.perf_counter()
+    if axes is not None and not args.map and sens is not None:
+        axes = _strongest_axes(scene, sens, varied, set(fixed_map)) or axes
+    if axes is not None:
+        qs = ["sigma_peak", "relaxed_fraction", "t_half"] if scene == "spheroid" else ["inner_stretch", "bursts"]
+        if scene == "blastula" and "pressure" not in axes:
+            qs.append("p_limit")
+        fig = sp.summary_maps(
+            table,
+            qs,
+            axes[0],
+            axes[1],
+            fixed=fixed_map or None,
+            log=log,
+            title=f"{scene} scan, {len(table)} points ({design})"
+            + (f"; white circles: {n_fe} FE spot-checks, labelled by deviation" if n_fe else ""),
+        )
+        figures.append(
+            ("map.png", fig, f"summaries over ({axes[0]}, {axes[1]}); FE spot-checks labelled by their deviation")
+        )
+    else:
+        notes.append("No map: it needs two varied parameters.")
+    color_by = args.color_by
+    if color_by is None:
+        color_by = curve_params[0]
+        cand = [k for k in varied if k in curve_params]
+        if cand:
+            color_by = cand[0]
+            if sens is not None:
+                key = "relaxed_fraction" if scene == "spheroid" else "inner_stretch"
+                s = sens[(sens["quantity"] == key) & sens["parameter"].isin(cand)].dropna(subset=["share [-]"])
+                if len(s):
+                    color_by = str(s.sort_values("share [-]").iloc[-1]["parameter"])
+    fig = sp.curve_bundle(table, color_by, log=log, seed=seed)
+    what = "relaxation curves" if scene == "spheroid" else "pressure-stretch curves (exact shell)"
+    figures.append(("curves.png", fig, f"{what} coloured by {color_by}"))
+    if n_fe:
+        fig = sp.parity_plot(table)
+        figures.append(("parity.png", fig, "reduced vs FE at the spot-checks, coloured by the deviation"))
+    timings["figures"] = time.perf_counter() - t4
+
+    # everything is computed and drawn: only now are the files written (a failure above leaves none)
     t2 = time.perf_counter()
-    files = []
     curves_col = "sigma [Pa]"
     flat = table.drop(columns=[curves_col]) if curves_col in table.columns else table
     flat.to_csv(out / "table.csv", index=False)
@@ -531,75 +613,12 @@ def _run(args: argparse.Namespace, scene: str) -> int:
     )
     timings["table.csv + scan.nc"] = time.perf_counter() - t2
 
-    t3 = time.perf_counter()
-    import matplotlib
-
-    matplotlib.use("Agg")  # the command writes files; it never opens a window
-    import matplotlib.pyplot as plt
-
-    sens = None
-    if varied:
-        sens = scan.sensitivities(
-            table,
-            n_points=n_sens,
-            seed=seed,
-            log=log,
-            **({"equilibrium": args.equilibrium} if scene == "spheroid" else {}),
-        )
-        fig = sp.sensitivity_chart(
-            sens,
-            title=f"{scene} scan: which parameter drives which summary\n"
-            f"(exact JAX derivatives at {min(n_sens, len(table))} design points;\n"
-            "parameters scaled to their scan range; sign: direction)",
-        )
-        fig.savefig(out / "sensitivity.png", dpi=120)
-        files.append(("sensitivity.png", "share of each parameter in the derivative of each summary"))
-    timings["sensitivities (JAX derivatives)"] = time.perf_counter() - t3
-
-    t4 = time.perf_counter()
-
+    t5 = time.perf_counter()
+    for name, fig, description in figures:
+        fig.savefig(out / name, dpi=120)
+        files.append((name, description))
     plt.close("all")
-    if axes is not None and not args.map and sens is not None:
-        axes = _strongest_axes(scene, sens, varied, set(fixed_map)) or axes
-    if axes is not None:
-        qs = ["sigma_peak", "relaxed_fraction", "t_half"] if scene == "spheroid" else ["inner_stretch", "bursts"]
-        if scene == "blastula" and "pressure" not in axes:
-            qs.append("p_limit")
-        fig = sp.summary_maps(
-            table,
-            qs,
-            axes[0],
-            axes[1],
-            fixed=fixed_map or None,
-            log=log,
-            title=f"{scene} scan, {len(table)} points ({design})"
-            + (f"; white circles: {n_fe} FE spot-checks, labelled by deviation" if n_fe else ""),
-        )
-        fig.savefig(out / "map.png", dpi=120)
-        files.append(("map.png", f"summaries over ({axes[0]}, {axes[1]}); FE spot-checks labelled by their deviation"))
-    else:
-        notes.append("No map: it needs two varied parameters.")
-    color_by = args.color_by
-    if color_by is None:
-        color_by = curve_params[0]
-        cand = [k for k in varied if k in curve_params]
-        if cand:
-            color_by = cand[0]
-            if sens is not None:
-                key = "relaxed_fraction" if scene == "spheroid" else "inner_stretch"
-                s = sens[(sens["quantity"] == key) & sens["parameter"].isin(cand)].dropna(subset=["share [-]"])
-                if len(s):
-                    color_by = str(s.sort_values("share [-]").iloc[-1]["parameter"])
-    fig = sp.curve_bundle(table, color_by, log=log, seed=seed)
-    fig.savefig(out / "curves.png", dpi=120)
-    what = "relaxation curves" if scene == "spheroid" else "pressure-stretch curves (exact shell)"
-    files.append(("curves.png", f"{what} coloured by {color_by}"))
-    if n_fe:
-        fig = sp.parity_plot(table)
-        fig.savefig(out / "parity.png", dpi=120)
-        files.append(("parity.png", "reduced vs FE at the spot-checks, coloured by the deviation"))
-    plt.close("all")
-    timings["figures"] = time.perf_counter() - t4
+    timings["figures"] += time.perf_counter() - t5
     timings["total"] = time.perf_counter() - t0
 
     argv_text = _reconstruct(args, scene, options)

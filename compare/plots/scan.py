@@ -402,7 +402,10 @@ def curve_bundle(
         combos = combos[pick]
         p_top = float(max_pressure or table[scan.column("pressure")].max())
         if not p_top > 0:
-            raise ValueError(f"max_pressure must be positive (Pa); got {p_top}")
+            given = "max_pressure" if max_pressure else "the largest pressure of the table"
+            raise ValueError(
+                f"the pressure-stretch curves run from 0 Pa up to a positive pressure; {given} is {p_top:.4g} Pa"
+            )
         p = np.linspace(0.0, p_top, 160)
         padded = np.concatenate([combos, np.repeat(combos[:1], 40 - len(combos) % 40 if len(combos) % 40 else 0, 0)])
         A, B, C, al = (jnp.asarray(padded[:, j])[:, None] for j in range(4))  # one shape: solver compiled once

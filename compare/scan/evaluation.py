@@ -31,7 +31,7 @@ import pandas as pd
 
 import tissuemech.reduced  # noqa: F401  (float64)
 from tissuemech.compare.scan.fe_checks import spot_check
-from tissuemech.compare.scan.table import BLASTULA_PARAMS, SPHEROID_PARAMS, column, unit_words
+from tissuemech.compare.scan.table import BLASTULA_PARAMS, SPHEROID_PARAMS, UNITS, column, unit_words
 from tissuemech.reduced.validation import (
     validate_choice,
     validate_finite,
@@ -51,12 +51,33 @@ __all__ = [
     "spheroid_times",
     "summaries",
     "evaluate_in_chunks",
+    "check_normal",
     "MAX_SCAN_BYTES",
     "CHUNK",
+    "TINY",
 ]
 
 MAX_SCAN_BYTES = 2 * 1024**3  # a design (or its curves) larger than this is refused up front
 CHUNK = 8192  # points per reduced-model call of evaluate_in_chunks (one compiled shape)
+
+
+TINY = float(np.finfo(np.float64).tiny)  # the smallest normal float64 (2.2e-308)
+
+
+def check_normal(points: pd.DataFrame) -> None:
+    """Refuse parameter values that are not zero but below the smallest normal float64 (``TINY``, 2.2e-308): the
+    model's arithmetic underflows with them (zero stresses, NaN summaries). Raises ValueError naming the
+    parameter, its unit and the point."""
+    for k in points.columns:
+        v = points[k].to_numpy(dtype=float)
+        bad = np.flatnonzero((v != 0) & (np.abs(v) < TINY))
+        if bad.size:
+            i = int(bad[0])
+            unit = unit_words(str(k))
+            raise ValueError(
+                f"{k} ({unit}) is {v[i]:.3g} at point {i}: below the smallest normal float64 number ({TINY:.3g}), "
+                f"so the computation underflows; give {k} in {unit} as a number of ordinary size"
+            )
 
 
 def _number(name: str, value: Any, unit: str) -> float:
@@ -319,6 +340,7 @@ def spheroid(
     batch_size = validate_int("batch_size", batch_size, minimum=1)
     fe_checks = validate_int("fe_checks (number of FE spot checks)", fe_checks, minimum=0)
     pts = _points(params, points, n, design_method, seed, log)
+    check_normal(pts)
     validate_positive("radius", pts["radius"].to_numpy(), "m")
     validate_material(pts["C"].to_numpy(), pts["alpha"].to_numpy())
     validate_nonnegative("beta (the energy factor of the Maxwell branch)", pts["beta"].to_numpy())
@@ -365,6 +387,16 @@ def spheroid(
         res = _batched(evaluate, {k: pts[k].to_numpy() for k in varying}, batch_size)
     else:
         res = {k: np.asarray(v) for k, v in evaluate().items()}
+    peak = np.asarray(res["sigma_peak"], dtype=float)
+    bad = np.flatnonzero(~(np.isfinite(peak) & (peak >= TINY)))
+    if bad.size:  # the model never gives a zero or NaN peak stress for a compression: the numbers failed
+        i = int(bad[0])
+        at = ", ".join(f"{k}={float(pts[k].iloc[i]):.4g} {UNITS[k]}" for k in SPHEROID_PARAMS)
+        raise ValueError(
+            f"the reduced spheroid model gives a peak nominal stress of {peak[i]:.3g} Pa at {bad.size} of {len(pts)} "
+            f"points, e.g. point {i} ({at}): its parameters underflow or overflow float64 arithmetic; scan "
+            "parameters of ordinary size (SI units)"
+        )
     df = pts.rename(columns={k: column(k) for k in pts.columns})
     for k in ("sigma_peak", "sigma_end", "relaxed_fraction", "t_half"):
         df[column(k)] = res[k]
@@ -530,6 +562,7 @@ def blastula(
     batch_size = validate_int("batch_size", batch_size, minimum=1)
     fe_checks = validate_int("fe_checks (number of FE spot checks)", fe_checks, minimum=0)
     pts = _points(params, points, n, design_method, seed, log)
+    check_normal(pts)
     validate_radii(pts["inner_radius"].to_numpy(), pts["outer_radius"].to_numpy())
     validate_material(pts["C"].to_numpy(), pts["alpha"].to_numpy())
     validate_finite("pressure", pts["pressure"].to_numpy(), "Pa")

@@ -87,21 +87,23 @@ def to_xarray(table: pd.DataFrame) -> Any:
         shape = (n,)
         order = np.arange(n)
 
-    def attrs(name: str, unit: str) -> dict:
-        a = {"units": _cf_units(unit)}
+    def attrs(name: str, unit: str, label: str | None = None) -> dict:
+        a = {"units": _cf_units(unit)} if unit else {}  # a column without a unit gets none (it stays unitless)
         if name in LONG_NAMES:
             a["long_name"] = LONG_NAMES[name]
+        if label is not None:
+            a["column"] = label  # the table's column name, for an exact round trip
         return a
 
     coords: dict[str, Any] = {}
     for k in params:
         unit = split_column(cols[k])[1]
         if k in fixed:
-            coords[k] = ((), float(values[k][0]), attrs(k, unit))
+            coords[k] = ((), float(values[k][0]), attrs(k, unit, cols[k]))
         elif grid:
-            coords[k] = ((k,), levels[k], attrs(k, unit))
+            coords[k] = ((k,), levels[k], attrs(k, unit, cols[k]))
         else:
-            coords[k] = (("point",), values[k], attrs(k, unit))
+            coords[k] = (("point",), values[k], attrs(k, unit, cols[k]))
     if not grid:
         coords["point"] = (("point",), np.arange(n), {"long_name": "index of the point in the scan table"})
     data_vars: dict[str, Any] = {}
@@ -113,11 +115,17 @@ def to_xarray(table: pd.DataFrame) -> Any:
         if table[col].dtype == object:  # curves: one array per row
             arr = np.stack([np.asarray(v, dtype=float) for v in table[col].to_numpy()[order]])
             curves = (name, unit)
-            data_vars[name] = (dims + ("time",), arr.reshape(shape + arr.shape[1:]), attrs(name, unit))
+            data_vars[name] = (dims + ("time",), arr.reshape(shape + arr.shape[1:]), attrs(name, unit, col))
             continue
         v = table[col].to_numpy()[order]
-        v = v.astype(bool) if v.dtype == bool else v.astype(float)
-        data_vars[name] = (dims, v.reshape(shape), attrs(name, unit))
+        a = attrs(name, unit, col)
+        if v.dtype == bool:
+            v = v.astype(bool)
+        elif np.issubdtype(v.dtype, np.integer):  # kept whole (netCDF3 stores int32; read back as this dtype)
+            a["pandas_dtype"] = v.dtype.str
+        else:
+            v = v.astype(float)
+        data_vars[name] = (dims, v.reshape(shape), a)
     if curves is not None:
         t = table.attrs.get("time [s]")
         if t is None:
@@ -140,7 +148,12 @@ def from_xarray(ds: Any) -> pd.DataFrame:
     scene, params = scene_parameters(list(ds.variables))
 
     def label(name: str) -> str:
-        u = ds[name].attrs.get("units", "")
+        a = ds[name].attrs
+        if "column" in a:
+            return str(a["column"])
+        if "units" not in a:  # a column without a unit
+            return name
+        u = a["units"]
         return f"{name} [{'-' if u == '1' else u}]"
 
     dims = [d for d in ds.dims if d != "time"]
@@ -159,7 +172,10 @@ def from_xarray(ds: Any) -> pd.DataFrame:
             arr = np.asarray(var.transpose(*dims, "time").values).reshape(n, -1)
             out[label(name)] = list(arr)
         else:
-            out[label(name)] = np.asarray(var.transpose(*dims).values).reshape(n)
+            v = np.asarray(var.transpose(*dims).values).reshape(n)
+            if "pandas_dtype" in var.attrs:
+                v = v.astype(np.dtype(str(var.attrs["pandas_dtype"])))
+            out[label(name)] = v
     df = pd.DataFrame(out)
     if "time" in ds.coords:
         df.attrs["time [s]"] = np.asarray(ds["time"].values, dtype=float)
