@@ -47,6 +47,10 @@ def test_parse_value_syntax():
         (["scan", "blastula", "--map", "C,alpha"], "is not varied"),
         (["scan", "spheroid", "--alpha=-0.1:0.2", "--n", "3"], "alpha"),
         (["scan", "blastula", "--alpha", "0:0.3", "--n", "4", "--color-by", "bogus"], "--color-by bogus: choose from"),
+        (["scan", "spheroid", "--C", "1e-320:1e-319"], "--C 1e-320:1e-319: 1e-320 is too small to compute with"),
+        (["scan", "spheroid", "--radius-um", "1e-303"], "--radius-um 1e-303: 1e-303 is too small"),
+        (["scan", "blastula", "--pressure=-1000:0"], "--pressure -1000:0: the largest pressure must be positive (Pa)"),
+        (["scan", "blastula", "--pressure", "0"], "--pressure 0: the largest pressure must be positive (Pa)"),
     ],
 )
 def test_bad_input_one_line_exit_2(tmp_path, capsys, argv, match):

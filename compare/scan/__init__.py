@@ -21,7 +21,9 @@ from __future__ import annotations
 from tissuemech.compare.scan.evaluation import (
     CHUNK,
     MAX_SCAN_BYTES,
+    TINY,
     blastula,
+    check_normal,
     default_times,
     design,
     evaluate_in_chunks,
@@ -79,6 +81,8 @@ __all__ = [
     "BLASTULA_SUMMARIES",
     "FE_COLUMNS",
     "LONG_NAMES",
+    "check_normal",
     "MAX_SCAN_BYTES",
     "CHUNK",
+    "TINY",
 ]

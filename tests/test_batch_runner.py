@@ -103,7 +103,7 @@ def test_resume_after_kill(tmp_path, executor):
     pts = [dict(a=float(a), log=str(log), delay=0.25) for a in range(10)]
     ex = "'serial'" if executor == "serial" else "None"
     code = (
-        "import sys; sys.path.insert(0, %r); import test_batch as t; from tissuemech.compare import batch\n"
+        "import sys; sys.path.insert(0, %r); import test_batch_runner as t; from tissuemech.compare import batch\n"
         "if __name__ == '__main__': batch.run(t.square, %r, executor=%s, store=%r, progress=False)"
         % (str(Path(__file__).parent), pts, ex, str(store))
     )
@@ -161,7 +161,7 @@ def test_key_holds_version_and_code(monkeypatch):
     assert batch.point_key(square, dict(a=1.0)) != k
 
 
-@pytest.mark.parametrize("damage", ["truncate", "empty", "garbage", "altered", "foreign"])
+@pytest.mark.parametrize("damage", ["truncate", "empty", "garbage", "altered", "foreign", "copied"])
 def test_corrupt_file_is_detected_recomputed_and_reported(tmp_path, damage):
     log = tmp_path / "log"
     log.mkdir()
@@ -178,13 +178,16 @@ def test_corrupt_file_is_detected_recomputed_and_reported(tmp_path, damage):
         victim.write_bytes(os.urandom(len(raw)))
     elif damage == "foreign":
         np.savez(victim, x=np.zeros(3))  # a valid .npz, but not one of ours
+    elif damage == "copied":  # a valid result of another point under this point's name
+        victim.write_bytes((store / f"{batch.point_key(square, pts[0])}.npz").read_bytes())
     else:  # a valid file whose numbers were changed afterwards
         with np.load(victim) as z:
             fields = {k: z[k] for k in z.files}
         fields["x"] = fields["x"] + 1.0
         np.savez(victim, **fields)
-    with pytest.raises(batch.StoreError, match=str(victim.name)):
-        batch.load(victim)
+    with pytest.raises(batch.StoreError, match=str(victim.name)) as info:
+        batch.load(victim, key=batch.point_key(square, pts[2]))
+    assert str(store) in str(info.value) and "allow_pickle" not in str(info.value)
     before = _calls(log)
     with pytest.warns(batch.StoreWarning, match="recomputing"):
         res = batch.run(square, pts, executor="serial", store=store, progress=False)
@@ -289,7 +292,7 @@ def test_a_lock_never_appears_without_its_owner_and_an_ownerless_one_expires(tmp
 WRITER = """
 import sys, json
 sys.path.insert(0, {tests!r})
-import test_batch as t
+import test_batch_runner as t
 from tissuemech.compare import batch
 if __name__ == "__main__":
     pts = [dict(a=float(a), log={log!r}) for a in range({n})]
@@ -346,3 +349,88 @@ def test_bad_arguments(tmp_path, kw, match):
     args.update(kw)
     with pytest.raises(ValueError, match=match):
         batch.run(args.pop("function"), args.pop("points"), **args)
+
+
+PARENT = """
+import os, sys, time
+sys.path.insert(0, {tests!r})
+import test_batch_runner as t
+from tissuemech.compare import batch
+if __name__ == "__main__":
+    pool = batch.process_pool(2)
+    futures = [pool.submit(t.report_pid_and_sleep, folder={folder!r}) for _ in range(2)]
+    time.sleep(600)
+"""
+
+
+def report_pid_and_sleep(*, folder: str) -> None:
+    Path(folder, str(os.getpid())).touch()
+    time.sleep(600)
+
+
+def test_a_killed_parent_takes_its_workers_with_it(tmp_path):
+    """Workers of the pool end themselves when their parent is killed (SIGKILL: no cleanup in the parent), instead
+    of computing on as orphans."""
+    pids = tmp_path / "pids"
+    pids.mkdir()
+    script = tmp_path / "parent.py"
+    script.write_text(PARENT.format(tests=str(Path(__file__).parent), folder=str(pids)))
+    parent = subprocess.Popen([sys.executable, str(script)], start_new_session=True)
+    t0 = time.time()
+    while len(list(pids.iterdir())) < 2 and time.time() - t0 < 120:
+        time.sleep(0.05)
+    workers = [int(p.name) for p in pids.iterdir()]
+    assert len(workers) == 2, "the workers did not start"
+    parent.kill()  # the parent only, not its process group
+    parent.wait()
+
+    def alive(pid: int) -> bool:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return False
+        return (
+            Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0] != "Z" if Path("/proc").exists() else True
+        )
+
+    t0 = time.time()
+    while any(alive(p) for p in workers) and time.time() - t0 < 30:
+        time.sleep(0.1)
+    left = [p for p in workers if alive(p)]
+    for p in left:  # do not leave them behind if the test fails
+        os.kill(p, signal.SIGKILL)
+    assert not left, f"workers {left} outlived their killed parent"
+
+
+def test_a_wait_says_what_it_waits_for(tmp_path, caplog):
+    """A point claimed by another live process is waited for, and the log says for what and whom."""
+    import json
+    import threading
+
+    folder = tmp_path / "store"
+    folder.mkdir()
+    pt = dict(a=4.0)
+    key = batch.point_key(square, pt)
+    holder = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        owner = dict(pid=holder.pid, host=batch_store.HOST, boot=batch_store.BOOT_ID, time=time.time())
+        owner["start"] = batch_store.process_start(holder.pid)
+        (folder / f"{key}.lock").write_text(json.dumps(owner))
+        out: list = []
+        with caplog.at_level("INFO", logger="tissuemech.compare.batch.runner"):
+            worker = threading.Thread(
+                target=lambda: out.append(batch.run(square, [pt], executor="serial", store=folder, progress=False)),
+                daemon=True,
+            )
+            worker.start()
+            t0 = time.time()
+            while "waiting for it" not in caplog.text and time.time() - t0 < 30:
+                time.sleep(0.05)
+            holder.kill()  # the owner dies: the wait ends, the point is computed here
+            holder.wait()
+            worker.join(timeout=60)
+        assert f"process {holder.pid} on host {batch_store.HOST}" in caplog.text and "a': 4.0" in caplog.text
+        assert out and float(out[0][0].total) == 20.0
+    finally:
+        holder.kill()
+        holder.wait()
