@@ -2,7 +2,7 @@
 
 Each point is one FE inflation of the blastula; results go to a store folder the moment they finish,
 so a rerun with the same store skips the finished points. Workers run one thread each, with BLAS and
-XLA pinned to one thread (``compare.batch_cli.worker_env``) so they do not oversubscribe the cores.
+XLA pinned to one thread (``compare.batch.worker_env``) so they do not oversubscribe the cores.
 For a cluster, replace the LocalCluster by a ``dask_jobqueue.SLURMCluster`` (docs: "Clusters").
 
     python examples/dask_batch.py
@@ -13,7 +13,6 @@ import os
 import numpy as np
 
 from tissuemech.compare import batch
-from tissuemech.compare.batch_cli import worker_env
 
 FAST = os.environ.get("TISSUEMECH_EXAMPLES_FAST") == "1"  # tests/test_examples.py: small sizes
 OUT = os.environ.get("TISSUEMECH_EXAMPLES_OUT", "example-output")  # where the files go
@@ -41,7 +40,7 @@ if __name__ == "__main__":
     ]
     store = f"{OUT}/dask-store"
     with (
-        LocalCluster(n_workers=2, threads_per_worker=1, env=worker_env(1), dashboard_address=None) as cluster,
+        LocalCluster(n_workers=2, threads_per_worker=1, env=batch.worker_env(1), dashboard_address=None) as cluster,
         Client(cluster) as client,
     ):
         results = batch.run(inner_stretch, points, executor=client, store=store, progress=False)

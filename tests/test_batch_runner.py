@@ -1,7 +1,8 @@
-"""compare.batch: ordered results, stored per point, resume after a kill, executors (process, dask)."""
+"""compare.batch (runner, store, pool): ordered results, stored per point, resume after a kill, executors (process, dask)."""
 
 from __future__ import annotations
 
+import builtins
 import os
 import signal
 import subprocess
@@ -14,6 +15,7 @@ import numpy as np
 import pytest
 
 from tissuemech.compare import batch
+from tissuemech.compare.batch import store as batch_store
 
 
 class Out(NamedTuple):
@@ -101,7 +103,7 @@ def test_resume_after_kill(tmp_path, executor):
     pts = [dict(a=float(a), log=str(log), delay=0.25) for a in range(10)]
     ex = "'serial'" if executor == "serial" else "None"
     code = (
-        "import sys; sys.path.insert(0, %r); import test_compare_batch as t; from tissuemech.compare import batch\n"
+        "import sys; sys.path.insert(0, %r); import test_batch_runner as t; from tissuemech.compare import batch\n"
         "if __name__ == '__main__': batch.run(t.square, %r, executor=%s, store=%r, progress=False)"
         % (str(Path(__file__).parent), pts, ex, str(store))
     )
@@ -152,14 +154,14 @@ def _calls(log: Path) -> int:
 
 def test_key_holds_version_and_code(monkeypatch):
     k = batch.point_key(square, dict(a=1.0))
-    monkeypatch.setattr(batch, "_version", lambda: "0.0.0-other")
+    monkeypatch.setattr(batch_store, "code_version", lambda: "0.0.0-other")
     assert batch.point_key(square, dict(a=1.0)) != k  # another version of the code: not reused
     monkeypatch.undo()
-    monkeypatch.setattr(batch, "_code_hash", lambda f: "changed")
+    monkeypatch.setattr(batch_store, "code_hash", lambda f: "changed")
     assert batch.point_key(square, dict(a=1.0)) != k
 
 
-@pytest.mark.parametrize("damage", ["truncate", "empty", "garbage", "altered", "foreign"])
+@pytest.mark.parametrize("damage", ["truncate", "empty", "garbage", "altered", "foreign", "copied"])
 def test_corrupt_file_is_detected_recomputed_and_reported(tmp_path, damage):
     log = tmp_path / "log"
     log.mkdir()
@@ -176,13 +178,16 @@ def test_corrupt_file_is_detected_recomputed_and_reported(tmp_path, damage):
         victim.write_bytes(os.urandom(len(raw)))
     elif damage == "foreign":
         np.savez(victim, x=np.zeros(3))  # a valid .npz, but not one of ours
+    elif damage == "copied":  # a valid result of another point under this point's name
+        victim.write_bytes((store / f"{batch.point_key(square, pts[0])}.npz").read_bytes())
     else:  # a valid file whose numbers were changed afterwards
         with np.load(victim) as z:
             fields = {k: z[k] for k in z.files}
         fields["x"] = fields["x"] + 1.0
         np.savez(victim, **fields)
-    with pytest.raises(batch.StoreError, match=str(victim.name)):
-        batch.load(victim)
+    with pytest.raises(batch.StoreError, match=str(victim.name)) as info:
+        batch.load(victim, key=batch.point_key(square, pts[2]))
+    assert str(store) in str(info.value) and "allow_pickle" not in str(info.value)
     before = _calls(log)
     with pytest.warns(batch.StoreWarning, match="recomputing"):
         res = batch.run(square, pts, executor="serial", store=store, progress=False)
@@ -207,16 +212,18 @@ def test_read_only_store_fails_before_computing(tmp_path, monkeypatch):
             store.chmod(0o755)
         assert _calls(log) == 0
 
-    def refuse(*a, **k):
-        raise PermissionError(13, "Permission denied")
+    def refuse(file, mode="r", *a, **k):  # writing refused, reading allowed
+        if any(c in mode for c in "wax+"):
+            raise PermissionError(13, "Permission denied")
+        return builtins.open(file, mode, *a, **k)
 
-    monkeypatch.setattr(batch, "open", refuse, raising=False)
+    monkeypatch.setattr(batch_store, "open", refuse, raising=False)
     with pytest.raises(batch.StoreError, match="not writable"):
         batch.run(square, pts, executor="serial", store=store, progress=False)
     assert _calls(log) == 0  # nothing was computed
     monkeypatch.undo()
     done = batch.run(square, pts, executor="serial", store=store, progress=False)
-    monkeypatch.setattr(batch, "open", refuse, raising=False)  # all stored: reading needs no write access
+    monkeypatch.setattr(batch_store, "open", refuse, raising=False)  # all stored: reading needs no write access
     again = batch.run(square, pts, executor="serial", store=store, progress=False)
     assert [float(r.total) for r in again] == [float(r.total) for r in done]
 
@@ -235,7 +242,7 @@ def test_stale_lock_of_a_dead_process_is_taken_over(tmp_path):
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
     dead.wait()
     lock = store / f"{batch.point_key(square, pt)}.lock"
-    lock.write_text(f'{{"pid": {dead.pid}, "host": "{batch._HOST}"}}')
+    lock.write_text(f'{{"pid": {dead.pid}, "host": "{batch_store.HOST}"}}')
     (store / f"{batch.point_key(square, pt)}.npz.{dead.pid}.abc.part").write_bytes(b"half")
     res = batch.run(square, [pt], executor="serial", store=store, progress=False)
     assert float(res[0].total) == 10.0
@@ -253,16 +260,16 @@ def test_a_lock_never_appears_without_its_owner_and_an_ownerless_one_expires(tmp
     store = tmp_path / "store"
     store.mkdir()
     lock = store / "k.lock"
-    assert batch._claim(lock, 24 * 3600.0)
+    assert batch_store.claim(lock, 24 * 3600.0)
     assert json.loads(lock.read_text())["pid"] == os.getpid()  # the owner is there from the start
-    assert not list(store.glob("*.part")) and not batch._claim(lock, 24 * 3600.0)  # held: refused
-    batch._release(lock)
+    assert not list(store.glob("*.part")) and not batch_store.claim(lock, 24 * 3600.0)  # held: refused
+    batch_store.release(lock)
     # an ownerless lock: young = being written (kept), older than the grace = its writer died (taken over)
     lock.write_text("")
-    assert not batch._lock_is_stale(lock, 24 * 3600.0)
-    old = time.time() - batch.UNWRITTEN_LOCK_GRACE - 5
+    assert not batch_store.lock_is_stale(lock, 24 * 3600.0)
+    old = time.time() - batch_store.UNWRITTEN_LOCK_GRACE - 5
     os.utime(lock, (old, old))
-    assert batch._lock_is_stale(lock, 24 * 3600.0)
+    assert batch_store.lock_is_stale(lock, 24 * 3600.0)
     # end to end: a store holding such a lock for a point of the batch finishes and computes that point
     pt = dict(a=3.0)
     empty = store / f"{batch.point_key(square, pt)}.lock"
@@ -278,14 +285,14 @@ def test_a_lock_never_appears_without_its_owner_and_an_ownerless_one_expires(tmp
     assert out, "the batch waited on an ownerless lock"
     assert float(out[0][0].total) == 15.0 and not empty.exists()
     # where the file system refuses hard links, the lock is created exclusively and then filled
-    monkeypatch.setattr(batch.os, "link", lambda *a: (_ for _ in ()).throw(PermissionError("no hard links")))
-    assert batch._claim(lock, 24 * 3600.0) and json.loads(lock.read_text())["host"] == batch._HOST
+    monkeypatch.setattr(batch_store.os, "link", lambda *a: (_ for _ in ()).throw(PermissionError("no hard links")))
+    assert batch_store.claim(lock, 24 * 3600.0) and json.loads(lock.read_text())["host"] == batch_store.HOST
 
 
 WRITER = """
 import sys, json
 sys.path.insert(0, {tests!r})
-import test_compare_batch as t
+import test_batch_runner as t
 from tissuemech.compare import batch
 if __name__ == "__main__":
     pts = [dict(a=float(a), log={log!r}) for a in range({n})]
@@ -342,3 +349,88 @@ def test_bad_arguments(tmp_path, kw, match):
     args.update(kw)
     with pytest.raises(ValueError, match=match):
         batch.run(args.pop("function"), args.pop("points"), **args)
+
+
+PARENT = """
+import os, sys, time
+sys.path.insert(0, {tests!r})
+import test_batch_runner as t
+from tissuemech.compare import batch
+if __name__ == "__main__":
+    pool = batch.process_pool(2)
+    futures = [pool.submit(t.report_pid_and_sleep, folder={folder!r}) for _ in range(2)]
+    time.sleep(600)
+"""
+
+
+def report_pid_and_sleep(*, folder: str) -> None:
+    Path(folder, str(os.getpid())).touch()
+    time.sleep(600)
+
+
+def test_a_killed_parent_takes_its_workers_with_it(tmp_path):
+    """Workers of the pool end themselves when their parent is killed (SIGKILL: no cleanup in the parent), instead
+    of computing on as orphans."""
+    pids = tmp_path / "pids"
+    pids.mkdir()
+    script = tmp_path / "parent.py"
+    script.write_text(PARENT.format(tests=str(Path(__file__).parent), folder=str(pids)))
+    parent = subprocess.Popen([sys.executable, str(script)], start_new_session=True)
+    t0 = time.time()
+    while len(list(pids.iterdir())) < 2 and time.time() - t0 < 120:
+        time.sleep(0.05)
+    workers = [int(p.name) for p in pids.iterdir()]
+    assert len(workers) == 2, "the workers did not start"
+    parent.kill()  # the parent only, not its process group
+    parent.wait()
+
+    def alive(pid: int) -> bool:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return False
+        return (
+            Path(f"/proc/{pid}/stat").read_text().split(")")[-1].split()[0] != "Z" if Path("/proc").exists() else True
+        )
+
+    t0 = time.time()
+    while any(alive(p) for p in workers) and time.time() - t0 < 30:
+        time.sleep(0.1)
+    left = [p for p in workers if alive(p)]
+    for p in left:  # do not leave them behind if the test fails
+        os.kill(p, signal.SIGKILL)
+    assert not left, f"workers {left} outlived their killed parent"
+
+
+def test_a_wait_says_what_it_waits_for(tmp_path, caplog):
+    """A point claimed by another live process is waited for, and the log says for what and whom."""
+    import json
+    import threading
+
+    folder = tmp_path / "store"
+    folder.mkdir()
+    pt = dict(a=4.0)
+    key = batch.point_key(square, pt)
+    holder = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        owner = dict(pid=holder.pid, host=batch_store.HOST, boot=batch_store.BOOT_ID, time=time.time())
+        owner["start"] = batch_store.process_start(holder.pid)
+        (folder / f"{key}.lock").write_text(json.dumps(owner))
+        out: list = []
+        with caplog.at_level("INFO", logger="tissuemech.compare.batch.runner"):
+            worker = threading.Thread(
+                target=lambda: out.append(batch.run(square, [pt], executor="serial", store=folder, progress=False)),
+                daemon=True,
+            )
+            worker.start()
+            t0 = time.time()
+            while "waiting for it" not in caplog.text and time.time() - t0 < 30:
+                time.sleep(0.05)
+            holder.kill()  # the owner dies: the wait ends, the point is computed here
+            holder.wait()
+            worker.join(timeout=60)
+        assert f"process {holder.pid} on host {batch_store.HOST}" in caplog.text and "a': 4.0" in caplog.text
+        assert out and float(out[0][0].total) == 20.0
+    finally:
+        holder.kill()
+        holder.wait()

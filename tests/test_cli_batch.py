@@ -9,7 +9,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from tissuemech.compare import batch_cli
+from tissuemech.compare import batch
+from tissuemech.compare.cli import batch as batch_cli
 
 HERE = Path(__file__).resolve().parent
 
@@ -20,32 +21,14 @@ def probe_threads(*, x: float) -> dict:
                 xla_single="--xla_cpu_multi_thread_eigen=false" in os.environ.get("XLA_FLAGS", ""), pid=os.getpid())  # fmt: skip
 
 
-def _cli(*args, env=None):
+def _cli(*args, env=None, module="tissuemech.compare.cli.batch"):
     e = dict(os.environ, PYTHONPATH=str(HERE) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     for k in ("SLURM_ARRAY_TASK_ID", "PBS_ARRAY_INDEX", "PBS_ARRAYID", "SGE_TASK_ID", "LSB_JOBINDEX"):
         e.pop(k, None)
     e.update(env or {})
     return subprocess.Popen(
-        [sys.executable, "-m", "tissuemech.compare.batch_cli", *args], env=e, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        [sys.executable, "-m", module, *args], env=e, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
     )  # fmt: skip
-
-
-def test_chunks_partition_the_points():
-    n, N = 23, 5
-    seen = sorted(i for k in range(N) for i in batch_cli.chunk(n, k, N))
-    assert seen == list(range(n))
-    assert batch_cli.chunk(n, 2, N) == [2, 7, 12, 17, 22]
-    with pytest.raises(ValueError, match="--index"):
-        batch_cli.chunk(n, 5, N)
-
-
-def test_worker_env_pins_blas_and_xla():
-    env = batch_cli.worker_env(1)
-    assert env["OMP_NUM_THREADS"] == env["OPENBLAS_NUM_THREADS"] == env["MKL_NUM_THREADS"] == "1"
-    assert "intra_op_parallelism_threads=1" in env["XLA_FLAGS"]
-    assert batch_cli.worker_env(4)["MKL_NUM_THREADS"] == "4"
-    with pytest.raises(ValueError, match="threads"):
-        batch_cli.worker_env(0)
 
 
 def test_two_array_tasks_fill_one_store_then_collect(tmp_path):
@@ -58,7 +41,7 @@ def test_two_array_tasks_fill_one_store_then_collect(tmp_path):
         "--store",
         str(store),
         "--function",
-        "test_compare_batch_cli:probe_threads",
+        "test_cli_batch:probe_threads",
     ]
     # task 0 takes its index from SLURM, task 1 from PBS, on its own spawned worker; both at once
     a = _cli(*common, "--chunks", "2", env=dict(SLURM_ARRAY_TASK_ID="0"))
@@ -71,7 +54,7 @@ def test_two_array_tasks_fill_one_store_then_collect(tmp_path):
     assert "chunk 0/2: 4 of 4 points stored" in outs[0] and "chunk 1/2: 3 of 3 points stored" in outs[1]
     assert len(list(store.glob("*.npz"))) == 7
 
-    table = batch_cli.collect(batch_cli.read_points(tmp_path / "points.csv"), store, probe_threads)
+    table = batch.collect(batch.read_points(tmp_path / "points.csv"), store, probe_threads)
     assert table["stored"].all()
     assert np.allclose(table["x2"], 2 * table["x"])
     assert (table["omp"] == 1).all() and (table["openblas"] == 1).all() and table["xla_single"].all()
@@ -86,8 +69,17 @@ def test_two_array_tasks_fill_one_store_then_collect(tmp_path):
 
     # the command-line collect writes the same table
     out = tmp_path / "table.csv"
-    d = _cli("collect", str(tmp_path / "points.csv"), "--store", str(store), "--function",
-             "test_compare_batch_cli:probe_threads", "--out", str(out))  # fmt: skip
+    d = _cli(
+        "collect",
+        str(tmp_path / "points.csv"),
+        "--store",
+        str(store),
+        "--function",
+        "test_cli_batch:probe_threads",
+        "--out",
+        str(out),
+        module="tissuemech.compare.batch_cli",
+    )  # the old path
     so, se = d.communicate(timeout=300)
     assert d.returncode == 0, se
     assert "7 of 7 points stored" in so
@@ -103,7 +95,7 @@ def test_fe_blastula_chunk_matches_the_exact_shell(tmp_path):
     pts.to_csv(tmp_path / "p.csv", index=False)
     args = ["run", str(tmp_path / "p.csv"), "--store", str(tmp_path / "s"), "--function", "fe-blastula", "--index", "0"]
     assert batch_cli.main(args) == 0
-    table = batch_cli.collect(batch_cli.read_points(tmp_path / "p.csv"), tmp_path / "s", batch_cli.fe_blastula)
+    table = batch.collect(batch.read_points(tmp_path / "p.csv"), tmp_path / "s", batch.fe_blastula)
     exact = blastula.inner_stretch(
         300.0, inner_radius=50e-6, outer_radius=table["outer_radius"].to_numpy(), C=200.0, alpha=0.2
     )
@@ -119,36 +111,15 @@ def test_bad_arguments_exit_2_with_one_line(tmp_path, capsys):
     assert "--function" in capsys.readouterr().err
 
 
-def test_jobqueue_recipe_pins_every_worker():
-    pytest.importorskip("dask_jobqueue")
-    with batch_cli.jobqueue_cluster(
-        "slurm",
-        cores=8,
-        memory="16GB",
-        walltime="01:00:00",
-        queue="normal",
-        job_script_prologue=["source ~/venv/bin/activate"],
-        scheduler_options={"dashboard_address": None},
-    ) as cluster:
-        script = cluster.job_script()
-    lines = script.splitlines()
-    assert "#SBATCH -p normal" in lines and "#SBATCH --cpus-per-task=8" in lines
-    assert "export OMP_NUM_THREADS='1'" in lines and "export OPENBLAS_NUM_THREADS='1'" in lines
-    assert lines.index("export OMP_NUM_THREADS='1'") < lines.index("source ~/venv/bin/activate")
-    assert "--nworkers 8" in script and "--nthreads 1" in script  # 8 single-threaded workers per job
-    with pytest.raises(ValueError, match="multiple"):
-        batch_cli.jobqueue_cluster("slurm", cores=8, memory="1GB", walltime="1:00:00", threads_per_worker=3)
-
-
 def test_units_in_the_header_are_checked_and_failures_say_why(tmp_path):
     """A '[kPa]' column was read as SI (C = 0.2 Pa for 0.2 kPa) and failed points were listed without a reason."""
     bad = tmp_path / "kpa.csv"
     bad.write_text("C [kPa],x [m]\n0.2,1\n")
     with pytest.raises(ValueError, match=r"column 'C \[kPa\]': the points are passed as they are, in SI units"):
-        batch_cli.read_points(bad)
+        batch.read_points(bad)
     ok = tmp_path / "ok.csv"
     ok.write_text("x [m],y [-]\n1,2\n")
-    assert batch_cli.read_points(ok) == [dict(x=1, y=2)]
+    assert batch.read_points(ok) == [dict(x=1, y=2)]
     pts = tmp_path / "p.csv"
     pts.write_text("y\n1.0\n")  # probe_threads needs x
     p = _cli(
@@ -157,9 +128,50 @@ def test_units_in_the_header_are_checked_and_failures_say_why(tmp_path):
         "--store",
         str(tmp_path / "s"),
         "--function",
-        "test_compare_batch_cli:probe_threads",
+        "test_cli_batch:probe_threads",
         "--index",
         "0",
     )
     out, err = p.communicate(timeout=120)
     assert p.returncode == 1 and "row 0: TypeError" in err and "'y'" in err, err
+
+
+@pytest.mark.parametrize(
+    "extra, env, want",
+    [
+        (["--index", "0", "--function", "os:system"], {}, "--function 'os:system': os is part of Python's standard"),
+        (["--index", "0", "--function", "..x:f"], {}, "--function '..x:f': expected one of"),
+        (["--function", "fe-blastula"], {"SGE_TASK_ID": "0"}, "SGE_TASK_ID=0 is not a valid array index"),
+        (
+            ["--function", "fe-blastula", "--chunks", "2"],
+            {"SLURM_ARRAY_TASK_ID": "2"},
+            "SLURM_ARRAY_TASK_ID=2 is chunk 2",
+        ),
+    ],
+)
+def test_refusals_are_one_line(tmp_path, monkeypatch, capsys, extra, env, want):
+    for k in ("SLURM_ARRAY_TASK_ID", "PBS_ARRAY_INDEX", "PBS_ARRAYID", "SGE_TASK_ID", "LSB_JOBINDEX"):
+        monkeypatch.delenv(k, raising=False)
+    for k, v in env.items():
+        monkeypatch.setenv(k, v)
+    (tmp_path / "p.csv").write_text("command\necho hacked > " + str(tmp_path / "hacked") + "\n")
+    assert batch_cli.main(["run", str(tmp_path / "p.csv"), "--store", str(tmp_path / "s"), *extra]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and want in err[0] and "Traceback" not in err[0], err
+    assert not (tmp_path / "hacked").exists() and not (tmp_path / "s").exists()
+
+
+def test_semicolon_table_and_wrong_function_say_what_is_there(tmp_path, capsys):
+    (tmp_path / "semi.csv").write_text("outer_radius;C;alpha;pressure\n6e-05;200;0.2;300\n")
+    assert batch_cli.main(["collect", str(tmp_path / "semi.csv"), "--store", str(tmp_path / "s")]) == 2
+    assert "separated by ';'" in capsys.readouterr().err
+    pts = tmp_path / "p.csv"
+    pts.write_text("outer_radius,C,alpha,pressure,mesh\n6e-05,200,0.2,300,coarse\n")
+    args = ["--store", str(tmp_path / "s"), "--function", "fe-blastula"]
+    assert batch_cli.main(["run", str(pts), *args, "--index", "0"]) == 0
+    capsys.readouterr()
+    assert batch_cli.main(["collect", str(pts), "--store", str(tmp_path / "s")]) == 2  # default: fe-spheroid
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "holds 1 result of tissuemech.compare.batch.points.fe_blastula" in err[0]
+    assert batch_cli.main(["collect", str(pts), *args, "--out", str(tmp_path / "t.csv")]) == 0
+    assert pd.read_csv(tmp_path / "t.csv")["stored"].all() and not list(tmp_path.glob(".t.csv*"))

@@ -30,6 +30,8 @@ import numpy as np
 import pandas as pd
 
 import tissuemech.reduced  # noqa: F401  (float64)
+from tissuemech.compare.scan.fe_checks import spot_check
+from tissuemech.compare.scan.table import BLASTULA_PARAMS, SPHEROID_PARAMS, UNITS, column, unit_words
 from tissuemech.reduced.validation import (
     validate_choice,
     validate_finite,
@@ -41,43 +43,49 @@ from tissuemech.reduced.validation import (
     validate_times,
 )
 
-__all__ = ["design", "spheroid", "blastula", "spread_indices", "to_xarray", "from_xarray", "to_netcdf"]
-
-UNITS = {
-    "radius": "m",
-    "C": "Pa",
-    "alpha": "-",
-    "beta": "-",
-    "tau": "s",
-    "displacement": "m",
-    "ramp_time": "s",
-    "inner_radius": "m",
-    "outer_radius": "m",
-    "pressure": "Pa",
-    "sigma_peak": "Pa",
-    "sigma_end": "Pa",
-    "relaxed_fraction": "-",
-    "t_half": "s",
-    "inner_stretch": "-",
-    "outer_stretch": "-",
-    "p_limit": "Pa",
-    "bursts": "-",
-    "fe_sigma_peak": "Pa",
-    "fe_sigma_end": "Pa",
-    "fe_inner_stretch": "-",
-    "deviation": "-",
-}
-
-
-def _col(name: str) -> str:
-    return f"{name} [{UNITS[name]}]"
-
-
-def _unit(name: str) -> str:
-    return {"-": "dimensionless"}.get(UNITS.get(name, ""), UNITS.get(name, ""))
-
+__all__ = [
+    "design",
+    "spheroid",
+    "blastula",
+    "default_times",
+    "spheroid_times",
+    "summaries",
+    "evaluate_in_chunks",
+    "check_normal",
+    "MAX_SCAN_BYTES",
+    "CHUNK",
+    "TINY",
+]
 
 MAX_SCAN_BYTES = 2 * 1024**3  # a design (or its curves) larger than this is refused up front
+CHUNK = 8192  # points per reduced-model call of evaluate_in_chunks (one compiled shape)
+
+
+TINY = float(np.finfo(np.float64).tiny)  # the smallest normal float64 (2.2e-308)
+
+
+def check_normal(points: pd.DataFrame) -> None:
+    """Refuse parameter values that are not zero but below the smallest normal float64 (``TINY``, 2.2e-308): the
+    model's arithmetic underflows with them (zero stresses, NaN summaries). Raises ValueError naming the
+    parameter, its unit and the point."""
+    for k in points.columns:
+        v = points[k].to_numpy(dtype=float)
+        bad = np.flatnonzero((v != 0) & (np.abs(v) < TINY))
+        if bad.size:
+            i = int(bad[0])
+            unit = unit_words(str(k))
+            raise ValueError(
+                f"{k} ({unit}) is {v[i]:.3g} at point {i}: below the smallest normal float64 number ({TINY:.3g}), "
+                f"so the computation underflows; give {k} in {unit} as a number of ordinary size"
+            )
+
+
+def _number(name: str, value: Any, unit: str) -> float:
+    """``value`` as a finite float (the validation's error naming ``name`` and ``unit`` otherwise)."""
+    v = validate_finite(name, value, unit)
+    if v is None:  # a traced value: scans take numbers
+        raise TypeError(f"{name} must be a number, not a traced JAX value")
+    return float(v)
 
 
 def _check_memory(points: int, values_per_point: int, what: str) -> None:
@@ -95,7 +103,7 @@ def _points(params: dict, points: Any, n: int, method: str, seed: int, log: Sequ
     lacks are taken from the fixed keyword values) or one generated from the ranges."""
     if points is None:
         return design(params, n=n, method=method, seed=seed, log=log)
-    df = pd.DataFrame(points).rename(columns={_col(k): k for k in params})
+    df = pd.DataFrame(points).rename(columns={column(k): k for k in params})
     unknown = set(df.columns) - set(params)
     if unknown:
         raise ValueError(f"points has unknown columns {sorted(unknown)}; expected some of {list(params)}")
@@ -103,9 +111,9 @@ def _points(params: dict, points: Any, n: int, method: str, seed: int, log: Sequ
         if k not in df.columns:
             if _is_range(v) or np.ndim(v) > 0:
                 raise ValueError(f"{k}: give it in points or as a single number, not a range, when points= is used")
-            df[k] = float(validate_finite(f"{k} ({_unit(k)})", v, _unit(k)))
+            df[k] = _number(f"{k} ({unit_words(k)})", v, unit_words(k))
     for k in params:
-        validate_finite(f"points[{k!r}] ({_unit(k)})", df[k].to_numpy(dtype=object), _unit(k))
+        validate_finite(f"points[{k!r}] ({unit_words(k)})", df[k].to_numpy(dtype=object), unit_words(k))
     _check_memory(len(df), len(params), "design")
     return df[list(params)].astype(float).reset_index(drop=True)
 
@@ -128,12 +136,12 @@ def design(
     names = list(params)
     ranged = [k for k in names if _is_range(params[k])]
     for k in ranged:
-        lo, hi = (float(validate_finite(f"range of {k} ({_unit(k)})", v, _unit(k))) for v in params[k])
+        lo, hi = (_number(f"range of {k} ({unit_words(k)})", v, unit_words(k)) for v in params[k])
         if lo > hi:
             raise ValueError(f"range of {k} must be (low, high) with low <= high; got {params[k]}")
     for k in names:
         if not _is_range(params[k]):
-            validate_finite(f"{k} ({_unit(k)})", params[k], _unit(k))
+            validate_finite(f"{k} ({unit_words(k)})", params[k], unit_words(k))
     if method == "grid":
         size = 1
         for k in names:
@@ -178,25 +186,6 @@ def design(
     return pd.DataFrame(cols)
 
 
-def spread_indices(points: pd.DataFrame, k: int, seed: int = 0) -> np.ndarray:
-    """``k`` row indices spread over the design (greedy max-min distance in the unit-scaled box)."""
-    k = min(int(k), len(points))
-    if k <= 0:
-        return np.zeros(0, dtype=int)
-    x = points.to_numpy(dtype=float)
-    span = x.max(axis=0) - x.min(axis=0)
-    x = (x - x.min(axis=0)) / np.where(span > 0, span, 1.0)
-    rng = np.random.default_rng(seed)
-    cand = rng.choice(len(x), size=min(len(x), 2000), replace=False)
-    chosen = [int(cand[np.argmin(np.abs(x[cand] - 0.5).sum(axis=1))])]  # start near the centre
-    d = np.linalg.norm(x[cand] - x[chosen[0]], axis=1)
-    for _ in range(k - 1):
-        j = int(cand[np.argmax(d)])
-        chosen.append(j)
-        d = np.minimum(d, np.linalg.norm(x[cand] - x[j], axis=1))
-    return np.array(chosen)
-
-
 def _batched(fn: Callable, arrays: dict[str, np.ndarray], batch_size: int) -> dict[str, np.ndarray]:
     """Apply a jitted, vmapped fn(**arrays) chunk by chunk (last chunk padded with the first row)."""
     n = len(next(iter(arrays.values())))
@@ -212,11 +201,70 @@ def _batched(fn: Callable, arrays: dict[str, np.ndarray], batch_size: int) -> di
     return {k: np.concatenate(v) for k, v in outs.items()}
 
 
+def evaluate_in_chunks(
+    function: Callable[..., pd.DataFrame],
+    points: pd.DataFrame,
+    varied: Sequence[str],
+    kw: Mapping[str, Any],
+    *,
+    progress: bool = True,
+    stiff_row: int | None = None,
+    chunk: int = CHUNK,
+) -> pd.DataFrame:
+    """``function(points=..., **kw)`` (:func:`spheroid` or :func:`blastula`) on a large design, ``chunk`` points
+    per call, ticking a progress bar: the table of one call.
+
+    Each call gets the same number of points (the last chunk padded) plus the design rows where each
+    varied parameter takes its extremes (and ``stiff_row``: the spheroid's stiffest point), so every call
+    compiles to the same evaluator (same varied set, same stiffness choice) and is reused; padding and extra
+    rows are dropped."""
+    from tqdm.auto import tqdm
+
+    chunk = validate_int("chunk (points per call)", chunk, minimum=1)
+    n = len(points)
+    if n <= chunk:
+        with tqdm(total=n, disable=not progress, desc="reduced", unit="pt") as bar:
+            df = function(points=points, batch_size=max(n, 1), **kw)
+            bar.update(n)
+        return df
+    extra = {int(points[k].to_numpy().argmin()) for k in varied} | {int(points[k].to_numpy().argmax()) for k in varied}
+    if stiff_row is not None:
+        extra.add(int(stiff_row))
+    extra_rows = points.iloc[sorted(extra)]
+    parts = []
+    attrs: dict = {}
+    with tqdm(total=n, disable=not progress, desc="reduced", unit="pt") as bar:
+        for s in range(0, n, chunk):
+            sub = points.iloc[s : s + chunk]
+            m = len(sub)
+            call = pd.concat([sub, points.iloc[[0] * (chunk - m)], extra_rows], ignore_index=True)
+            df = function(points=call, batch_size=len(call), **kw)
+            attrs = dict(df.attrs)
+            df.attrs = {}  # concat compares attrs (arrays: ambiguous); set once below
+            parts.append(df.iloc[:m])
+            bar.update(m)
+    out = pd.concat(parts, ignore_index=True)
+    out.attrs = attrs
+    return out
+
+
 # ---------------------------------------------------------------------------------------------
 # Spheroid compression-relaxation
 # ---------------------------------------------------------------------------------------------
 
-SPHEROID_PARAMS = ("radius", "C", "alpha", "beta", "tau", "displacement", "ramp_time")
+
+def spheroid_times(ramp_times: Any, end_time: float) -> np.ndarray:
+    """Output times (s) for a design's ramp times: :func:`default_times` for one ramp time; with a range of
+    ramp times, 20 intervals up to the shortest ramp, 20 across the ramp range, log-spaced hold.
+    Raises ValueError unless ``end_time`` is after the longest ramp."""
+    ramp = np.asarray(ramp_times, dtype=float)
+    lo, hi = float(np.min(ramp)), float(np.max(ramp))
+    if not end_time > hi:
+        raise ValueError(f"end_time ({end_time:g} s) must be after the end of the ramp ({hi:g} s)")
+    if lo == hi:
+        return default_times(lo, end_time)
+    t = np.concatenate([np.linspace(0, lo, 21), np.linspace(lo, hi, 21), np.geomspace(hi, end_time, 160)])
+    return np.unique(t)
 
 
 def default_times(ramp_time: float, end_time: float, n: int = 200) -> np.ndarray:
@@ -226,7 +274,7 @@ def default_times(ramp_time: float, end_time: float, n: int = 200) -> np.ndarray
     return np.concatenate([ramp, hold])
 
 
-def _summaries(t, s):
+def summaries(t, s):
     """sigma_peak, sigma_end, relaxed fraction and half-relaxation time of curves s (..., T)."""
     peak = jnp.max(s, axis=-1)
     ipk = jnp.argmax(s, axis=-1)
@@ -241,22 +289,6 @@ def _summaries(t, s):
     th = t[jm] + w * (t[j] - t[jm])
     th = jnp.where(jnp.any(after, axis=-1), th, jnp.nan)
     return dict(sigma_peak=peak, sigma_end=end, relaxed_fraction=1.0 - end / peak, t_half=th)
-
-
-def _fe_spheroid(*, radius, C, alpha, beta, tau, displacement, ramp_time, end_time):
-    """One FE spheroid run (module level, so process pools can pickle it): time and nominal stress."""
-    from tissuemech.fem import spheroid as fem_spheroid
-
-    r = fem_spheroid.compress(
-        radius=radius,
-        C=C,
-        alpha=alpha,
-        branches=[(beta, tau)],
-        displacement=displacement,
-        ramp_time=ramp_time,
-        end_time=end_time,
-    )
-    return {"time": np.asarray(r.time), "nominal_stress": np.asarray(r.nominal_stress)}
 
 
 def spheroid(
@@ -308,6 +340,7 @@ def spheroid(
     batch_size = validate_int("batch_size", batch_size, minimum=1)
     fe_checks = validate_int("fe_checks (number of FE spot checks)", fe_checks, minimum=0)
     pts = _points(params, points, n, design_method, seed, log)
+    check_normal(pts)
     validate_positive("radius", pts["radius"].to_numpy(), "m")
     validate_material(pts["C"].to_numpy(), pts["alpha"].to_numpy())
     validate_nonnegative("beta (the energy factor of the Maxwell branch)", pts["beta"].to_numpy())
@@ -325,6 +358,8 @@ def spheroid(
             )
         times = default_times(float(pts["ramp_time"].iloc[0]), end_time)
     tt = validate_times("times (output times)", times, unit="s", ascending=True, strictly=True)
+    if tt is None:
+        raise TypeError("times (output times, s) must be numbers, not a traced JAX value")
     if tt.ndim != 1 or tt.size < 2:
         raise ValueError(f"times (output times, s) must be a 1-D array of at least 2 times; got shape {tt.shape}")
     if curves:
@@ -352,28 +387,33 @@ def spheroid(
         res = _batched(evaluate, {k: pts[k].to_numpy() for k in varying}, batch_size)
     else:
         res = {k: np.asarray(v) for k, v in evaluate().items()}
-    df = pts.rename(columns={k: _col(k) for k in pts.columns})
+    peak = np.asarray(res["sigma_peak"], dtype=float)
+    bad = np.flatnonzero(~(np.isfinite(peak) & (peak >= TINY)))
+    if bad.size:  # the model never gives a zero or NaN peak stress for a compression: the numbers failed
+        i = int(bad[0])
+        at = ", ".join(f"{k}={float(pts[k].iloc[i]):.4g} {UNITS[k]}" for k in SPHEROID_PARAMS)
+        raise ValueError(
+            f"the reduced spheroid model gives a peak nominal stress of {peak[i]:.3g} Pa at {bad.size} of {len(pts)} "
+            f"points, e.g. point {i} ({at}): its parameters underflow or overflow float64 arithmetic; scan "
+            "parameters of ordinary size (SI units)"
+        )
+    df = pts.rename(columns={k: column(k) for k in pts.columns})
     for k in ("sigma_peak", "sigma_end", "relaxed_fraction", "t_half"):
-        df[_col(k)] = res[k]
+        df[column(k)] = res[k]
     if curves:
         df["sigma [Pa]"] = list(res["sigma"])
         df.attrs["time [s]"] = np.asarray(t)
     if fe_checks:
-        idx = spread_indices(pts, fe_checks, seed)
-        fe_pts = [dict(pts.iloc[i].to_dict(), end_time=float(np.max(times))) for i in idx]
-        fe = _run_fe(fe_function or _fe_spheroid, fe_pts, fe_executor, fe_store, fe_progress)
-        for name in ("fe_sigma_peak", "fe_sigma_end", "deviation"):
-            df[_col(name)] = np.nan
-        for i, r in zip(idx, fe):
-            if r is None:
-                continue
-            s_fe = np.interp(np.asarray(t), r["time"], r["nominal_stress"])
-            peak, end = float(np.max(s_fe)), float(s_fe[-1])
-            df.loc[i, _col("fe_sigma_peak")] = peak
-            df.loc[i, _col("fe_sigma_end")] = end
-            df.loc[i, _col("deviation")] = max(
-                abs(res["sigma_peak"][i] / peak - 1.0), abs(res["sigma_end"][i] / end - 1.0)
-            )
+        spot_check(
+            df,
+            fe_checks,
+            times=np.asarray(t),
+            seed=seed,
+            executor=fe_executor,
+            store=fe_store,
+            function=fe_function,
+            progress=fe_progress,
+        )
     return df
 
 
@@ -432,7 +472,7 @@ def _spheroid_evaluator(model: Callable, equilibrium: Any, fixed: tuple, varying
     @jax.jit
     def evaluate(t, kw):
         s = jax.vmap(lambda k: one(t, **k))(kw) if kw else one(t)[None, :]
-        out = _summaries(t, s)
+        out = summaries(t, s)
         if curves:
             out["sigma"] = s
         return out
@@ -483,26 +523,9 @@ def _polish_blastula(res: dict[str, np.ndarray], pts: pd.DataFrame) -> None:
     res["outer_stretch"][redo[ok]] = np.asarray(red.outer_stretch(la[redo[ok]], **geo))
 
 
-def _run_fe(function, points, executor, store, progress: bool = True):
-    from tissuemech.compare import batch
-
-    return batch.run(function, points, executor=executor, store=store, raise_on_error=False, progress=progress)
-
-
 # ---------------------------------------------------------------------------------------------
 # Blastula inflation
 # ---------------------------------------------------------------------------------------------
-
-BLASTULA_PARAMS = ("inner_radius", "outer_radius", "C", "alpha", "pressure")
-
-
-def _fe_blastula(*, inner_radius, outer_radius, C, alpha, pressure):
-    """One FE blastula run to ``pressure`` (module level for process pools): final inner stretch."""
-    from tissuemech.fem import blastula as fem_blastula
-
-    ps = np.linspace(0.0, pressure, 11)[1:]
-    r = fem_blastula.inflate(inner_radius=inner_radius, outer_radius=outer_radius, C=C, alpha=alpha, pressures=ps)
-    return {"inner_stretch": float(np.asarray(r.inner_stretch)[-1])}
 
 
 def blastula(
@@ -539,227 +562,20 @@ def blastula(
     batch_size = validate_int("batch_size", batch_size, minimum=1)
     fe_checks = validate_int("fe_checks (number of FE spot checks)", fe_checks, minimum=0)
     pts = _points(params, points, n, design_method, seed, log)
+    check_normal(pts)
     validate_radii(pts["inner_radius"].to_numpy(), pts["outer_radius"].to_numpy())
     validate_material(pts["C"].to_numpy(), pts["alpha"].to_numpy())
     validate_finite("pressure", pts["pressure"].to_numpy(), "Pa")
 
     res = _batched(lambda **kw: _blastula_evaluate(**kw), {k: pts[k].to_numpy() for k in BLASTULA_PARAMS}, batch_size)
     _polish_blastula(res, pts)
-    df = pts.rename(columns={k: _col(k) for k in pts.columns})
+    df = pts.rename(columns={k: column(k) for k in pts.columns})
     for k in ("inner_stretch", "outer_stretch", "p_limit"):
-        df[_col(k)] = res[k]
+        df[column(k)] = res[k]
     p = pts["pressure"].to_numpy()
-    df[_col("bursts")] = np.isnan(res["inner_stretch"]) & (p > 0) & (p >= res["p_limit"])  # NaN p_limit: False
+    df[column("bursts")] = np.isnan(res["inner_stretch"]) & (p > 0) & (p >= res["p_limit"])  # NaN p_limit: False
     if fe_checks:
-        ok = np.nonzero(~np.isnan(res["inner_stretch"]) & (pts["pressure"].to_numpy() > 0))[0]
-        sub = spread_indices(pts.iloc[ok].reset_index(drop=True), fe_checks, seed)
-        idx = ok[sub]
-        fe = _run_fe(
-            fe_function or _fe_blastula, [pts.iloc[i].to_dict() for i in idx], fe_executor, fe_store, fe_progress
+        spot_check(
+            df, fe_checks, seed=seed, executor=fe_executor, store=fe_store, function=fe_function, progress=fe_progress
         )
-        df[_col("fe_inner_stretch")] = np.nan
-        df[_col("deviation")] = np.nan
-        for i, r in zip(idx, fe):
-            if r is None:
-                continue
-            la_fe = float(r["inner_stretch"])
-            df.loc[i, _col("fe_inner_stretch")] = la_fe
-            df.loc[i, _col("deviation")] = abs(res["inner_stretch"][i] / la_fe - 1.0)
     return df
-
-
-# ---------------------------------------------------------------------------------------------
-# Export: xarray Dataset and netCDF
-# ---------------------------------------------------------------------------------------------
-
-_LONG_NAMES = {
-    "radius": "ball radius a0",
-    "C": "Fung stiffness C",
-    "alpha": "Fung exponent alpha",
-    "beta": "energy factor beta of the Maxwell branch",
-    "tau": "relaxation time tau of the Maxwell branch",
-    "displacement": "total approach of the plates",
-    "ramp_time": "duration of the loading ramp",
-    "inner_radius": "inner radius A of the shell",
-    "outer_radius": "outer radius B of the shell",
-    "pressure": "internal pressure p",
-    "sigma_peak": "nominal stress F/A_mid at the end of the ramp (peak)",
-    "sigma_end": "nominal stress at the end of the hold",
-    "relaxed_fraction": "relaxed fraction 1 - sigma_end/sigma_peak",
-    "t_half": "time at which the stress has fallen half-way from peak to end",
-    "inner_stretch": "inner stretch a/A (NaN where the shell bursts or leaves 0.5..10)",
-    "outer_stretch": "outer stretch b/B (NaN where the shell bursts or leaves 0.5..10)",
-    "p_limit": "limit (burst) pressure of the exact shell (NaN: none up to stretch 10)",
-    "bursts": "the pressure is at or above the limit pressure",
-    "fe_sigma_peak": "FE nominal stress at the end of the ramp",
-    "fe_sigma_end": "FE nominal stress at the end of the hold",
-    "fe_inner_stretch": "FE inner stretch a/A",
-    "deviation": "largest relative difference reduced vs FE (NaN: no FE run at this point)",
-    "sigma": "nominal stress F/A_mid",
-    "time": "time since first contact",
-}
-
-
-def _split_col(col: str) -> tuple[str, str]:
-    """``"C [Pa]"`` -> ``("C", "Pa")``; a column without a unit -> ``(col, "")``."""
-    if col.endswith("]") and " [" in col:
-        name, unit = col[:-1].rsplit(" [", 1)
-        return name, unit
-    return col, ""
-
-
-def _scene_params(names: Sequence[str]) -> tuple[str, tuple[str, ...]]:
-    if set(SPHEROID_PARAMS) <= set(names):
-        return "spheroid", SPHEROID_PARAMS
-    if set(BLASTULA_PARAMS) <= set(names):
-        return "blastula", BLASTULA_PARAMS
-    raise ValueError(
-        "table is not a scan table: it needs the parameter columns of scan.spheroid "
-        f"({', '.join(_col(k) for k in SPHEROID_PARAMS)}) or of scan.blastula ({', '.join(_col(k) for k in BLASTULA_PARAMS)})"
-    )
-
-
-def _cf_units(unit: str) -> str:
-    return "1" if unit == "-" else unit
-
-
-def to_xarray(table: pd.DataFrame) -> Any:
-    """A scan table (from :func:`spheroid` or :func:`blastula`) as an ``xarray.Dataset``.
-
-    Variables carry the plain names (``C``, ``sigma_peak``, ``inner_stretch``, ``deviation``...) with
-    ``units`` (SI; "1" for dimensionless) and ``long_name`` attributes. Dimensions are the varied
-    parameters when the table is a full factorial grid over them (``design_method="grid"``): one
-    dimension per varied parameter, its sorted values as the coordinate. Other designs (random,
-    Latin hypercube, ``points=``) have one dimension ``point`` with the parameters as coordinates
-    along it. Parameters held fixed are scalar coordinates. A curves column (``sigma [Pa]``, from
-    ``curves=True``) becomes the variable ``sigma`` with the extra dimension ``time`` (s).
-    ``ds.attrs``: ``scene`` ("spheroid" or "blastula"), ``layout`` ("grid" or "points").
-
-    Raises ValueError if ``table`` lacks the parameter columns of a scan.
-    """
-    import xarray as xr
-
-    cols = {_split_col(c)[0]: c for c in table.columns}
-    scene, params = _scene_params(list(cols))
-    n = len(table)
-    if n == 0:
-        raise ValueError("table is empty (no scan points)")
-    values = {k: table[cols[k]].to_numpy(dtype=float) for k in params}
-    varied = [k for k in params if np.unique(values[k]).size > 1]
-    fixed = [k for k in params if k not in varied]
-
-    levels = {k: np.unique(values[k]) for k in varied}
-    shape = tuple(levels[k].size for k in varied)
-    codes = [np.searchsorted(levels[k], values[k]) for k in varied]
-    grid = bool(varied) and int(np.prod(shape)) == n
-    if grid:
-        flat = np.ravel_multi_index(codes, shape)
-        grid = np.unique(flat).size == n
-    if grid:
-        dims: tuple[str, ...] = tuple(varied)
-        order = np.argsort(flat)  # rows in C order of the grid
-    else:
-        dims = ("point",)
-        shape = (n,)
-        order = np.arange(n)
-
-    def attrs(name: str, unit: str) -> dict:
-        a = {"units": _cf_units(unit)}
-        if name in _LONG_NAMES:
-            a["long_name"] = _LONG_NAMES[name]
-        return a
-
-    coords: dict[str, Any] = {}
-    for k in params:
-        unit = _split_col(cols[k])[1]
-        if k in fixed:
-            coords[k] = ((), float(values[k][0]), attrs(k, unit))
-        elif grid:
-            coords[k] = ((k,), levels[k], attrs(k, unit))
-        else:
-            coords[k] = (("point",), values[k], attrs(k, unit))
-    if not grid:
-        coords["point"] = (("point",), np.arange(n), {"long_name": "index of the point in the scan table"})
-    data_vars: dict[str, Any] = {}
-    curves = None
-    for name, col in cols.items():
-        if name in params:
-            continue
-        unit = _split_col(col)[1]
-        if table[col].dtype == object:  # curves: one array per row
-            arr = np.stack([np.asarray(v, dtype=float) for v in table[col].to_numpy()[order]])
-            curves = (name, unit)
-            data_vars[name] = (dims + ("time",), arr.reshape(shape + arr.shape[1:]), attrs(name, unit))
-            continue
-        v = table[col].to_numpy()[order]
-        v = v.astype(bool) if v.dtype == bool else v.astype(float)
-        data_vars[name] = (dims, v.reshape(shape), attrs(name, unit))
-    if curves is not None:
-        t = table.attrs.get("time [s]")
-        if t is None:
-            raise ValueError(
-                'a curves column needs the output times in table.attrs["time [s]"] (as scan.spheroid sets)'
-            )
-        coords["time"] = (("time",), np.asarray(t, dtype=float), attrs("time", "s"))
-    ds = xr.Dataset(data_vars, coords=coords)
-    ds.attrs.update(scene=scene, layout="grid" if grid else "points", source="tissuemech.compare.scan")
-    return ds
-
-
-def from_xarray(ds: Any) -> pd.DataFrame:
-    """The scan table of a Dataset from :func:`to_xarray` (or read back from :func:`to_netcdf`).
-
-    Unit-labelled columns as the scans return them (parameters first); rows in the Dataset's order
-    (C order of the grid dimensions, or the ``point`` order); curves back as a ``sigma [Pa]`` column of
-    arrays with ``attrs["time [s]"]``.
-    """
-    scene, params = _scene_params(list(ds.variables))
-
-    def label(name: str) -> str:
-        u = ds[name].attrs.get("units", "")
-        return f"{name} [{'-' if u == '1' else u}]"
-
-    dims = [d for d in ds.dims if d != "time"]
-    n = int(np.prod([ds.sizes[d] for d in dims])) if dims else 1
-    out: dict[str, Any] = {}
-    for k in params:
-        v = ds[k].reset_coords(drop=True)
-        for d in dims:
-            if d not in v.dims:
-                v = v.expand_dims({d: ds.sizes[d]})
-        out[label(k)] = np.asarray(v.transpose(*dims).values, dtype=float).reshape(n)
-    names = sorted(ds.data_vars, key=lambda v: "time" in ds[v].dims)  # curves last, as the scans return them
-    for name in names:
-        var = ds[name]
-        if "time" in var.dims:
-            arr = np.asarray(var.transpose(*dims, "time").values).reshape(n, -1)
-            out[label(name)] = list(arr)
-        else:
-            out[label(name)] = np.asarray(var.transpose(*dims).values).reshape(n)
-    df = pd.DataFrame(out)
-    if "time" in ds.coords:
-        df.attrs["time [s]"] = np.asarray(ds["time"].values, dtype=float)
-    return df
-
-
-def to_netcdf(table_or_dataset: Any, path: Any, *, engine: str = "scipy") -> Any:
-    """Write a scan table (DataFrame, converted by :func:`to_xarray`) or a Dataset to a netCDF file.
-
-    engine  ``"scipy"`` (default; netCDF3 64-bit offset, needs nothing beyond scipy) or
-            ``"h5netcdf"`` / ``"netcdf4"`` (netCDF4, if that package is installed).
-    Returns the path (``pathlib.Path``). Read back with ``xarray.open_dataset(path)`` and
-    :func:`from_xarray`.
-    """
-    from pathlib import Path
-
-    import xarray as xr
-
-    ds = table_or_dataset if isinstance(table_or_dataset, xr.Dataset) else to_xarray(table_or_dataset)
-    path = Path(path)
-    if engine == "scipy":
-        ds.to_netcdf(path, engine="scipy", format="NETCDF3_64BIT")
-    elif engine in ("h5netcdf", "netcdf4"):
-        ds.to_netcdf(path, engine=engine)  # type: ignore[call-overload]  # xarray stubs: engine is a checked str, not a Literal
-    else:
-        raise ValueError(f'engine must be "scipy", "h5netcdf" or "netcdf4"; got {engine!r}')
-    return path

@@ -222,3 +222,27 @@ def test_blastula_scan_bursts_only_past_the_limit_pressure():
     # no limit point, but the state lies beyond the largest stretch searched (10): NaN, and it does not burst
     assert np.isnan(la[3]) and not df["bursts [-]"].to_numpy()[3]
     assert list(df["bursts [-]"]) == [False, False, True, False]
+
+
+@pytest.mark.parametrize(
+    "scene, kw, match",
+    [
+        ("spheroid", dict(C=(1e-320, 1e-319)), r"^C \(Pa\) is 1e-320 at point 0: below the smallest normal float64"),
+        ("spheroid", dict(displacement=1e-310, radius=1e-309), r"^radius \(m\) is 1e-309"),
+        ("blastula", dict(pressure=(0.0, 1e-310)), r"^pressure \(Pa\) is .* below the smallest normal float64"),
+    ],
+)
+def test_denormal_parameters_are_refused(scene, kw, match):
+    """C = 1e-320 Pa gave zero stresses and NaN summaries without a word."""
+    fn = scan.spheroid if scene == "spheroid" else scan.blastula
+    with pytest.raises(ValueError, match=match):
+        fn(n=2, **kw)
+    assert scan.check_normal(pd.DataFrame({"C": [0.0, 200.0, scan.TINY]})) is None  # zero and TINY are fine
+
+
+def test_underflowing_stresses_are_refused():
+    """Normal numbers whose products underflow (a 1e-160 m ball: area 1e-320 m^2) give no stress: an error, not NaN."""
+    with pytest.raises(
+        ValueError, match=r"peak nominal stress of nan Pa at 1 of 1 points, e.g. point 0 \(radius=1e-160 m"
+    ):
+        scan.spheroid(radius=1e-160, displacement=1e-161, equilibrium="hertz", n=1)

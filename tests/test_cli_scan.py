@@ -8,8 +8,8 @@ import pytest
 import xarray as xr
 from fakes import fake_nominal_stress
 
-from tissuemech.compare import cli, scan
-from tissuemech.compare import scan_cli as sc
+from tissuemech.compare import batch, cli, scan
+from tissuemech.compare.cli import scan as sc
 
 C_OPT = [o for o in sc.SPHEROID_OPTIONS if o.name == "C"][0]
 R_OPT = [o for o in sc.SPHEROID_OPTIONS if o.name == "radius"][0]
@@ -47,6 +47,10 @@ def test_parse_value_syntax():
         (["scan", "blastula", "--map", "C,alpha"], "is not varied"),
         (["scan", "spheroid", "--alpha=-0.1:0.2", "--n", "3"], "alpha"),
         (["scan", "blastula", "--alpha", "0:0.3", "--n", "4", "--color-by", "bogus"], "--color-by bogus: choose from"),
+        (["scan", "spheroid", "--C", "1e-320:1e-319"], "--C 1e-320:1e-319: 1e-320 is too small to compute with"),
+        (["scan", "spheroid", "--radius-um", "1e-303"], "--radius-um 1e-303: 1e-303 is too small"),
+        (["scan", "blastula", "--pressure=-1000:0"], "--pressure -1000:0: the largest pressure must be positive (Pa)"),
+        (["scan", "blastula", "--pressure", "0"], "--pressure 0: the largest pressure must be positive (Pa)"),
     ],
 )
 def test_bad_input_one_line_exit_2(tmp_path, capsys, argv, match):
@@ -98,7 +102,7 @@ PROMISED = ("table.csv", "scan.nc", "map.png", "curves.png", "sensitivity.png", 
 
 
 def test_blastula_command_writes_every_promised_file(tmp_path, capsys, monkeypatch):
-    monkeypatch.setattr(scan, "_fe_blastula", _fake_fe_blastula)
+    monkeypatch.setattr(batch.points, "fe_blastula", _fake_fe_blastula)
     out = tmp_path / "b"
     argv = ["scan", "blastula", "--alpha", "0.05:0.3", "--outer-radius-um", "55,75", "--pressure", "0:400"]
     argv += ["--design", "grid", "--n", "4", "--fe-checks", "3", "--fe-workers", "0", "--sens-points", "16"]
@@ -142,7 +146,7 @@ def _fake_fe_spheroid(*, radius, C, alpha, beta, tau, displacement, ramp_time, e
 
 @pytest.mark.slow
 def test_spheroid_command_writes_every_promised_file(tmp_path, monkeypatch):
-    monkeypatch.setattr(scan, "_fe_spheroid", _fake_fe_spheroid)
+    monkeypatch.setattr(batch.points, "fe_spheroid", _fake_fe_spheroid)
     out = tmp_path / "s"
     argv = ["scan", "spheroid", "--C", "100:300", "--tau", "20:500:log", "--displacement-um", "50"]
     argv += ["--equilibrium", "hertz", "--n", "40", "--fe-checks", "2", "--fe-workers", "0", "--sens-points", "8"]
@@ -158,20 +162,19 @@ def test_spheroid_command_writes_every_promised_file(tmp_path, monkeypatch):
         assert np.allclose(ds["sigma"].max("time").values, df["sigma_peak [Pa]"].to_numpy(), rtol=1e-12)
 
 
-def test_chunked_evaluation_equals_one_call(monkeypatch):
+def test_chunked_evaluation_equals_one_call():
     """Large designs go through the reduced model in equal chunks (plus the design's extreme rows, so
     every chunk compiles to the same evaluator): the table is the one of a single call."""
     pts = scan.design({"alpha": (0.05, 0.3), "C": (100.0, 300.0), "pressure": (0.0, 300.0)}, n=45, method="lhs")
     pts = pts.assign(inner_radius=50e-6, outer_radius=75e-6)[list(scan.BLASTULA_PARAMS)]
     direct = scan.blastula(points=pts)
-    monkeypatch.setattr(sc, "_CHUNK", 16)
-    got = sc._reduced_in_chunks(scan.blastula, pts, ["C", "alpha", "pressure"], {}, progress=False)
+    got = scan.evaluate_in_chunks(scan.blastula, pts, ["C", "alpha", "pressure"], {}, progress=False, chunk=16)
     pd.testing.assert_frame_equal(got, direct)
     df = scan.spheroid(C=(100.0, 300.0), tau=(10.0, 100.0), n=5, model=fake_nominal_stress, equilibrium="fake")
-    sp_pts = df[[scan._col(k) for k in scan.SPHEROID_PARAMS]]
+    sp_pts = df[[scan.column(k) for k in scan.SPHEROID_PARAMS]]
     sp_pts.columns = list(scan.SPHEROID_PARAMS)
     kw = dict(model=fake_nominal_stress, equilibrium="fake", curves=True)
-    got = sc._reduced_in_chunks(scan.spheroid, sp_pts, ["C", "tau"], kw, progress=False, stiff_row=0)
+    got = scan.evaluate_in_chunks(scan.spheroid, sp_pts, ["C", "tau"], kw, progress=False, stiff_row=0, chunk=16)
     want = scan.spheroid(points=sp_pts, **kw)
     pd.testing.assert_frame_equal(got.drop(columns="sigma [Pa]"), want.drop(columns="sigma [Pa]"))
     assert np.array_equal(got.attrs["time [s]"], want.attrs["time [s]"])

@@ -76,3 +76,15 @@ def test_errors():
     df = scan.blastula(pressure=10.0, n=1)
     with pytest.raises(ValueError, match="engine"):
         scan.to_netcdf(df, "x.nc", engine="zarr")
+
+
+def test_unitless_and_integer_columns_round_trip_exactly(tmp_path):
+    """A unitless column came back renamed 'batch_id []' (and as floats)."""
+    df = scan.blastula(alpha=(0.1, 0.3), pressure=(10.0, 100.0), n=6, design_method="random")
+    df["batch_id"] = np.arange(len(df), dtype=np.int64)
+    df["note []"] = 0.5
+    pd.testing.assert_frame_equal(scan.from_xarray(scan.to_xarray(df)), df)
+    assert "units" not in scan.to_xarray(df)["batch_id"].attrs
+    scan.to_netcdf(df, tmp_path / "u.nc")
+    with xr.open_dataset(tmp_path / "u.nc") as back:
+        pd.testing.assert_frame_equal(scan.from_xarray(back), df)

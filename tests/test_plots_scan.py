@@ -1,4 +1,4 @@
-"""compare.scan_plots: maps put FE spot-checks at their design coordinates, cells hold the right
+"""compare.plots.scan: maps put FE spot-checks at their design coordinates, cells hold the right
 averages, curves satisfy the model, parity points are the (FE, reduced) pairs, sensitivities are
 the exact derivatives (finite differences, scaling laws)."""
 
@@ -13,7 +13,7 @@ import pytest
 from fakes import fake_nominal_stress
 
 from tissuemech.compare import scan
-from tissuemech.compare import scan_plots as sp
+from tissuemech.compare.plots import scan as sp
 
 
 @pytest.fixture(scope="module")
@@ -154,13 +154,13 @@ def test_blastula_sensitivities_are_exact_derivatives(blastula_grid):
     from tissuemech.reduced import blastula as red
 
     df = blastula_grid
-    sens = sp.sensitivities(df, n_points=1000, log=())
+    sens = scan.sensitivities(df, n_points=1000, log=())
     assert set(sens["parameter"]) == {"outer_radius", "C", "alpha", "pressure"}
     g = sens[sens["quantity"] == "inner_stretch"].set_index("parameter")
     assert g["share [-]"].sum() == pytest.approx(1.0)
     # finite differences of the exact shell over the holding points, scaled to the scan ranges
     ok = df["inner_stretch [-]"].notna().to_numpy()  # holding points (p = 0 included: derivatives 0 there but in p)
-    base = {k: df[scan._col(k)].to_numpy()[ok] for k in ("inner_radius", "outer_radius", "C", "alpha", "pressure")}
+    base = {k: df[scan.column(k)].to_numpy()[ok] for k in ("inner_radius", "outer_radius", "C", "alpha", "pressure")}
 
     def la(**kw):
         p = {**base, **kw}
@@ -186,7 +186,7 @@ def test_spheroid_sensitivities_scaling_laws():
     """Hertz: the stress is proportional to C (d ln sigma / d ln C = 1), the relaxed fraction and the
     half-relaxation time do not depend on C; after a fast ramp t_half - t_r ~ tau ln 2."""
     df = scan.spheroid(C=(100.0, 300.0), tau=(20.0, 100.0), n=3, equilibrium="hertz")
-    sens = sp.sensitivities(df, equilibrium="hertz", log=())
+    sens = scan.sensitivities(df, equilibrium="hertz", log=())
     s = sens.set_index(["quantity", "parameter"])
     C = df["C [Pa]"].to_numpy()
     for q in ("sigma_peak", "sigma_end"):
@@ -203,7 +203,7 @@ def test_spheroid_sensitivities_scaling_laws():
 
 
 def test_sensitivity_chart_and_labels(blastula_grid, tmp_path):
-    sens = sp.sensitivities(blastula_grid, n_points=40)
+    sens = scan.sensitivities(blastula_grid, n_points=40)
     fig = sp.sensitivity_chart(sens)
     ax = fig.axes[0]
     assert [t.get_text() for t in ax.get_xticklabels()] == [
