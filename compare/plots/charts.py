@@ -24,6 +24,22 @@ __all__ = [
 ]
 
 
+# marker styles that stay visible when two series coincide: a large hollow one around a small filled one
+_STYLES = (
+    dict(marker="o", ms=9, mfc="none", mew=1.3),
+    dict(marker="s", ms=4),
+    dict(marker="^", ms=8, mfc="none"),
+    dict(marker="D", ms=4),
+    dict(marker="v", ms=8, mfc="none"),
+)
+_FAIL_STYLES = (dict(marker="+", ms=15, mew=1.5), dict(marker="x", ms=8, mew=1.5))
+
+
+def _legend_below(ax, ncol: int = 1) -> None:
+    """The axis's legend under it, outside the data (constrained layout makes room for it)."""
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=ncol, frameon=False)
+
+
 def _spread_labels(y: np.ndarray, min_sep: float) -> np.ndarray:
     """Label positions (log10) at least ``min_sep`` apart, as close to ``y`` as the order allows."""
     order = np.argsort(y)
@@ -60,7 +76,7 @@ def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16, note: 
             ax.errorbar(x, y, xerr=np.maximum(xerr, 0), fmt="none", ecolor=ln.get_color(), lw=0.8, capsize=2)
         else:
             (ln,) = ax.plot(x, y, next(markers), ms=7, mfc="none", label=method)
-        labels += [(xi, yi, x.max() * 2.2, text, ln.get_color()) for xi, yi, text in zip(x, y, g.setting.astype(str))]
+        labels += [(xi, yi, x.max() * 5.0, text, ln.get_color()) for xi, yi, text in zip(x, y, g.setting.astype(str))]
     # stacked over ALL methods: two methods' points at about the same place get labels one line apart
     ly: np.ndarray = 10 ** _spread_labels(np.log10([lab[1] for lab in labels]), min_sep) if labels else np.zeros(0)
     for (xi, yi, lx, text, color), lyi in zip(labels, ly):
@@ -93,7 +109,7 @@ def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16, note: 
     if len(ly):  # the stacked labels may sit above / below every point: keep them inside the axes
         ys = np.concatenate([d.err_plot.to_numpy(float), ly])
         ax.set_ylim(ys.min() / 3, ys.max() * 3)
-    ax.set_xlabel("wall time per solve (s): median of repeated calls after a warm-up; bars: min..max")
+    ax.set_xlabel("wall time per solve (s): the fastest of repeated calls after a warm-up; bars: min..max")
     ax.set_ylabel("relative error")
     ax.set_title(title, fontsize=10)
     ax.grid(alpha=0.3, which="both")
@@ -124,9 +140,10 @@ def limit_point_panel(ax, limit: pd.DataFrame) -> None:
     ax.axhline(0.0, color="k", lw=0.8)
     ax.set_xticks(range(len(bs)), [f"B = {b:g} um" for b in bs])
     ax.set_xlim(-0.6, len(bs) - 0.4)
+    ax.set_xlabel("geometry (outer radius B; A = 50 um)")
     ax.set_ylabel("p_reached / p_max,exact - 1 (symlog)")
-    ax.set_title("neo-Hookean limit point: load control stops below (< 0), arc-length passes it", fontsize=9)
-    ax.legend(fontsize=7)
+    ax.set_title("neo-Hookean limit point: load control stops below (< 0),\narc-length passes it", fontsize=9)
+    _legend_below(ax, ncol=3)
     ax.grid(alpha=0.3, axis="y")
 
 
@@ -134,21 +151,21 @@ def kappa_panel(ax, kappa: pd.DataFrame) -> None:
     """Inner-stretch error vs kappa/C, mixed u-p against displacement-only; Newton failures on a top band."""
     ok_all = ~kappa.failed.astype(bool)
     top = 3.0 * float(np.nanmax(kappa.error[ok_all])) if ok_all.any() else 1.0
-    for form, g in kappa.groupby("formulation", sort=False):
+    for k, (form, g) in enumerate(kappa.groupby("formulation", sort=False)):
         ok = ~g.failed.astype(bool)
-        (ln,) = ax.loglog(g.kappa_over_C[ok], g.error[ok], "o-", label=form)
+        (ln,) = ax.loglog(g.kappa_over_C[ok], g.error[ok], "-", label=form, **_STYLES[k % len(_STYLES)])
         if (~ok).any():
             ax.plot(
                 g.kappa_over_C[~ok],
                 np.full((~ok).sum(), top),
-                "x",
                 color=ln.get_color(),
-                ms=10,
                 ls="none",
                 label=f"{form}: Newton failed (no error; drawn on the top band)",
+                **_FAIL_STYLES[k % len(_FAIL_STYLES)],
             )
     if (~ok_all).any():
         ax.axhline(top, color="0.6", lw=0.6, ls=":")
+        ax.set_ylim(top=top * 3)
     k = np.geomspace(kappa.kappa_over_C.min(), kappa.kappa_over_C.max(), 50)
     ax.loglog(
         k,
@@ -157,46 +174,51 @@ def kappa_panel(ax, kappa: pd.DataFrame) -> None:
         lw=0.8,
         label="~ C/kappa (physical compressibility)",
     )
-    ax.set_xlabel("kappa / C")
-    ax.set_ylabel("inner-stretch error vs incompressible exact")
-    ax.set_title("locking: displacement-only vs mixed u-p", fontsize=9)
-    ax.legend(fontsize=7)
+    ax.set_xlabel("kappa / C (bulk over shear-like modulus, -)")
+    ax.set_ylabel("inner-stretch error vs incompressible exact (-)")
+    ax.set_title("locking: displacement-only vs mixed u-p\n(alpha = 0.2, B = 75 um)", fontsize=9)
+    _legend_below(ax)
     ax.grid(alpha=0.3, which="both")
 
 
 def viscous_step_panel(ax, viscous: pd.DataFrame, tolerance: float = 1e-3) -> None:
     """Force error of each viscoelastic update formula vs the time step."""
-    for u, g in viscous.groupby("update", sort=False):
-        ax.loglog(g["step [s]"], np.maximum(g.error, 1e-16), "o-", ms=3, label=u)
+    for k, (u, g) in enumerate(viscous.groupby("update", sort=False)):
+        ax.loglog(g["step [s]"], np.maximum(g.error, 1e-16), "-", label=u, **_STYLES[k % len(_STYLES)])
     ax.axhline(tolerance, color="r", lw=0.8, label=f"tolerance {tolerance:g}")
     ax.set_ylim(1e-10, 10)
     ax.set_xlabel("time step h (s)  [tau = 200 s, ramp 0.2 s]")
-    ax.set_ylabel("max force error / max force")
-    ax.set_title("viscoelastic update: largest step keeping 1e-3")
-    ax.legend(fontsize=7)
+    ax.set_ylabel("max force error / max force (-)")
+    ax.set_title("viscoelastic update: largest step keeping 1e-3\n(one Maxwell branch, exact solution)", fontsize=9)
+    _legend_below(ax, ncol=2)
     ax.grid(alpha=0.3, which="both")
 
 
 def stiff_solver_panel(ax, stiff: pd.DataFrame) -> None:
-    """Accepted + rejected diffrax steps vs tau / ramp time, explicit against implicit."""
-    for name, g in stiff.groupby("solver", sort=False):
+    """Accepted + rejected diffrax steps vs tau / ramp time, explicit against implicit.
+
+    Explicit solvers that coincide (Tsit5 and Dopri5 take the same steps) stay visible: a large hollow
+    marker around a small filled one, and '+' around 'x' where they gave up.
+    """
+    for k, (name, g) in enumerate(stiff.groupby("solver", sort=False)):
         ok = ~g.failed.astype(bool)
-        (ln,) = ax.loglog(g.tau_over_ramp[ok], g.steps[ok] + g.rejected[ok], "o-", label=f"{name}")
+        (ln,) = ax.loglog(
+            g.tau_over_ramp[ok], g.steps[ok] + g.rejected[ok], "-", label=f"{name}", **_STYLES[k % len(_STYLES)]
+        )
         if (~ok).any():
             ax.plot(
                 g.tau_over_ramp[~ok],
                 g.steps[~ok] + g.rejected[~ok],
-                "x",
                 color=ln.get_color(),
-                ms=10,
                 ls="none",
                 label=f"{name}: gave up (steps taken when max_steps was hit)",
+                **_FAIL_STYLES[k % len(_FAIL_STYLES)],
             )
-    ax.set_xlabel("tau / ramp time")
+    ax.set_xlabel("tau / ramp time (-)")
     ax.set_ylabel("solver steps (accepted + rejected)")
-    ax.set_title("stiffness: explicit vs implicit diffrax", fontsize=9)
+    ax.set_title("stiffness: explicit vs implicit diffrax\n(same ODE, rtol = atol = 1e-8)", fontsize=9)
     ax.invert_xaxis()
-    ax.legend(fontsize=7)
+    _legend_below(ax, ncol=2)
     ax.grid(alpha=0.3, which="both")
 
 
@@ -205,13 +227,16 @@ def compression_panel(ax, compression: pd.DataFrame | None, seed_depth: float = 
     if compression is not None and len(compression):
         ok = compression.converged.astype(bool)
         ax.plot(100 * compression.fraction[ok], compression["force [N]"][ok] * 1e6, "o-", label="converged")
-        for _, r in compression[~ok].iterrows():
-            ax.plot(100 * r.fraction, 0.0, "rx", ms=10, ls="none")
+        bad = compression[~ok]
+        if len(bad):
+            ax.plot(100 * bad.fraction, np.zeros(len(bad)), "rx", ms=10, mew=1.5, ls="none", label="not converged")
+        for _, r in bad.iterrows():
             ax.annotate(
                 f"{r.failure}",
                 (100 * r.fraction, 0.0),
                 textcoords="offset points",
-                xytext=(-10, 8),
+                xytext=(-8, 10),
+                ha="right",
                 fontsize=7,
                 color="r",
             )
@@ -219,12 +244,15 @@ def compression_panel(ax, compression: pd.DataFrame | None, seed_depth: float = 
         ax.axvline(
             100 * cap, color="r", ls="--", lw=0.8, label=f"fem.spheroid refuses >= {100 * cap:.0f} % (stated cap)"
         )
-        ax.set_xlabel("total approach / diameter (%)")
-        ax.set_ylabel("plate force (uN)")
-        ax.legend(fontsize=7, loc="upper left")
+        ax.set_xlim(min(100 * compression.fraction.min(), 100 * seed_depth) - 5, 100 * cap + 5)
+        _legend_below(ax, ncol=2)
     else:
         ax.text(0.5, 0.5, "spheroid FE not available", ha="center", va="center", transform=ax.transAxes)
-    ax.set_title("static compression depth (spheroid FE): pushed to failure or cap", fontsize=9)
+    ax.set_xlabel("total approach / diameter (%)")
+    ax.set_ylabel("plate force (uN)")
+    ax.set_title(
+        "static compression depth (spheroid FE, alpha = 0.2,\nC = 200 Pa): pushed to failure or cap", fontsize=9
+    )
     ax.grid(alpha=0.3)
 
 
@@ -237,14 +265,17 @@ def stability_charts(
     compression: pd.DataFrame | None = None,
     tolerance: float = 1e-3,
 ):
-    """The stability map: limit point, locking vs kappa/C, viscous step, stiff solvers, compression depth."""
+    """The stability map: limit point, locking vs kappa/C, viscous step, stiff solvers, compression depth.
+
+    Five panels (three above, two centred below; no empty one), each legend under its panel, off the data.
+    """
     plt = _plt()
-    fig, axes = plt.subplots(2, 3, figsize=(16, 9))
-    limit_point_panel(axes[0, 0], limit)
-    kappa_panel(axes[0, 1], kappa)
-    viscous_step_panel(axes[0, 2], viscous, tolerance)
-    stiff_solver_panel(axes[1, 0], stiff)
-    compression_panel(axes[1, 1], compression)
-    axes[1, 2].axis("off")
-    fig.tight_layout()
+    fig = plt.figure(figsize=(16, 11), layout="constrained")
+    axes = fig.subplot_mosaic("AABBCC;.DDEE.")
+    limit_point_panel(axes["A"], limit)
+    kappa_panel(axes["B"], kappa)
+    viscous_step_panel(axes["C"], viscous, tolerance)
+    stiff_solver_panel(axes["D"], stiff)
+    compression_panel(axes["E"], compression)
+    fig.suptitle("Stability map: each method pushed until it fails (tables: stability_*.csv)", fontsize=11)
     return fig

@@ -19,7 +19,15 @@ import numpy as np
 
 from tissuemech.compare.cases import UM
 
-__all__ = ["nodal_average", "q2_triangulation", "draw_field", "element_von_mises", "relaxation_curves"]
+__all__ = ["nodal_average", "q2_triangulation", "draw_field", "element_von_mises", "relaxation_curves", "subgrid"]
+
+
+def subgrid(n_sub: int) -> np.ndarray:
+    """The (2, (n_sub+1)^2) reference points [0, 1]^2 of the drawing sub-grid, in the order
+    ``q2_triangulation`` uses (values given per point must follow it)."""
+    s = np.linspace(0.0, 1.0, n_sub + 1)
+    S, T = np.meshgrid(s, s, indexing="ij")
+    return np.vstack([S.ravel(), T.ravel()])
 
 
 def _ref_area(mesh: Any) -> np.ndarray:
@@ -47,20 +55,21 @@ def q2_triangulation(
     """(x_um, y_um, triangles, values) of the field on the (deformed) Q2 geometry.
 
     mesh: an ``fem.mesh.AxiMesh`` (Q2); displacement: (N, 2) nodal displacement in m, or None for the
-    reference configuration; element_values: one value per element.
+    reference configuration; element_values: one value per element (drawn as their nodal average), or
+    values at the sub-grid points (n_el, (n_sub+1)^2), points ordered as :func:`subgrid`.
     """
     elem = mesh.basis.elem
     dofs = mesh.basis.element_dofs  # (9, nel)
-    s = np.linspace(0.0, 1.0, n_sub + 1)
-    S, T = np.meshgrid(s, s, indexing="ij")
-    ref = np.vstack([S.ravel(), T.ravel()])  # (2, m) on the reference square [0, 1]^2
+    ref = subgrid(n_sub)  # (2, m) on the reference square [0, 1]^2
     phi = np.array([np.asarray(elem.lbasis(ref, i)[0]) for i in range(dofs.shape[0])])  # (9, m)
     X = mesh.X.T * mesh.length_scale  # (N, 2) m
     if displacement is not None:
         X = X + np.asarray(displacement)[:, :2]
-    nodal = nodal_average(mesh, element_values)
     xe = np.einsum("km,kec->ecm", phi, X[dofs])  # (nel, 2, m)
-    ve = np.einsum("km,ke->em", phi, nodal[dofs])  # (nel, m)
+    if np.ndim(element_values) == 2:  # values at the sub-grid points
+        ve = np.asarray(element_values, float).reshape(dofs.shape[1], ref.shape[1])
+    else:
+        ve = np.einsum("km,ke->em", phi, nodal_average(mesh, element_values)[dofs])  # (nel, m)
     nel, m = ve.shape
     idx = np.arange(m).reshape(n_sub + 1, n_sub + 1)
     a, b, c, d = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()

@@ -14,6 +14,7 @@ to a synthetic record). The report's charts are in :mod:`tissuemech.compare.plot
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -22,13 +23,49 @@ import numpy as np
 from tissuemech.compare.cases import UM
 from tissuemech.compare.plots import pyplot as _plt
 
-__all__ = ["fig3", "fig_stretch_pressure", "fig8", "fig9", "fig10", "element_radius"]
+__all__ = [
+    "fig3",
+    "fig_stretch_pressure",
+    "fig8",
+    "fig9",
+    "fig10",
+    "element_radius",
+    "elastic_von_mises_at",
+    "reference_points",
+]
 
 
 def element_radius(mesh) -> np.ndarray:
     """Reference radius (m) of each element's corner centroid, sqrt(R^2 + Z^2) (spherical shell)."""
     p = mesh.mesh.p[:, mesh.mesh.t[:4]].mean(axis=1)
     return np.hypot(p[0], p[1]) * mesh.length_scale
+
+
+def elastic_von_mises_at(mesh, displacement: np.ndarray, ref_points: np.ndarray, *, C: float, alpha: float):
+    """Von Mises stress (Pa) of an ELASTIC FE state at given points of every element: (n_el, n_points).
+
+    mesh: an ``fem.mesh.AxiMesh`` (Q2); displacement: (N, 2) nodal displacement (m); ref_points: (2, n)
+    points of the reference square [0, 1]^2; C (Pa), alpha: the Fung law. The deformation gradient comes
+    from the Q2 displacement at each point and the stress from ``fem.constitutive`` (the engine's law):
+    von Mises depends only on the stress deviator, which in the mixed form is the isochoric stress's (the
+    pressure field adds a multiple of the identity), so it is the FE field itself, not an average (the
+    results store element means). Not for viscoelastic states (their branch stresses are history).
+    """
+    from skfem import CellBasis
+
+    from tissuemech.fem import constitutive as cm
+
+    pts = np.asarray(ref_points, float)
+    basis = CellBasis(mesh.mesh, mesh.basis.elem, quadrature=(pts, np.full(pts.shape[1], 1.0 / pts.shape[1])))
+    L = mesh.length_scale
+    u = np.asarray(displacement, float) / L  # scaled like the mesh coordinates
+    ur, uz = basis.interpolate(u[:, 0]), basis.interpolate(u[:, 1])
+    R = np.asarray(basis.global_coordinates())[0]  # (nel, n) scaled
+    on_axis = R < 1e-12 * max(float(np.max(R)), 1.0)
+    hoop = 1.0 + np.where(on_axis, ur.grad[0], np.asarray(ur) / np.where(on_axis, 1.0, R))
+    f = np.stack([1.0 + ur.grad[0], ur.grad[1], uz.grad[0], 1.0 + uz.grad[1], hoop], axis=-1)
+    P, _ = cm.iso_stress(f, C, alpha)
+    return cm.von_mises(cm.cauchy(f, P))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -44,74 +81,84 @@ def fig3(
     alpha: float,
     outer_radius: float,
     inner_stretch: float | None = None,
+    C: float = 200.0,
+    n_sub: int = 6,
 ):
     """Seed Fig. 3: von Mises in the inflated wall, four panels with one colour scale.
 
     (a) the deformed quarter section (the wall is thin at this stretch: the box marks the zoom),
     (b) the zoom on the deformed wall at 45 degrees, where the through-thickness gradient shows,
     (c) the same field on the reference section (R, Z), (d) the exact through-wall profile against
-    the FE element means. result: ``fem.blastula`` result at the final pressure; profile:
-    ``reduced.blastula.profiles`` at the exact inner stretch (R in m, von_mises in Pa).
+    the FE. result: ``fem.blastula`` result at the final pressure (elastic); profile:
+    ``reduced.blastula.profiles`` at the exact inner stretch (R in m, von_mises in Pa); C (Pa).
+
+    The colours are the FE field itself, evaluated at ``n_sub`` x ``n_sub`` points per element
+    (:func:`elastic_von_mises_at`), not the stored element means (which average the steep through-wall
+    gradient and miss the wall values); the colour scale spans the FE field and the exact profile, so
+    both extrema are on it (the colour-bar label gives both ranges).
     """
     from matplotlib.patches import Rectangle
 
-    from tissuemech.compare.plots.fields import draw_field
+    from tissuemech.compare.plots.fields import draw_field, subgrid
 
     plt = _plt()
-    fig, axes = plt.subplots(2, 2, figsize=(11, 9.5))
+    fig, axes = plt.subplots(2, 2, figsize=(11, 9.5), layout="constrained")
     (a0, a1), (a2, a3) = axes
     mesh, vm = result.mesh, np.asarray(result.von_mises)
     R_prof, vm_prof = np.asarray(profile.R).ravel(), np.asarray(profile.von_mises).ravel()
-    from tissuemech.compare.plots.fields import nodal_average
-
-    nodal = nodal_average(mesh, vm)
-    lo, hi = float(nodal.min()), float(nodal.max())  # the colour scale of what is drawn
+    ref = subgrid(n_sub)
+    vm_pts = elastic_von_mises_at(mesh, result.displacement, ref, C=C, alpha=alpha)  # (nel, (n_sub+1)^2)
+    lo, hi = min(float(vm_pts.min()), float(vm_prof.min())), max(float(vm_pts.max()), float(vm_prof.max()))
     A = mesh.length_scale
     la = float(result.inner_stretch[-1]) if inner_stretch is None else inner_stretch
     lb = float(result.outer_stretch[-1])
     a, b = la * A / UM, lb * outer_radius / UM
-    coll = draw_field(a0, mesh, result.displacement, vm, vmin=lo, vmax=hi)
+    kw = dict(vmin=lo, vmax=hi, n_sub=n_sub)
+    coll = draw_field(a0, mesh, result.displacement, vm_pts, **kw)
     rc, w = 0.5 * (a + b), max(1.6 * (b - a), 2.0)
     cx, cy = rc / np.sqrt(2), rc / np.sqrt(2)
     a0.add_patch(Rectangle((cx - w, cy - w), 2 * w, 2 * w, fill=False, ec="r", lw=1.2))
     a0.set_title(f"(a) deformed section, p = {pressure / 1e3:g} kPa (wall {b - a:.1f} um thick)", fontsize=9)
-    draw_field(a1, mesh, result.displacement, vm, vmin=lo, vmax=hi, n_sub=6)
+    draw_field(a1, mesh, result.displacement, vm_pts, **kw)
     a1.set_xlim(cx - w, cx + w)
     a1.set_ylim(cy - w, cy + w)
     a1.set_title("(b) zoom on the deformed wall (red box in (a))", fontsize=9)
-    draw_field(a2, mesh, None, vm, vmin=lo, vmax=hi)
+    draw_field(a2, mesh, None, vm_pts, **kw)
     a2.set_title(
-        f"(c) the same field on the reference section (A = {A / UM:g} um, B = {outer_radius / UM:g} um)", fontsize=9
+        f"(c) the same field on the reference section\n(A = {A / UM:g} um, B = {outer_radius / UM:g} um)", fontsize=9
     )
     for ax, xl, yl in ((a0, "r (um)", "z (um)"), (a1, "r (um)", "z (um)"), (a2, "R (um)", "Z (um)")):
         ax.set_xlabel(xl)
         ax.set_ylabel(yl)
-    fig.colorbar(coll, ax=a1, label="von Mises stress (Pa)")
-    fig.colorbar(coll, ax=a2, label="von Mises stress (Pa)")
-    a3.plot(R_prof / UM, vm_prof, "k-", label="exact (incompressible shell)")
-    a3.plot(element_radius(mesh) / UM, vm, "o", ms=4, mfc="none", label="FE element means")
-    on_axis = np.abs(mesh.X[1]) < 1e-12  # nodes on Z = 0: what the colour maps show along a radius
-    order = np.argsort(mesh.X[0][on_axis])
+    fig.colorbar(coll, ax=[a0, a1], label="von Mises stress (Pa)", shrink=0.9)
+    fig.colorbar(coll, ax=[a2], label="von Mises stress (Pa)", shrink=0.9)
+    a3.plot(R_prof / UM, vm_prof, "k-", lw=1.5, label="exact (incompressible shell)", zorder=3)
+    r_pts = np.hypot(*reference_points(mesh, ref)) * A / UM
     a3.plot(
-        (mesh.X[0][on_axis] * A / UM)[order],
-        nodal[on_axis][order],
-        "s--",
-        ms=3,
-        lw=0.8,
-        color="C1",
-        label="FE nodal values drawn in (a)-(c) (element means averaged to nodes)",
+        r_pts.ravel(), vm_pts.ravel(), ".", ms=2, color="C0", alpha=0.5, label="FE field at points (drawn in (a)-(c))"
     )
+    a3.plot(element_radius(mesh) / UM, vm, "s", ms=5, mfc="none", color="C1", label="FE element means (stored)")
     a3.set_xlabel("reference radius R (um)")
     a3.set_ylabel("von Mises stress |sigma_theta - sigma_r| (Pa)")
     a3.set_title("(d) through-wall profile (not in the seed)", fontsize=9)
     a3.grid(alpha=0.3)
-    a3.legend(fontsize=8)
+    a3.legend(fontsize=8, loc="upper right")
     fig.suptitle(
-        f"Fig. 3: blastula at p = {pressure:g} Pa, alpha = {alpha:g}, C = 200 Pa; inner stretch {la:.4f}, "
-        f"outer {lb:.4f}"
+        f"Fig. 3: blastula at p = {pressure:g} Pa, alpha = {alpha:g}, C = {C:g} Pa; inner stretch {la:.4f}, "
+        f"outer {lb:.4f}\ncolours: the FE field at {n_sub + 1} x {n_sub + 1} points per element, "
+        f"{vm_pts.min():.0f}..{vm_pts.max():.0f} Pa (exact {vm_prof.min():.0f}..{vm_prof.max():.0f} Pa; "
+        "one scale spans both)",
+        fontsize=10,
     )
-    fig.tight_layout()
     return fig
+
+
+def reference_points(mesh, ref: np.ndarray) -> np.ndarray:
+    """Scaled reference coordinates (2, n_el, n) of the points ``ref`` of every element (Q2 map)."""
+    from skfem import CellBasis
+
+    basis = CellBasis(mesh.mesh, mesh.basis.elem, quadrature=(ref, np.full(ref.shape[1], 1.0 / ref.shape[1])))
+    return np.asarray(basis.global_coordinates())
 
 
 def fig_stretch_pressure(
@@ -186,9 +233,14 @@ def fig8(result: Any, times: Sequence[float], *, title: str = ""):
         ax.set_xlabel("r (um)")
         ax.set_ylabel("z (um)")
         ax.set_title(f"t = {f.time:g} s: approach {d:.0f} um, plates at z = +-{zp:.0f} um", fontsize=9)
-    fig.colorbar(coll, ax=list(axes), label="von Mises stress (Pa)", shrink=0.85)
-    if title:
-        fig.suptitle(title, fontsize=10)
+    fig.colorbar(
+        coll,
+        ax=list(axes),
+        label="von Mises stress (Pa)\n(element means averaged to nodes)",
+        shrink=0.85,
+    )
+    note = f"colours: FE element means averaged to the nodes, element means {lo:.0f}..{hi:.0f} Pa over both times"
+    fig.suptitle("\n".join([*textwrap.wrap(title, 120), note]), fontsize=10)
     return fig
 
 
@@ -200,24 +252,31 @@ def fig9(
     label: str = "",
     reduced_label: str = "FE static mean x reduced relaxation factor (hybrid, not independent)",
 ):
-    """Seed Fig. 9: volume-averaged von Mises vs time (ramp, left; relaxation, right, log time)."""
+    """Seed Fig. 9: volume-averaged von Mises vs time (ramp, left; relaxation, right, log time).
+
+    The title is wrapped to the figure's width and the legend sits below the panels (off the data).
+    """
     plt = _plt()
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.8), layout="constrained")
     ramp_end = float(fe.parameters.get("ramp_time", 0.2)) if getattr(fe, "parameters", None) else 0.2
     for ax, sel in zip(axes, (fe.time <= ramp_end * 1.0001, fe.time >= ramp_end * 0.9999)):
-        ax.plot(fe.time[sel], fe.mean_von_mises[sel], "o-", ms=3, label="FE (transient run)")
+        ax.plot(fe.time[sel], fe.mean_von_mises[sel], "o", ms=5, mfc="none", label="FE (transient run), every step")
         if reduced_t is not None and reduced_vm is not None:
             rs = (reduced_t <= ramp_end * 1.0001) if ax is axes[0] else (reduced_t >= ramp_end * 0.9999)
-            ax.plot(reduced_t[rs], reduced_vm[rs], "k--", label=reduced_label)
+            ax.plot(reduced_t[rs], reduced_vm[rs], "k--", lw=1.2, label=reduced_label)
         ax.set_xlabel("time t (s)")
         ax.set_ylabel("volume-averaged von Mises stress (Pa)")
         ax.grid(alpha=0.3)
+    axes[0].set_xlim(0, ramp_end * 1.02)
+    axes[0].set_ylim(bottom=0)
     axes[1].set_xscale("log")
-    axes[0].set_title("ramp")
-    axes[1].set_title("relaxation (hold)")
-    axes[0].legend(fontsize=8)
-    fig.suptitle(label, fontsize=10)
-    fig.tight_layout()
+    axes[0].set_title("ramp", fontsize=9)
+    axes[1].set_title("relaxation (hold, log time)", fontsize=9)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(
+        handles, ["\n".join(textwrap.wrap(t, 90)) for t in labels], fontsize=8, loc="outside lower center", ncol=2
+    )
+    fig.suptitle("\n".join(textwrap.wrap(label, 110)), fontsize=10)
     return fig
 
 
@@ -228,21 +287,29 @@ def fig10(
     label: str = "",
     reference: Mapping[str, Any] | None = None,
     ramp_time: float = 0.2,
+    linthresh: float = 1e-3,
 ):
     """Seed Fig. 10: nominal stress sigma~ = F / A_mid vs time, and each model's deviation from the FE.
 
     curves     dicts with label, t (s), sigma (Pa), style (matplotlib format string); optionally
-               sigma_at_ref (the curve at ``reference["t"]``) for the deviation panel
-    synthetic  dict with t, sigma (the noisy synthetic record), fit_t, fit_sigma, fit_label
+               sigma_at_ref (the curve at ``reference["t"]``) for the deviation panel, and top=False to
+               draw the curve in the deviation panel only
+    synthetic  dict with t, sigma (the noisy synthetic record), fit_t, fit_sigma, fit_label, fit_at_ref
     reference  dict with t, sigma, label: what the bottom panels divide by (the FE)
+    linthresh  the deviation panels are symlog in %: linear within +-linthresh %, so that deviations
+               of 1e-5 and of 10 % both read
+    The fit is drawn as a solid red line; one legend for all panels sits below them, off the data.
     """
     plt = _plt()
     rows = 2 if reference is not None else 1
-    fig, axes = plt.subplots(rows, 2, figsize=(11.5, 4.2 * rows), squeeze=False, sharex="col")
+    fig, axes = plt.subplots(
+        rows, 2, figsize=(11.5, 4.0 * rows + 1.4), squeeze=False, sharex="col", layout="constrained"
+    )
     for col, log in enumerate((False, True)):
         ax = axes[0, col]
         for c in curves:
-            ax.plot(c["t"], c["sigma"], c.get("style", "-"), label=c["label"], ms=4, mfc="none", lw=1.4)
+            if c.get("top", True):
+                ax.plot(c["t"], c["sigma"], c.get("style", "-"), label=c["label"], ms=4, mfc="none", lw=1.4)
         if synthetic is not None:
             ax.plot(
                 synthetic["t"],
@@ -264,7 +331,7 @@ def fig10(
             bx = axes[1, col]
             for c in curves:
                 if c.get("sigma_at_ref") is not None:
-                    bx.plot(
+                    (ln,) = bx.plot(
                         reference["t"],
                         100 * (np.asarray(c["sigma_at_ref"]) / reference["sigma"] - 1),
                         c.get("style", "-"),
@@ -273,6 +340,8 @@ def fig10(
                         lw=1.2,
                         label=c["label"],
                     )
+                    if not c.get("top", True) and col == 0:  # only here: give it a legend entry
+                        ax.plot([], [], c.get("style", "-"), ms=4, mfc="none", label=c["label"])
             if synthetic is not None and synthetic.get("fit_at_ref") is not None:
                 bx.plot(
                     reference["t"],
@@ -282,7 +351,8 @@ def fig10(
                     label="fit",
                 )
             bx.axhline(0, color="k", lw=0.6)
-            bx.set_ylabel(f"model / {reference.get('label', 'FE')} - 1 (%)")
+            bx.set_yscale("symlog", linthresh=linthresh)
+            bx.set_ylabel(f"model / {reference.get('label', 'FE')} - 1 (%)\n(symlog, linear within +-{linthresh:g} %)")
             bx.grid(alpha=0.3)
             bx.set_xlabel("time t (s)")
             if log:
@@ -291,9 +361,11 @@ def fig10(
             ax.set_xlabel("time t (s)")
     axes[0, 0].set_title("ramp and early hold", fontsize=9)
     axes[0, 1].set_title("relaxation (log time)", fontsize=9)
+    if reference is not None:
+        axes[1, 0].set_title("deviation from the FE at every FE step", fontsize=9)
+        axes[1, 1].set_title("deviation from the FE at every FE step (log time)", fontsize=9)
     # one legend for both columns, below the panels: the fit's label is long and must not cover data
     handles, labels = axes[0, 0].get_legend_handles_labels()
-    fig.legend(handles, labels, fontsize=7, loc="lower center", ncol=2, frameon=False)
-    fig.suptitle(label, fontsize=10)
-    fig.tight_layout(rect=(0, 0.08, 1, 1))
+    fig.legend(handles, labels, fontsize=7, loc="outside lower center", ncol=2, frameon=False)
+    fig.suptitle("\n".join(textwrap.wrap(label, 120)), fontsize=10)
     return fig
