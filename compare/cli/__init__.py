@@ -45,6 +45,7 @@ COMMANDS: list[tuple[str, str]] = [
     ("calibrate", "tissuemech.compare.cli.calibrate"),
     ("checks", "tissuemech.compare.cli.checks"),
     ("readme-tables", "tissuemech.compare.cli.readme_tables"),
+    ("afm", "tissuemech.compare.cli.afm"),
 ]
 
 

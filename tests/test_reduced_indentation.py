@@ -1,0 +1,130 @@
+"""reduced.indentation: two Hertz contacts in series, the half-space limit, the lumped relaxation, gradients."""
+
+import math
+
+import jax
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from tissuemech.reduced import indentation as ind
+from tissuemech.reduced import spheroid
+
+A0, RP, C = 40e-6, 5e-6, 500.0
+
+
+def test_two_contacts_in_series_closed_form():
+    # same force through both Hertz contacts: d_i = (F / k_i)^(2/3), k_i = (4/3) E* sqrt(R_i), E* = 8 C
+    d = 1.2e-6
+    F = float(ind.equilibrium_force(d, radius=A0, probe_radius=RP, C=C))
+    estar = 8.0 * C  # E = 6 C (mu = 2 C, incompressible), E* = E / (1 - 1/4)
+    r1, r2 = RP * A0 / (RP + A0), A0
+    k1, k2 = (4 / 3) * estar * math.sqrt(r1), (4 / 3) * estar * math.sqrt(r2)
+    d1, d2 = (F / k1) ** (2 / 3), (F / k2) ** (2 / 3)
+    assert d1 + d2 == pytest.approx(d, rel=1e-12)
+    c1, c2 = ind.contact_depths(d, radius=A0, probe_radius=RP)
+    assert float(c1) == pytest.approx(d1, rel=1e-12) and float(c2) == pytest.approx(d2, rel=1e-12)
+
+
+def test_half_space_limit_and_plates():
+    d = 0.3e-6
+    half = float(ind.equilibrium_force(d, radius=math.inf, probe_radius=RP, C=C))
+    assert half == pytest.approx((4 / 3) * 8 * C * math.sqrt(RP) * d**1.5, rel=1e-13)
+    # a0 -> inf: the deficit is the ball-plate contact, 1 - F/F_half ~ (3/2) (R_p / a0)^(1/3) (slow, 1/3 power)
+    for a0 in (1e-2, 1e1, 1e4):
+        big = float(ind.equilibrium_force(d, radius=a0, probe_radius=RP, C=C))
+        assert 1 - big / half == pytest.approx(1.5 * (RP / a0) ** (1 / 3), rel=3 * (RP / a0) ** (1 / 3))
+    # R_1 = R_2 = a0 (a probe as large as... a plate is R_p -> inf): the spheroid's two-plate Hertz law
+    plates = float(ind.equilibrium_force(d, radius=A0, probe_radius=1e9, C=C))
+    ref = float(spheroid.equilibrium_force(d, radius=A0, C=C, alpha=0.0, equilibrium="hertz"))
+    assert plates == pytest.approx(ref, rel=1e-6)
+
+
+def test_relaxation_after_ramp_matches_quadrature():
+    beta, tau, tr, d = 1.5, 2.0, 1.0, 1e-6
+    t = np.array([0.5, 1.0, 3.0, 10.0])
+    F = np.asarray(ind.force(t, radius=A0, probe_radius=RP, C=C, branches=[(beta, tau)], displacement=d, ramp_time=tr))
+    K = (32 / 3) * C * math.sqrt(float(ind.series_radius(A0, RP)))  # F_eq = K delta^1.5
+
+    def ref(tt):
+        s_end = min(tt, tr)
+        v = d / tr
+        q = quad(lambda s: math.exp(-(s_end - s) / tau) * 1.5 * K * v**1.5 * math.sqrt(s), 0, s_end, epsabs=0)[0]
+        return K * (v * s_end) ** 1.5 + beta * q * math.exp(-max(tt - tr, 0) / tau)
+
+    assert np.allclose(F, [ref(tt) for tt in t], rtol=1e-8)
+
+
+def test_measured_history_linear_equilibrium_closed_form():
+    # delta(t) = D (t/tr)^(2/3): F_eq grows linearly in t (a linear equilibrium in time), so the standard
+    # linear solid's closed form holds: q(tr) = beta tau F_max / tr (1 - e^{-tr/tau}), then e^{-(t-tr)/tau}
+    beta, tau, tr, D = 0.8, 0.7, 1.0, 0.8e-6
+    th = np.concatenate([np.linspace(0, tr, 801), [tr + 20.0]])
+    dh = D * np.minimum(th / tr, 1.0) ** (2 / 3)
+    t = np.array([0.25, 0.5, 1.0, 2.0, 5.0])
+    F = np.asarray(ind.force(t, radius=A0, probe_radius=RP, C=C, branches=[(beta, tau)], displacement=(th, dh)))
+    Fm = float(ind.equilibrium_force(D, radius=A0, probe_radius=RP, C=C))
+    rate = Fm / tr
+    ramp = lambda s: rate * s + beta * tau * rate * (1 - np.exp(-s / tau))
+    ref = np.where(t <= tr, ramp(t), Fm + (ramp(tr) - Fm) * np.exp(-(t - tr) / tau))
+    assert np.allclose(F, ref, rtol=2e-4)
+
+
+def test_history_agrees_with_ramp_and_hold():
+    t = np.linspace(0.0, 20.0, 41)
+    kw = dict(radius=A0, probe_radius=RP, C=C, branches=[(2.0, 3.0)])
+    F = np.asarray(ind.force(t, **kw, displacement=1e-6, ramp_time=1.0))
+    th = np.array([0.0, 1.0, 20.0])
+    G = np.asarray(ind.force(t, **kw, displacement=(th, np.array([0.0, 1e-6, 1e-6]))))
+    assert np.max(np.abs(F - G)) < 1e-7 * np.max(F)
+
+
+def test_gradients_against_finite_differences():
+    t = np.array([0.5, 1.0, 4.0])
+
+    def total(p):
+        c, beta, tau, rp = p
+        return ind.force(
+            t, radius=A0, probe_radius=rp, C=c, branches=[(beta, tau)], displacement=1e-6, ramp_time=1.0
+        ).sum()
+
+    p0 = np.array([C, 1.2, 2.0, RP])
+    g = np.asarray(jax.grad(total)(p0))
+    for i in range(4):
+        h = 1e-6 * p0[i]
+        e = np.zeros(4)
+        e[i] = h
+        fd = (float(total(p0 + e)) - float(total(p0 - e))) / (2 * h)
+        assert g[i] == pytest.approx(fd, rel=1e-6)
+
+
+def test_vmap_and_jit():
+    t = np.linspace(0, 5, 11)
+    f = jax.jit(
+        jax.vmap(
+            lambda c: ind.force(
+                t, radius=A0, probe_radius=RP, C=c, branches=[(1.0, 1.0)], displacement=1e-6, ramp_time=1.0
+            )
+        )
+    )
+    out = np.asarray(f(np.array([100.0, 200.0])))
+    assert out.shape == (2, 11) and np.allclose(out[1], 2 * out[0], rtol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "words"),
+    [
+        (dict(probe_radius=-1e-6), "probe_radius"),
+        (dict(radius=0.0), "radius (of the indented ball"),
+        (dict(C=-1.0), "C (the Fung stiffness"),
+        (dict(displacement=1e-3), "effective radius"),
+        (dict(displacement=(np.array([0.0, 1.0]), np.array([1e-7, 1e-6]))), "first contact"),
+        (dict(displacement=(np.array([0.0, 1.0]), np.array([0.0, -1e-6]))), "must not be negative"),
+        (dict(ramp_time=None), "ramp_time"),
+    ],
+)
+def test_bad_inputs_name_quantity_and_unit(kwargs, words):
+    kw = dict(radius=A0, probe_radius=RP, C=C, displacement=1e-6, ramp_time=1.0)
+    kw.update(kwargs)
+    with pytest.raises(ValueError, match=words.replace("(", r"\(")):
+        ind.force(np.array([0.5]), **kw)
