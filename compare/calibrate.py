@@ -41,7 +41,6 @@ __all__ = [
     "write",
     "load",
     "reference_error",
-    "main",
     "DEFAULT_ALPHAS",
     "CHECK_ALPHAS",
     "DEFAULT_OUT",

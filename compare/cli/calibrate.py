@@ -5,16 +5,15 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
-from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from tissuemech.compare import calibrate
+from tissuemech.compare.cli.common import Command
 
-__all__ = ["add_parser", "run", "main"]
+__all__ = ["COMMAND", "add_parser", "run", "main"]
 
 DESCRIPTION = "Tabulate the plate scene's FE master curves f = F_eq/(C a0^2) and g = r_mid/a0 from static FE runs."
 
@@ -75,7 +74,7 @@ def _options(ap: argparse.ArgumentParser) -> argparse.ArgumentParser:
     return ap
 
 
-def _calibrate(a: argparse.Namespace, argv: Sequence[str], error: Any) -> int:
+def _execute(a: argparse.Namespace, error: Any) -> int:
     try:
         alphas = [float(v) for v in a.alphas.split(",")]
         chk = [float(v) for v in a.check_alphas.split(",")]
@@ -108,7 +107,7 @@ def _calibrate(a: argparse.Namespace, argv: Sequence[str], error: Any) -> int:
         interpolation="f = f_Hertz(x) h(sqrt(x), alpha), h natural cubic splines in s = sqrt(x) and alpha",
         sqrt_basis_degree=a.degree,
         sqrt_basis_max_residual_f=change,
-        command="tissuemech calibrate " + " ".join(argv),
+        command="tissuemech calibrate " + " ".join(a.words),
         radius_m=calibrate.RADIUS,
         C_Pa=calibrate.C_REF,
         kappa_Pa=calibrate.KAPPA,
@@ -134,28 +133,10 @@ def _calibrate(a: argparse.Namespace, argv: Sequence[str], error: Any) -> int:
     return 0
 
 
-def add_parser(sub: Any) -> argparse.ArgumentParser:
-    """Register ``calibrate`` on an argparse subparsers object."""
-    return _options(sub.add_parser("calibrate", help="regenerate the FE master curves of the reduced spheroid",
-                                   description=DESCRIPTION))  # fmt: skip
-
-
-def run(args: argparse.Namespace) -> int:
-    """``tissuemech calibrate [options]``."""
-    words = sys.argv[sys.argv.index("calibrate") + 1 :] if "calibrate" in sys.argv else []
-    return _calibrate(args, words, _refuse)
-
-
-def _refuse(message: str) -> None:
-    raise ValueError(message)  # tissuemech's main prints it as one line, exit code 2
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """``tissuemech calibrate`` (also ``python -m tissuemech.compare.calibrate``): tabulate F_eq and r_mid."""
-    words = list(sys.argv[1:] if argv is None else argv)
-    ap = _options(argparse.ArgumentParser(prog="tissuemech calibrate", description=DESCRIPTION))
-    return _calibrate(ap.parse_args(words), words, ap.error)
-
+COMMAND = Command(
+    "calibrate", "regenerate the FE master curves of the reduced spheroid", DESCRIPTION, _options, _execute
+)
+add_parser, run, main = COMMAND.add_parser, COMMAND.run, COMMAND.main
 
 if __name__ == "__main__":
     raise SystemExit(main())

@@ -4,16 +4,15 @@ the work is done by :mod:`tissuemech.compare.studies.checks`."""
 from __future__ import annotations
 
 import argparse
-import sys
-from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
 
 import tissuemech.compare.studies.checks as lib
+from tissuemech.compare.cli.common import Command
 
-__all__ = ["add_parser", "run", "main"]
+__all__ = ["COMMAND", "add_parser", "run", "main"]
 
 DESCRIPTION = (lib.__doc__ or "").strip().split("\n")[0]
 
@@ -108,31 +107,14 @@ def _execute(a: argparse.Namespace, error: Any) -> int:
     return 0
 
 
-def _refuse(message: str) -> None:
-    raise ValueError(message)  # tissuemech's main prints it as one line, exit code 2
-
-
-def add_parser(sub: Any) -> argparse.ArgumentParser:
-    """Register ``checks`` on an argparse subparsers object."""
-    return _options(
-        sub.add_parser(
-            "checks",
-            help="reduced-vs-FE tables: blastula stretch, creep, spheroid stress history, Hertz vs FE",
-            description=DESCRIPTION,
-        )
-    )
-
-
-def run(args: argparse.Namespace) -> int:
-    """``tissuemech checks [options]``."""
-    return _execute(args, _refuse)
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """``tissuemech checks`` as a function (also ``python -m tissuemech.compare.checks``)."""
-    ap = _options(argparse.ArgumentParser(prog="tissuemech checks", description=DESCRIPTION))
-    return _execute(ap.parse_args(list(sys.argv[1:] if argv is None else argv)), ap.error)
-
+COMMAND = Command(
+    "checks",
+    "reduced-vs-FE tables: blastula stretch, creep, spheroid stress history, Hertz vs FE",
+    DESCRIPTION,
+    _options,
+    _execute,
+)
+add_parser, run, main = COMMAND.add_parser, COMMAND.run, COMMAND.main
 
 if __name__ == "__main__":
     raise SystemExit(main())

@@ -4,12 +4,50 @@ from __future__ import annotations
 
 import argparse
 import math
-from collections.abc import Callable
+import sys
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 
 class CLIError(Exception):
     """A user-facing error: printed as one line, exit code 2."""
+
+
+def refuse(message: str) -> None:
+    """Report a bad combination of options found after parsing (``tissuemech``'s main prints it as one line)."""
+    raise CLIError(message)
+
+
+@dataclass(frozen=True)
+class Command:
+    """A subcommand written once: its name, help line, ``options(parser)`` (adds the arguments, returns the
+    parser) and ``execute(args, error)`` (does the work; ``error(message)`` reports a bad option, and
+    ``args.words`` holds the command's own words for a provenance line). It gives the module's
+    ``add_parser(sub)``, ``run(args)`` and a stand-alone ``main(argv)`` (``python -m ...``)."""
+
+    name: str
+    help: str
+    description: str
+    options: Callable[[argparse.ArgumentParser], argparse.ArgumentParser]
+    execute: Callable[[argparse.Namespace, Callable[[str], None]], int]
+
+    def add_parser(self, sub: Any) -> argparse.ArgumentParser:
+        """Register the subcommand on an argparse subparsers object."""
+        return self.options(sub.add_parser(self.name, help=self.help, description=self.description))
+
+    def run(self, args: argparse.Namespace) -> int:
+        """Run it from ``tissuemech NAME ...``."""
+        args.words = sys.argv[sys.argv.index(self.name) + 1 :] if self.name in sys.argv else []
+        return self.execute(args, refuse)
+
+    def main(self, argv: Sequence[str] | None = None) -> int:
+        """Run it stand-alone (``python -m``, or from Python with a list of words)."""
+        words = list(sys.argv[1:] if argv is None else argv)
+        ap = self.options(argparse.ArgumentParser(prog=f"tissuemech {self.name}", description=self.description))
+        args = ap.parse_args(words)
+        args.words = words
+        return self.execute(args, ap.error)
 
 
 def positive(kind: type = float) -> Callable[[str], Any]:

@@ -4,14 +4,13 @@ README against them (the work is done by :mod:`tissuemech.compare.report.readme_
 from __future__ import annotations
 
 import argparse
-import sys
-from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import tissuemech.compare.report.readme_tables as lib
+from tissuemech.compare.cli.common import Command
 
-__all__ = ["add_parser", "run", "main"]
+__all__ = ["COMMAND", "add_parser", "run", "main"]
 
 DESCRIPTION = (lib.__doc__ or "").strip().split("\n")[0]
 
@@ -44,31 +43,10 @@ def _execute(a: argparse.Namespace, error: Any) -> int:
     return 0
 
 
-def _refuse(message: str) -> None:
-    raise ValueError(message)  # tissuemech's main prints it as one line, exit code 2
-
-
-def add_parser(sub: Any) -> argparse.ArgumentParser:
-    """Register ``readme-tables`` on an argparse subparsers object."""
-    return _options(
-        sub.add_parser(
-            "readme-tables",
-            help="print the README's result tables from the commands that make them (or check a README against them)",
-            description=DESCRIPTION,
-        )
-    )
-
-
-def run(args: argparse.Namespace) -> int:
-    """``tissuemech readme-tables [options]``."""
-    return _execute(args, _refuse)
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """``tissuemech readme-tables`` as a function (also ``python -m tissuemech.compare.readme_tables``)."""
-    ap = _options(argparse.ArgumentParser(prog="tissuemech readme-tables", description=DESCRIPTION))
-    return _execute(ap.parse_args(list(sys.argv[1:] if argv is None else argv)), ap.error)
-
+COMMAND = Command(
+    "readme-tables", "print the README's result tables (or check a page against them)", DESCRIPTION, _options, _execute
+)
+add_parser, run, main = COMMAND.add_parser, COMMAND.run, COMMAND.main
 
 if __name__ == "__main__":
     raise SystemExit(main())

@@ -32,7 +32,7 @@ import numpy as np
 
 from tissuemech.compare import cases
 
-__all__ = ["BLOCKS", "render", "blocks_in", "check", "main"]
+__all__ = ["BLOCKS", "render", "blocks_in", "check"]
 
 DETERMINISTIC = ("hertz", "blastula", "spheroid")
 BLOCKS = (*DETERMINISTIC, "timings")

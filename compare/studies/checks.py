@@ -27,7 +27,7 @@ import pandas as pd
 from tissuemech.compare import cases
 from tissuemech.compare.cases import spheroid_keywords
 
-__all__ = ["blastula", "blastula_creep", "spheroid", "hertz_table", "fit_demo", "SPHEROID_CASES", "CREEP_CASES", "main"]
+__all__ = ["blastula", "blastula_creep", "spheroid", "hertz_table", "fit_demo", "SPHEROID_CASES", "CREEP_CASES"]
 
 UM = cases.UM
 A_BLASTULA = cases.BLASTULA_INNER_RADIUS
