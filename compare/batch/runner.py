@@ -72,15 +72,18 @@ def run(
     points     dicts of keyword arguments (SI units).
     executor   None: 2 local processes; "serial"; a concurrent.futures.Executor; a dask Client.
     store      directory for ``<key>.npz`` results; points already there are not recomputed (resume).
-               Corrupt files are recomputed (with a ``StoreWarning``); points claimed by a concurrent
-               run into the same store are waited for, not recomputed.
+               A stored file is used only if it is intact and the result of this function (name and source),
+               point and tissuemech version; others (damaged, or copied from another point) are moved aside and
+               recomputed (with a ``StoreWarning`` naming the file); points claimed by a concurrent run into the
+               same store are waited for, not recomputed (logged: which point, which process holds it).
     progress   show a tqdm progress bar.
     poll       seconds between looks at points another run is computing.
     stale_after  seconds after which a lock of a process on another host counts as abandoned (locks of
                dead processes on this host are taken over at once).
     Failed points are collected; at the end a :class:`BatchError` names them (finished points are
     stored, so a rerun continues), or with ``raise_on_error=False`` their entries are None.
-    Raises :class:`StoreError` before computing anything if the store cannot be written.
+    Raises :class:`StoreError` before computing anything if the store cannot be written, and (naming the
+    store and the file) when a stored file cannot be read or a result cannot be written (full disk).
     """
     if not callable(function):
         raise ValueError(f"function must be a callable of keyword arguments; got {function!r}")
