@@ -40,11 +40,12 @@ from tissuemech.compare.batch.store import (
     save,
 )
 
-__all__ = ["run", "BatchError", "WAIT_REPORT"]
+__all__ = ["run", "BatchError", "WAIT_REPORT", "WAIT_FIRST"]
 
 log = logging.getLogger(__name__)
 
-WAIT_REPORT = 60.0  # s between log messages while waiting for points another run computes
+WAIT_REPORT = 60.0  # s between warnings while waiting for points another run computes (the first after WAIT_FIRST)
+WAIT_FIRST = 10.0
 
 
 class BatchError(RuntimeError):
@@ -123,7 +124,7 @@ def run(
     try:
         waiting: list[int] = []  # points another run holds: looked at again later
         announced: set[str] = set()  # keys whose wait was logged
-        next_report = time.monotonic() + WAIT_REPORT
+        next_report = time.monotonic() + WAIT_FIRST
         futures: dict[Any, int] = {}
         queue = list(pending)
 
