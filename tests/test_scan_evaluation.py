@@ -66,50 +66,6 @@ def test_spheroid_scan_matches_direct_model():
     assert np.allclose(fast["sigma_peak [Pa]"] / fast["sigma_end [Pa]"], 1 + fast["beta [-]"], rtol=2e-2)
 
 
-def _fake_fe(*, radius, C, alpha, beta, tau, displacement, ramp_time, end_time):
-    t = scan.default_times(ramp_time, end_time)
-    s = np.asarray(
-        fake_nominal_stress(
-            t,
-            radius=radius,
-            C=C * 1.01,
-            alpha=alpha,
-            branches=[(beta, tau)],
-            displacement=displacement,
-            ramp_time=ramp_time,
-        )
-    )
-    return {"time": t, "nominal_stress": s}
-
-
-def test_spheroid_fe_checks_columns(tmp_path):
-    df = scan.spheroid(
-        C=(100.0, 300.0),
-        alpha=(0.0, 0.3),
-        n=20,
-        design_method="lhs",
-        model=fake_nominal_stress,
-        fe_checks=3,
-        fe_function=_fake_fe,
-        fe_executor="serial",
-        fe_store=str(tmp_path),
-    )
-    checked = df["deviation [-]"].notna()
-    assert checked.sum() == 3
-    # the fake FE is 1 % stiffer: deviation = 1 - 1/1.01 at every checked point
-    assert np.allclose(df.loc[checked, "deviation [-]"], 1 - 1 / 1.01, rtol=1e-9)
-    assert len(list(tmp_path.glob("*.npz"))) == 3
-
-
-def test_spread_indices_distinct_and_spread():
-    pts = scan.design({"x": (0.0, 1.0), "y": (0.0, 1.0)}, n=11, method="grid")
-    idx = scan.spread_indices(pts, 5)
-    assert len(set(idx)) == 5
-    chosen = pts.iloc[idx].to_numpy()
-    d = np.min([np.linalg.norm(a - b) for i, a in enumerate(chosen) for b in chosen[i + 1 :]])
-    assert d > 0.4
-
-
 def test_blastula_scan_exact_and_bursts():
     from tissuemech.reduced import blastula as red
 
@@ -161,17 +117,6 @@ def test_spheroid_scan_with_reduced_model():
             )
         )
         assert np.allclose(row["sigma [Pa]"], s, rtol=1e-8)  # jit (Kvaerno5) vs eager (Tsit5), both at rtol 1e-10
-
-
-def test_blastula_scan_fe_spot_checks_agree():
-    """FE spot-checks (fem.blastula, default mesh, kappa = 2.2 GPa) against the exact shell: < 1e-5."""
-    df = scan.blastula(
-        alpha=[0.2], outer_radius=[60e-6, 75e-6], pressure=(10.0, 60.0), n=4, fe_checks=2, fe_executor="serial"
-    )
-    checked = df["deviation [-]"].notna()
-    assert checked.sum() == 2
-    assert (df.loc[checked, "deviation [-]"] < 1e-5).all()
-    assert np.allclose(df.loc[checked, "fe_inner_stretch [-]"], df.loc[checked, "inner_stretch [-]"], rtol=1e-5)
 
 
 def test_user_design_points():

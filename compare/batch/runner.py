@@ -40,11 +40,12 @@ from tissuemech.compare.batch.store import (
     save,
 )
 
-__all__ = ["run", "BatchError", "WAIT_REPORT"]
+__all__ = ["run", "BatchError", "WAIT_REPORT", "WAIT_FIRST"]
 
 log = logging.getLogger(__name__)
 
-WAIT_REPORT = 60.0  # s between log messages while waiting for points another run computes
+WAIT_REPORT = 60.0  # s between warnings while waiting for points another run computes (the first after WAIT_FIRST)
+WAIT_FIRST = 10.0
 
 
 class BatchError(RuntimeError):
@@ -72,15 +73,18 @@ def run(
     points     dicts of keyword arguments (SI units).
     executor   None: 2 local processes; "serial"; a concurrent.futures.Executor; a dask Client.
     store      directory for ``<key>.npz`` results; points already there are not recomputed (resume).
-               Corrupt files are recomputed (with a ``StoreWarning``); points claimed by a concurrent
-               run into the same store are waited for, not recomputed.
+               A stored file is used only if it is intact and the result of this function (name and source),
+               point and tissuemech version; others (damaged, or copied from another point) are moved aside and
+               recomputed (with a ``StoreWarning`` naming the file); points claimed by a concurrent run into the
+               same store are waited for, not recomputed (logged: which point, which process holds it).
     progress   show a tqdm progress bar.
     poll       seconds between looks at points another run is computing.
     stale_after  seconds after which a lock of a process on another host counts as abandoned (locks of
                dead processes on this host are taken over at once).
     Failed points are collected; at the end a :class:`BatchError` names them (finished points are
     stored, so a rerun continues), or with ``raise_on_error=False`` their entries are None.
-    Raises :class:`StoreError` before computing anything if the store cannot be written.
+    Raises :class:`StoreError` before computing anything if the store cannot be written, and (naming the
+    store and the file) when a stored file cannot be read or a result cannot be written (full disk).
     """
     if not callable(function):
         raise ValueError(f"function must be a callable of keyword arguments; got {function!r}")
@@ -120,7 +124,7 @@ def run(
     try:
         waiting: list[int] = []  # points another run holds: looked at again later
         announced: set[str] = set()  # keys whose wait was logged
-        next_report = time.monotonic() + WAIT_REPORT
+        next_report = time.monotonic() + WAIT_FIRST
         futures: dict[Any, int] = {}
         queue = list(pending)
 

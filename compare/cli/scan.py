@@ -293,6 +293,18 @@ def _fe_checks(table: pd.DataFrame, k: int, kw: dict, args: Any, out: Path) -> i
             executor.shutdown(wait=True, cancel_futures=True)
 
 
+def _write(path: Path, write: Any) -> None:
+    """``write(tmp)`` to a temporary file next to ``path``, then renamed to ``path``: a failed write (full disk)
+    leaves no truncated file. Raises ScanInputError naming the file."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.part")
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise ScanInputError(f"cannot write {path}: {exc.strerror or exc}") from None
+
+
 def _map_axes(scene: str, varied: list[str], text: str | None, names: Sequence[str]) -> tuple[str, str] | None:
     if text:
         parts = [s.strip() for s in text.split(",")]
@@ -596,14 +608,14 @@ def _run(args: argparse.Namespace, scene: str) -> int:
     t2 = time.perf_counter()
     curves_col = "sigma [Pa]"
     flat = table.drop(columns=[curves_col]) if curves_col in table.columns else table
-    flat.to_csv(out / "table.csv", index=False)
+    _write(out / "table.csv", lambda f: flat.to_csv(f, index=False))
     files.append(("table.csv", "one row per design point: parameters and summaries (SI units in the column names)"))
     save_curves = scene == "spheroid" and args.save_curves
     nc_table = table if save_curves else flat
     if not save_curves:
         nc_table = flat.copy()
         nc_table.attrs = {}
-    scan.to_netcdf(nc_table, out / "scan.nc")
+    _write(out / "scan.nc", lambda f: scan.to_netcdf(nc_table, f))
     files.append(
         (
             "scan.nc",
@@ -615,7 +627,7 @@ def _run(args: argparse.Namespace, scene: str) -> int:
 
     t5 = time.perf_counter()
     for name, fig, description in figures:
-        fig.savefig(out / name, dpi=120)
+        _write(out / name, lambda f, fig=fig: fig.savefig(f, dpi=120, format="png"))
         files.append((name, description))
     plt.close("all")
     timings["figures"] += time.perf_counter() - t5
@@ -637,7 +649,7 @@ def _run(args: argparse.Namespace, scene: str) -> int:
         files=files,
         notes=notes,
     )
-    (out / "summary.md").write_text(md)
+    _write(out / "summary.md", lambda f: f.write_text(md))
     print(f"wrote {', '.join(f for f, _ in files)} to {out}{os.sep} (total {timings['total']:.2f} s)")
     return 0
 

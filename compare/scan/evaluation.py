@@ -12,7 +12,7 @@ Parameters named in ``log`` are sampled uniformly in their logarithm.
 The reduced model is evaluated in ``jax.vmap``-ed, jit-compiled batches of ``batch_size`` points.
 The returned DataFrame has one row per point and units in the column names (``C [Pa]``,
 ``sigma_peak [Pa]``, ``inner_stretch [-]``...). With ``fe_checks=k`` the FE model is run (through
-``compare.batch``) at ``k`` of the points, chosen spread over the design; its outputs are added as
+``compare.scan.spot_check`` and ``compare.batch``) at ``k`` of the points, chosen spread over the design; its outputs are added as
 ``fe_...`` columns and ``deviation [-]`` (the largest relative difference between the reduced and
 FE outputs at that point; NaN where no FE run was made), so each scan says how far it can be trusted.
 """
