@@ -538,10 +538,7 @@ def _run(args: argparse.Namespace, scene: str) -> int:
             )
 
     t3 = time.perf_counter()
-    import matplotlib
-
-    matplotlib.use("Agg")  # the command writes files; it never opens a window
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # on the Agg backend: tissuemech's main chose it (files only, no window)
 
     files: list[tuple[str, str]] = []
     figures: list[tuple[str, Any, str]] = []  # (file, figure, description), written at the end
