@@ -1,7 +1,7 @@
 """Time convergence of the FE spheroid with fast Maxwell branches (issue 35).
 
 ``python -m tissuemech.compare.bench.fem_time [--level 1] [--ref-level 2] [--n 6,12,24,48,96] [--history
-points,transfer] [--quick]`` prints, for the fast two-branch case (a0 = 500 um, C = 150 Pa, alpha = 0.2,
+points,transfer,chain] [--quick]`` prints, for the fast two-branch case (a0 = 500 um, C = 150 Pa, alpha = 0.2,
 branches (beta, tau) = (0.8, 0.05 s), (0.3, 20 s), a 100 um approach ramped in 0.2 s and held to 200 s), the
 plate force F at t = 0.05, 0.1, 0.15, 0.2, 1, 10 s of ``fem.spheroid.compress`` on a contact-edge-fitted level
 for n_ramp ramp steps, against a time-converged reference: node-by-node contact on the fixed mesh of
@@ -12,6 +12,14 @@ the relative error F / F_ref - 1 per output time and n_ramp, the observed order 
 reference differs from the fitted level by its own spatial error (the edge quantisation of the fixed mesh: on
 level 1 about 1.2e-3 of F, on level 2 about 2e-4 against level 1's fitted static force at 100 um).
 ``--quick``: level 0 against a level-1 nodal reference, n_ramp = 6, 12, 24, 48.
+
+Measured (2026-12-03, shared 2-core box, 14 min; F / F_ref - 1 on level 1 for n_ramp = 6, 12, 24, 48, 96):
+t = 0.2 s: "transfer" -1.53e-3, -7.6e-4, -5.1e-4, +3.1e-4, +4.7e-3 (drifts as the ramp is refined);
+"points" -1.56e-3, -8.7e-4, -6.5e-4, -6.9e-4, -5.8e-4 (no drift, scatter ~1e-4); "chain" (6, 24, 96 only)
+-1.37e-3, -3.5e-4, +2.0e-4. t = 1 s: transfer -2.3e-4 ... -2.0e-4; points -2.3e-4 ... -3.1e-4 (scatter
+1e-4); chain -1.7e-4, -1.3e-4, +2.2e-4. t = 0.05 s: all -1.0e-2 (6 steps) to -1.2e-3 ... -1.4e-3 (96 steps):
+there the fitted level's spatial error against the level-2 nodal reference dominates. The reference itself:
+observed orders 1.4-2.1, its 96-step run within 6e-5 of the extrapolation.
 """
 
 from __future__ import annotations
@@ -86,7 +94,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--level", type=int, default=1, help="the fitted level (default 1)")
     ap.add_argument("--ref-level", type=int, default=2, help="the nodal reference's mesh level (default 2)")
     ap.add_argument("--n", default="6,12,24,48,96", help="ramp step counts (comma-separated)")
-    ap.add_argument("--history", default="points,transfer", help="history treatments to measure")
+    ap.add_argument("--history", default="points,transfer,chain", help="history treatments to measure")
     ap.add_argument("--quick", action="store_true", help="level 0 against a level-1 reference, n = 6..48")
     a = ap.parse_args(argv)
     level, ref_level, steps = a.level, a.ref_level, [int(v) for v in a.n.split(",")]
