@@ -165,6 +165,11 @@ class Assembler:
         self._f_last: tuple[np.ndarray, np.ndarray] | None = None  # (u, F(u)): see f_at
 
     # ---- kinematics at quadrature points ------------------------------------------------
+    @property
+    def pattern(self):
+        """The element sparsity pattern of the tangent (shared by assemblers whose meshes have one connectivity)."""
+        return self._pattern
+
     def f_at(self, u: np.ndarray) -> np.ndarray:
         """5-comp deformation gradient (ne, nq, 5) for the global displacement u (the displacement dofs or
         the full vector (u, q)), by one stacked matmul per element; READ-ONLY.
@@ -351,7 +356,7 @@ class Assembler:
             self._edge_cache[key] = np.concatenate([self._pattern.inv, self._pattern.positions(rows, cols)])
         return self._edge_cache[key]
 
-    def _internal_reference(
+    def internal_reference(
         self, u: np.ndarray, mat: Material, extra_S=None, iso_scale: float = 1.0, tangent: bool = True
     ):
         """The straightforward assembly (``stress`` + np.block + a fresh COO->CSR matrix): the reference that

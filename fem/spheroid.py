@@ -266,10 +266,13 @@ def compress(
             smoothly under refinement (levels 1..4 are self-similar, h ~ 1/n_core). Time runs do the same
             at every step (the step's algorithmic viscoelastic stress in the edge condition); the Maxwell
             history (Q_m, S_iso per Gauss point) is interpolated onto each new mesh's Gauss points in the
-            reference configuration, so it stays tied to material points; while the plate is held the
-            edge and the mesh stay put. Beyond the fitted range (edge past 50.6 deg from the pole, about
-            delta/(2 a0) = 0.49) the remaining states / steps use node-by-node contact on the last fitted
-            mesh (a logged warning; ``parameters["contact"]`` says "fitted" or "nodal" per step).
+            reference configuration (``FittedEdge(history="transfer")``, the default: its error accumulates with
+            the number of ramp steps, so with a branch as fast as the ramp refining the ramp makes the force
+            worse; ``FittedEdge(history="points")`` keeps it on fixed material points instead; measured by
+            ``python -m tissuemech.compare.bench.fem_time``); while the plate is held the edge and the mesh
+            stay put. Beyond the fitted range (edge past 50.6 deg from the pole, about delta/(2 a0) = 0.49)
+            the remaining states / steps use node-by-node contact on the last fitted mesh (a logged warning;
+            ``parameters["contact"]`` says "fitted" or "nodal" per step).
             Or an ``AxiMesh`` from ``fem.mesh.ball_section`` built with length_scale = radius: a fixed
             mesh with node-by-node contact (its force carries the edge quantisation, ~0.2 %).
         contact: the contact treatment: "fitted" (``FittedEdge()``, the default on a level: the fitted meshes
@@ -404,8 +407,11 @@ def compress(
     if fit is not None:  # every state / step on its own fitted mesh
         if static:
             steps = static_fitted(fit, dscaled, times, load_of)
-        else:  # the Maxwell history interpolated onto each step's mesh
-            steps = timed_fitted(fit, beta, tau, dscaled, times, load_of, too_large)
+        else:  # the Maxwell history carried between the steps' meshes (FittedEdge.history)
+            assert isinstance(treat, FittedEdge)  # fit is made for a FittedEdge only
+            steps = timed_fitted(
+                fit, beta, tau, dscaled, times, load_of, too_large, history=treat.history, remesh=treat.remesh
+            )
     else:
         m0 = make_mesh(mesh, a0)
         prob = BallProblem(m0, mat, beta, tau, rtol)

@@ -1,0 +1,121 @@
+"""Time convergence of the FE spheroid with fast Maxwell branches (issue 35).
+
+``python -m tissuemech.compare.bench.fem_time [--level 1] [--ref-level 2] [--n 6,12,24,48,96] [--history
+points,transfer,chain] [--quick]`` prints, for the fast two-branch case (a0 = 500 um, C = 150 Pa, alpha = 0.2,
+branches (beta, tau) = (0.8, 0.05 s), (0.3, 20 s), a 100 um approach ramped in 0.2 s and held to 200 s), the
+plate force F at t = 0.05, 0.1, 0.15, 0.2, 1, 10 s of ``fem.spheroid.compress`` on a contact-edge-fitted level
+for n_ramp ramp steps, against a time-converged reference: node-by-node contact on the fixed mesh of
+``--ref-level`` (``contact="nodal"``; it converges at 2nd order in the step), Richardson-extrapolated from
+n_ramp = 24, 48, 96 with the observed order. Per history treatment (``fem.contact.FittedEdge(history=...)``):
+the relative error F / F_ref - 1 per output time and n_ramp, the observed order of the fitted runs themselves
+(log2 of the ratio of successive differences, from the three finest), and the wall time per run. The nodal
+reference differs from the fitted level by its own spatial error (the edge quantisation of the fixed mesh: on
+level 1 about 1.2e-3 of F, on level 2 about 2e-4 against level 1's fitted static force at 100 um).
+``--quick``: level 0 against a level-1 nodal reference, n_ramp = 6, 12, 24, 48.
+
+Measured (2026-12-03, shared 2-core box, 14 min; F / F_ref - 1 on level 1 for n_ramp = 6, 12, 24, 48, 96):
+t = 0.2 s: "transfer" -1.53e-3, -7.6e-4, -5.1e-4, +3.1e-4, +4.7e-3 (drifts as the ramp is refined);
+"points" -1.56e-3, -8.7e-4, -6.5e-4, -6.9e-4, -5.8e-4 (no drift, scatter ~1e-4); "chain" (6, 24, 96 only)
+-1.37e-3, -3.5e-4, +2.0e-4. t = 1 s: transfer -2.3e-4 ... -2.0e-4; points -2.3e-4 ... -3.1e-4 (scatter
+1e-4); chain -1.7e-4, -1.3e-4, +2.2e-4. t = 0.05 s: all -1.0e-2 (6 steps) to -1.2e-3 ... -1.4e-3 (96 steps):
+there the fitted level's spatial error against the level-2 nodal reference dominates. The reference itself:
+observed orders 1.4-2.1, its 96-step run within 6e-5 of the extrapolation.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from collections.abc import Sequence
+
+import numpy as np
+
+from tissuemech.fem.contact import FittedEdge
+from tissuemech.fem.spheroid import compress
+
+CASE = dict(
+    radius=500e-6,
+    C=150.0,
+    alpha=0.2,
+    branches=[(0.8, 0.05), (0.3, 20.0)],
+    displacement=100e-6,
+    ramp_time=0.2,
+    end_time=200.0,
+)
+TIMES = (0.05, 0.1, 0.15, 0.2, 1.0, 10.0)
+REFERENCE_STEPS = (24, 48, 96)
+
+
+def forces(level: int, n_ramp: int, contact, times: Sequence[float] = TIMES) -> tuple[np.ndarray, float]:
+    """(F at ``times`` [N], wall time [s]) of the fast two-branch case on ``level`` with ``n_ramp`` ramp steps."""
+    t0 = time.perf_counter()
+    r = compress(**CASE, mesh=level, contact=contact, n_ramp=n_ramp, field_times=list(times))
+    F = np.array([r.force[int(np.argmin(np.abs(r.time - t)))] for t in times])
+    return F, time.perf_counter() - t0
+
+
+def observed_order(F1: np.ndarray, F2: np.ndarray, F4: np.ndarray) -> np.ndarray:
+    """Observed order per output time from three runs with n, 2n, 4n steps: log2 |F2 - F1| / |F4 - F2|."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.log2(np.abs(F2 - F1) / np.abs(F4 - F2))
+
+
+def reference(level: int = 2, steps: Sequence[int] = REFERENCE_STEPS) -> tuple[np.ndarray, np.ndarray, dict]:
+    """(F_ref, observed order p, {n: F}): the nodal fixed-mesh runs Richardson-extrapolated in the step,
+    F_ref = F_4n + (F_4n - F_2n) / (2^p - 1) with p the observed order of the three runs (clipped to [1, 3])."""
+    runs = {n: forces(level, n, "nodal")[0] for n in steps}
+    F1, F2, F4 = (runs[n] for n in steps[-3:])
+    p = observed_order(F1, F2, F4)
+    q = np.clip(np.nan_to_num(p, nan=2.0), 1.0, 3.0)
+    return F4 + (F4 - F2) / (2.0**q - 1.0), p, runs
+
+
+def table(level: int, steps: Sequence[int], history: str, F_ref: np.ndarray) -> dict:
+    """Errors F / F_ref - 1 (rows n_ramp, columns TIMES), the fitted runs' observed order and wall times."""
+    F, wall = {}, {}
+    for n in steps:
+        F[n], wall[n] = forces(level, n, FittedEdge(history=history))
+    err = {n: F[n] / F_ref - 1.0 for n in steps}
+    p = observed_order(*(F[n] for n in steps[-3:])) if len(steps) >= 3 else np.full(len(TIMES), np.nan)
+    return dict(F=F, error=err, order=p, wall=wall)
+
+
+def _print_table(title: str, res: dict) -> None:
+    print(f"\n{title}")
+    print("n_ramp | " + " | ".join(f"t = {t:g} s" for t in TIMES) + " | wall [s]")
+    for n, e in res["error"].items():
+        print(f"{n:6d} | " + " | ".join(f"{v:+.2e}" for v in e) + f" | {res['wall'][n]:.1f}")
+    print("order  | " + " | ".join(f"{v:.2f}" for v in res["order"]) + " |   (observed, three finest n_ramp)")
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m tissuemech.compare.bench.fem_time", description=__doc__)
+    ap.add_argument("--level", type=int, default=1, help="the fitted level (default 1)")
+    ap.add_argument("--ref-level", type=int, default=2, help="the nodal reference's mesh level (default 2)")
+    ap.add_argument("--n", default="6,12,24,48,96", help="ramp step counts (comma-separated)")
+    ap.add_argument("--history", default="points,transfer,chain", help="history treatments to measure")
+    ap.add_argument("--quick", action="store_true", help="level 0 against a level-1 reference, n = 6..48")
+    a = ap.parse_args(argv)
+    level, ref_level, steps = a.level, a.ref_level, [int(v) for v in a.n.split(",")]
+    if a.quick:
+        level, ref_level, steps = 0, 1, [6, 12, 24, 48]
+    t0 = time.perf_counter()
+    F_ref, p_ref, runs = reference(ref_level)
+    print(
+        f"# FE time convergence, fast two-branch case {CASE['branches']}, {CASE['displacement'] * 1e6:g} um in "
+        f"{CASE['ramp_time']} s (fitted level {level}; reference: nodal contact on level {ref_level}, n_ramp = "
+        f"{', '.join(map(str, REFERENCE_STEPS))}, Richardson; {time.perf_counter() - t0:.0f} s)"
+    )
+    print("F_ref [N]     | " + " | ".join(f"{v:.6e}" for v in F_ref))
+    print("ref order     | " + " | ".join(f"{v:.2f}" for v in p_ref))
+    last = REFERENCE_STEPS[-1]
+    print(f"ref n={last} err | " + " | ".join(f"{v:+.1e}" for v in runs[last] / F_ref - 1.0))
+    for history in a.history.split(","):
+        res = table(level, steps, history, F_ref)
+        _print_table(f"history = {history!r}: F / F_ref - 1 on level {level}", res)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
