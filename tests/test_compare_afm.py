@@ -170,3 +170,17 @@ def test_real_curve_two_branches_beat_one(curves):
     assert half.params["tau"] == pytest.approx(one.params["tau"], rel=5e-3)
     assert half.params["C"] == pytest.approx(one.params["C"] * math.sqrt(rs / 25e-6), rel=5e-3)
     assert abs(math.log(half.params["tau"] / one.params["tau"])) < 0.1 * one.sd_log["tau"]
+
+
+@pytest.mark.slow
+def test_example_script(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    script = Path(__file__).resolve().parents[1] / "examples" / "afm_relaxation.py"
+    env = dict(os.environ, TISSUEMECH_EXAMPLES_FAST="1", TISSUEMECH_EXAMPLES_OUT=str(tmp_path))
+    proc = subprocess.run([sys.executable, str(script)], env=env, capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr
+    assert "two branches preferred by AIC on 3/3 curves" in proc.stdout
+    assert (tmp_path / "afm_relaxation.png").stat().st_size > 10_000
