@@ -150,8 +150,8 @@ def equilibrium_force(displacement: Any, *, radius: Any, probe_radius: Any, C: A
     if not is_traced(displacement, radius, probe_radius, C, alpha):
         _check_radii(radius, probe_radius)
         validate_material(C, alpha)
-        d = validate_finite("displacement (approach of the probe since contact)", displacement, "m")
-        _check_depth(d, radius, probe_radius)
+        dv = validate_finite("displacement (approach of the probe since contact)", displacement, "m")
+        _check_depth(dv, radius, probe_radius)
     d = jnp.maximum(jnp.asarray(displacement, dtype=jnp.float64), 0.0)
     rs = series_radius(radius, probe_radius)
     return HERTZ_PREFACTOR * jnp.asarray(C, dtype=jnp.float64) * jnp.sqrt(rs) * d * jnp.sqrt(d)
