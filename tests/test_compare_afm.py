@@ -184,3 +184,20 @@ def test_example_script(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert "two branches preferred by AIC on 3/3 curves" in proc.stdout
     assert (tmp_path / "afm_relaxation.png").stat().st_size > 10_000
+
+
+def test_recalibration_rescales_the_force(curves):
+    c = curves[0]
+    d = records.recalibrated(c, spring_constant=2 * c.spring_constant, sensitivity=0.5 * c.sensitivity)
+    assert np.allclose(d.force, c.force) and d.spring_constant == 2 * c.spring_constant
+    e = records.recalibrated(c, spring_constant=3 * c.spring_constant)
+    assert np.allclose(e.force, 3 * c.force) and np.allclose(e.deflection, c.deflection)
+    with pytest.raises(ValueError, match="spring_constant"):
+        records.recalibrated(c, spring_constant=-1.0)
+
+
+def test_cli_one_line_errors(capsys):
+    from tissuemech.compare.cli import main
+
+    assert main(["afm", "no_such_file.csv", "--probe-radius-um", "25", "--radius-um", "40"]) == 2
+    assert "no such file" in capsys.readouterr().err
