@@ -49,13 +49,14 @@ from scipy.optimize import least_squares
 from scipy.stats import norm
 
 import tissuemech.reduced  # noqa: F401  (float64)
+from tissuemech.compare import fit as relaxation_fit
 from tissuemech.compare.afm.contact import Indentation, lag1
 from tissuemech.reduced import indentation as probe_model
 from tissuemech.reduced.validation import InputError, validate_int, validate_positive
 
 __all__ = ["CurveFit", "fit_curve", "resample", "runs_test", "hac_covariance", "parameter_names", "spread"]
 
-Z95 = 1.959963984540054
+Z95 = relaxation_fit.Z95  # two-sided 95 % normal quantile
 BETA_BOUNDS = (1e-6, 1e3)
 TAU_BOUNDS = (1e-2, 1e4)  # s
 # the explicit Tsit5 at rtol = atol = 1e-6: 0.06 s per model and 0.05 s per Jacobian on the records of docs/afm.md
