@@ -49,8 +49,9 @@ Loading (``displacement``)
 * a number (m) with ``ramp_time`` (s): a linear ramp to it, then held (quadrature, ~1e-9 accurate);
 * a measured history ``(times, approaches)`` (s, m; 1-D, times strictly increasing from >= 0, approaches
   >= 0 and 0 at the first time, the first contact): piecewise linear between the samples and held after the
-  last one (diffrax, steps landing on every sample: ``rtol``/``atol``). Thin a long record first (a few
-  hundred knots: the cost grows with their number).
+  last one (diffrax at ``rtol``/``atol``; an eager call makes every sample a jump time of the solver; under
+  jit, where the samples are traced, give output times at the samples, as ``compare.afm.fit`` does, so the
+  steps land on the kinks). Thin a long record first (a few hundred knots: the cost grows with their number).
 
 Every function is jit / vmap / grad-able in float64 (parameters broadcast: output shape
 ``broadcast(params).shape + t.shape``); eager calls check their inputs (messages name the quantity and unit).
