@@ -49,8 +49,9 @@ Loading (``displacement``)
 * a number (m) with ``ramp_time`` (s): a linear ramp to it, then held (quadrature, ~1e-9 accurate);
 * a measured history ``(times, approaches)`` (s, m; 1-D, times strictly increasing from >= 0, approaches
   >= 0 and 0 at the first time, the first contact): piecewise linear between the samples and held after the
-  last one (diffrax, steps landing on every sample: ``rtol``/``atol``). Thin a long record first (a few
-  hundred knots: the cost grows with their number).
+  last one (diffrax at ``rtol``/``atol``; an eager call makes every sample a jump time of the solver; under
+  jit, where the samples are traced, give output times at the samples, as ``compare.afm.fit`` does, so the
+  steps land on the kinks). Thin a long record first (a few hundred knots: the cost grows with their number).
 
 Every function is jit / vmap / grad-able in float64 (parameters broadcast: output shape
 ``broadcast(params).shape + t.shape``); eager calls check their inputs (messages name the quantity and unit).
@@ -150,8 +151,8 @@ def equilibrium_force(displacement: Any, *, radius: Any, probe_radius: Any, C: A
     if not is_traced(displacement, radius, probe_radius, C, alpha):
         _check_radii(radius, probe_radius)
         validate_material(C, alpha)
-        d = validate_finite("displacement (approach of the probe since contact)", displacement, "m")
-        _check_depth(d, radius, probe_radius)
+        dv = validate_finite("displacement (approach of the probe since contact)", displacement, "m")
+        _check_depth(dv, radius, probe_radius)
     d = jnp.maximum(jnp.asarray(displacement, dtype=jnp.float64), 0.0)
     rs = series_radius(radius, probe_radius)
     return HERTZ_PREFACTOR * jnp.asarray(C, dtype=jnp.float64) * jnp.sqrt(rs) * d * jnp.sqrt(d)

@@ -2,6 +2,7 @@
 
 import math
 
+import diffrax
 import jax
 import numpy as np
 import pytest
@@ -11,6 +12,7 @@ from tissuemech.reduced import indentation as ind
 from tissuemech.reduced import spheroid
 
 A0, RP, C = 40e-6, 5e-6, 500.0
+TSIT5 = diffrax.Tsit5()  # the explicit solver compiles in half the time of the default Kvaerno5
 
 
 def test_two_contacts_in_series_closed_form():
@@ -62,7 +64,9 @@ def test_measured_history_linear_equilibrium_closed_form():
     th = np.concatenate([np.linspace(0, tr, 801), [tr + 20.0]])
     dh = D * np.minimum(th / tr, 1.0) ** (2 / 3)
     t = np.array([0.25, 0.5, 1.0, 2.0, 5.0])
-    F = np.asarray(ind.force(t, radius=A0, probe_radius=RP, C=C, branches=[(beta, tau)], displacement=(th, dh)))
+    F = np.asarray(
+        ind.force(t, radius=A0, probe_radius=RP, C=C, branches=[(beta, tau)], displacement=(th, dh), solver=TSIT5)
+    )
     Fm = float(ind.equilibrium_force(D, radius=A0, probe_radius=RP, C=C))
     rate = Fm / tr
     ramp = lambda s: rate * s + beta * tau * rate * (1 - np.exp(-s / tau))
@@ -70,12 +74,13 @@ def test_measured_history_linear_equilibrium_closed_form():
     assert np.allclose(F, ref, rtol=2e-4)
 
 
+@pytest.mark.slow
 def test_history_agrees_with_ramp_and_hold():
     t = np.linspace(0.0, 20.0, 41)
     kw = dict(radius=A0, probe_radius=RP, C=C, branches=[(2.0, 3.0)])
     F = np.asarray(ind.force(t, **kw, displacement=1e-6, ramp_time=1.0))
     th = np.array([0.0, 1.0, 20.0])
-    G = np.asarray(ind.force(t, **kw, displacement=(th, np.array([0.0, 1e-6, 1e-6]))))
+    G = np.asarray(ind.force(t, **kw, displacement=(th, np.array([0.0, 1e-6, 1e-6])), solver=TSIT5))
     assert np.max(np.abs(F - G)) < 1e-7 * np.max(F)
 
 
@@ -96,6 +101,35 @@ def test_gradients_against_finite_differences():
         e[i] = h
         fd = (float(total(p0 + e)) - float(total(p0 - e))) / (2 * h)
         assert g[i] == pytest.approx(fd, rel=1e-6)
+
+
+@pytest.mark.slow
+def test_history_jacobian_against_finite_differences():
+    # the fit's Jacobian: jacfwd (forward-mode diffrax sensitivities) through a measured history
+    th = np.array([0.0, 0.3, 0.7, 1.0, 4.0, 10.0])
+    dh = np.array([0.0, 0.2e-6, 0.6e-6, 1.0e-6, 1.05e-6, 1.1e-6])
+    t = np.array([0.5, 1.0, 2.0, 8.0])
+
+    def f(p):
+        c, beta, tau = p
+        return ind.force(
+            t,
+            radius=A0,
+            probe_radius=RP,
+            C=c,
+            branches=[(beta, tau)],
+            displacement=(th, dh),
+            adjoint="forward",
+            solver=TSIT5,
+        )
+
+    p0 = np.array([C, 1.2, 2.0])
+    J = np.asarray(jax.jacfwd(f)(p0))
+    for i in range(3):
+        e = np.zeros(3)
+        e[i] = 1e-5 * p0[i]
+        fd = (np.asarray(f(p0 + e)) - np.asarray(f(p0 - e))) / (2 * e[i])
+        assert np.allclose(J[:, i], fd, rtol=1e-5, atol=1e-8 * np.max(np.abs(fd)))
 
 
 def test_vmap_and_jit():

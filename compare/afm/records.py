@@ -33,7 +33,7 @@ import numpy as np
 
 from tissuemech.reduced.validation import InputError
 
-__all__ = ["Curve", "read_jpk", "read_csv", "write_csv", "JPK_SEGMENTS", "binned"]
+__all__ = ["Curve", "read_jpk", "read_csv", "write_csv", "JPK_SEGMENTS", "binned", "recalibrated"]
 
 JPK_SEGMENTS = ("pause", "approach", "hold", "retract")
 
@@ -300,4 +300,27 @@ def binned(curve: Curve, factors: dict[str, int]) -> Curve:
     t, h, f, s = (np.concatenate(v) for v in zip(*parts))
     return Curve(
         t, h, f, s, curve.spring_constant, curve.sensitivity, curve.segment_names, curve.name, dict(curve.metadata)
+    )
+
+
+def recalibrated(curve: Curve, *, spring_constant: float | None = None, sensitivity: float | None = None) -> Curve:
+    """A copy with another cantilever calibration: force = deflection voltage x sensitivity (m/V) x spring
+    constant (N/m), so the force is rescaled by k_new / k_old and s_new / s_old (the latter needs the curve's own
+    sensitivity). None keeps the file's value."""
+    f = curve.force.copy()
+    k, s = curve.spring_constant, curve.sensitivity
+    if spring_constant is not None:
+        if not (np.isfinite(spring_constant) and spring_constant > 0):
+            raise InputError(f"spring_constant must be positive (in N/m); got {spring_constant}")
+        f *= spring_constant / k
+        k = float(spring_constant)
+    if sensitivity is not None:
+        if not (np.isfinite(sensitivity) and sensitivity > 0):
+            raise InputError(f"sensitivity must be positive (in m/V); got {sensitivity}")
+        if s is None:
+            raise InputError(f"curve {curve.name!r} has no sensitivity (m/V) of its own to rescale the force from")
+        f *= sensitivity / s
+        s = float(sensitivity)
+    return Curve(
+        curve.time, curve.height, f, curve.segment, k, s, curve.segment_names, curve.name, dict(curve.metadata)
     )

@@ -57,10 +57,8 @@ def load_curves(paths: list[str], *, spring_constant: float | None = None, sensi
                 got = records.read_jpk(path)
             except ImportError as exc:
                 raise CLIError(str(exc)) from None
-            for c in got:
-                if spring_constant is not None:
-                    c.force = c.force / c.spring_constant * spring_constant
-                    c.spring_constant = spring_constant
+            if spring_constant is not None or sensitivity is not None:
+                got = [records.recalibrated(c, spring_constant=spring_constant, sensitivity=sensitivity) for c in got]
             curves += got
     return curves
 
