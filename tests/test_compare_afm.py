@@ -172,20 +172,6 @@ def test_real_curve_two_branches_beat_one(curves):
     assert abs(math.log(half.params["tau"] / one.params["tau"])) < 0.1 * one.sd_log["tau"]
 
 
-@pytest.mark.slow
-def test_example_script(tmp_path):
-    import os
-    import subprocess
-    import sys
-
-    script = Path(__file__).resolve().parents[1] / "examples" / "afm_relaxation.py"
-    env = dict(os.environ, TISSUEMECH_EXAMPLES_FAST="1", TISSUEMECH_EXAMPLES_OUT=str(tmp_path))
-    proc = subprocess.run([sys.executable, str(script)], env=env, capture_output=True, text=True, timeout=900)
-    assert proc.returncode == 0, proc.stderr
-    assert "two branches preferred by AIC on 3/3 curves" in proc.stdout
-    assert (tmp_path / "afm_relaxation.png").stat().st_size > 10_000
-
-
 def test_recalibration_rescales_the_force(curves):
     c = curves[0]
     d = records.recalibrated(c, spring_constant=2 * c.spring_constant, sensitivity=0.5 * c.sensitivity)

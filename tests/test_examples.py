@@ -29,7 +29,14 @@ def run_example(name: str, tmp_path: Path, *args: str) -> str:
 
 
 def test_every_example_is_tested():
-    tested = {"burst_pressure.py", "scan_with_fe_check.py", "fit_relaxation.py", "export_paraview.py", "dask_batch.py"}
+    tested = {
+        "burst_pressure.py",
+        "scan_with_fe_check.py",
+        "fit_relaxation.py",
+        "export_paraview.py",
+        "dask_batch.py",
+        "afm_relaxation.py",
+    }
     assert {p.name for p in EXAMPLES.glob("*.py")} == tested
 
 
@@ -94,3 +101,11 @@ def test_dask_batch(tmp_path):
     # the rerun finds every point in the store (resume)
     out2 = run_example("dask_batch.py", tmp_path)
     assert re.findall(r"lambda_a = ([0-9.]+)", out2) == re.findall(r"lambda_a = ([0-9.]+)", out)
+
+
+@pytest.mark.slow
+def test_afm_relaxation(tmp_path):
+    """The real AFM records (3 curves in the fast setting): two Maxwell branches win on AIC, the figure is written."""
+    out = run_example("afm_relaxation.py", tmp_path)
+    assert "two branches preferred by AIC on 3/3 curves" in out
+    assert (tmp_path / "out" / "afm_relaxation.png").stat().st_size > 10_000
