@@ -37,7 +37,7 @@ _FAIL_STYLES = (dict(marker="+", ms=15, mew=1.5), dict(marker="x", ms=8, mew=1.5
 
 def _legend_below(ax, ncol: int = 1) -> None:
     """The axis's legend under it, outside the data (constrained layout makes room for it)."""
-    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=ncol, frameon=False)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=ncol, frameon=False)
 
 
 def _spread_labels(y: np.ndarray, min_sep: float) -> np.ndarray:
@@ -166,10 +166,10 @@ def kappa_panel(ax, kappa: pd.DataFrame) -> None:
     if (~ok_all).any():
         ax.axhline(top, color="0.6", lw=0.6, ls=":")
         ax.set_ylim(top=top * 3)
-    k = np.geomspace(kappa.kappa_over_C.min(), kappa.kappa_over_C.max(), 50)
+    kk = np.geomspace(kappa.kappa_over_C.min(), kappa.kappa_over_C.max(), 50)
     ax.loglog(
-        k,
-        1.0 / k * kappa.error[kappa.formulation == "mixed"].iloc[0] * kappa.kappa_over_C.iloc[0],
+        kk,
+        1.0 / kk * kappa.error[kappa.formulation == "mixed"].iloc[0] * kappa.kappa_over_C.iloc[0],
         "k:",
         lw=0.8,
         label="~ C/kappa (physical compressibility)",
@@ -270,8 +270,13 @@ def stability_charts(
     Five panels (three above, two centred below; no empty one), each legend under its panel, off the data.
     """
     plt = _plt()
-    fig = plt.figure(figsize=(16, 11), layout="constrained")
-    axes = fig.subplot_mosaic("AABBCC;.DDEE.")
+    fig = plt.figure(figsize=(16, 10.5))
+    # fixed spacing (not constrained layout, which collapses with wide legends): room under each row for its
+    # legends, which sit below their panels
+    axes = fig.subplot_mosaic(
+        "AABBCC;.DDEE.",
+        gridspec_kw=dict(left=0.06, right=0.985, top=0.91, bottom=0.14, hspace=0.68, wspace=1.3),
+    )
     limit_point_panel(axes["A"], limit)
     kappa_panel(axes["B"], kappa)
     viscous_step_panel(axes["C"], viscous, tolerance)
