@@ -69,14 +69,16 @@ def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16, note: 
     for method, g in d.groupby("method", sort=False):
         x = g["wall_time [s]"].to_numpy(float)
         y = g.err_plot.to_numpy(float)
+        right = x.max()  # labels start right of the points and of their timing bars
         if "wall_time min [s]" in g and "wall_time max [s]" in g:
             lo, hi = g["wall_time min [s]"].to_numpy(float), g["wall_time max [s]"].to_numpy(float)
+            right = max(right, float(np.nanmax(hi)))
             xerr = np.vstack([x - lo, hi - x])
             (ln,) = ax.plot(x, y, next(markers), ms=7, mfc="none", label=method)
             ax.errorbar(x, y, xerr=np.maximum(xerr, 0), fmt="none", ecolor=ln.get_color(), lw=0.8, capsize=2)
         else:
             (ln,) = ax.plot(x, y, next(markers), ms=7, mfc="none", label=method)
-        labels += [(xi, yi, x.max() * 5.0, text, ln.get_color()) for xi, yi, text in zip(x, y, g.setting.astype(str))]
+        labels += [(xi, yi, right * 2.5, text, ln.get_color()) for xi, yi, text in zip(x, y, g.setting.astype(str))]
     # stacked over ALL methods: two methods' points at about the same place get labels one line apart
     ly: np.ndarray = 10 ** _spread_labels(np.log10([lab[1] for lab in labels]), min_sep) if labels else np.zeros(0)
     for (xi, yi, lx, text, color), lyi in zip(labels, ly):
@@ -89,6 +91,8 @@ def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16, note: 
             color=color,
             va="center",
             arrowprops=dict(arrowstyle="-", color=color, lw=0.5, alpha=0.6),
+            bbox=dict(fc="white", ec="none", alpha=0.8, pad=0.3),  # readable over grid and front lines
+            zorder=5,
         )
     front = d[d.pareto.astype(bool)].sort_values("wall_time [s]")
     ax.plot(
@@ -105,7 +109,7 @@ def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16, note: 
     ax.set_xscale("log")
     ax.set_yscale("log")
     xmin, xmax = d["wall_time [s]"].min(), d["wall_time [s]"].max()
-    ax.set_xlim(xmin / 3, xmax * 150)  # room for the labels right of the slowest points
+    ax.set_xlim(xmin / 3, max(lab[2] for lab in labels) * 60 if labels else xmax * 150)  # room for the labels
     if len(ly):  # the stacked labels may sit above / below every point: keep them inside the axes
         ys = np.concatenate([d.err_plot.to_numpy(float), ly])
         ax.set_ylim(ys.min() / 3, ys.max() * 3)
