@@ -72,6 +72,13 @@ def assert_readable(fig, *, data_axes: int | None = None):
         if leg is None:
             continue
         lb = leg.get_window_extent(r)
+        for other in panels:  # a legend below its panel must not run into the next row
+            if other is not ax:
+                assert not lb.overlaps(other.get_window_extent(r)), f"legend of {ax.get_title()!r} over a panel"
+                assert not lb.overlaps(other.title.get_window_extent(r)), f"legend of {ax.get_title()!r} over a title"
+        for lab in (ax.xaxis.label, ax.yaxis.label):
+            if lab.get_text():
+                assert not lb.overlaps(lab.get_window_extent(r)), f"legend of {ax.get_title()!r} over its axis label"
         if not lb.overlaps(ax.get_window_extent(r)):
             continue  # the legend sits outside the panel
         for ln in ax.get_lines():

@@ -37,7 +37,7 @@ _FAIL_STYLES = (dict(marker="+", ms=15, mew=1.5), dict(marker="x", ms=8, mew=1.5
 
 def _legend_below(ax, ncol: int = 1) -> None:
     """The axis's legend under it, outside the data (constrained layout makes room for it)."""
-    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=ncol, frameon=False)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=ncol, frameon=False)
 
 
 def _spread_labels(y: np.ndarray, min_sep: float) -> np.ndarray:
@@ -69,14 +69,16 @@ def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16, note: 
     for method, g in d.groupby("method", sort=False):
         x = g["wall_time [s]"].to_numpy(float)
         y = g.err_plot.to_numpy(float)
+        right = x.max()  # labels start right of the points and of their timing bars
         if "wall_time min [s]" in g and "wall_time max [s]" in g:
             lo, hi = g["wall_time min [s]"].to_numpy(float), g["wall_time max [s]"].to_numpy(float)
+            right = max(right, float(np.nanmax(hi)))
             xerr = np.vstack([x - lo, hi - x])
             (ln,) = ax.plot(x, y, next(markers), ms=7, mfc="none", label=method)
             ax.errorbar(x, y, xerr=np.maximum(xerr, 0), fmt="none", ecolor=ln.get_color(), lw=0.8, capsize=2)
         else:
             (ln,) = ax.plot(x, y, next(markers), ms=7, mfc="none", label=method)
-        labels += [(xi, yi, x.max() * 5.0, text, ln.get_color()) for xi, yi, text in zip(x, y, g.setting.astype(str))]
+        labels += [(xi, yi, right * 2.5, text, ln.get_color()) for xi, yi, text in zip(x, y, g.setting.astype(str))]
     # stacked over ALL methods: two methods' points at about the same place get labels one line apart
     ly: np.ndarray = 10 ** _spread_labels(np.log10([lab[1] for lab in labels]), min_sep) if labels else np.zeros(0)
     for (xi, yi, lx, text, color), lyi in zip(labels, ly):
@@ -89,6 +91,8 @@ def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16, note: 
             color=color,
             va="center",
             arrowprops=dict(arrowstyle="-", color=color, lw=0.5, alpha=0.6),
+            bbox=dict(fc="white", ec="none", alpha=0.8, pad=0.3),  # readable over grid and front lines
+            zorder=5,
         )
     front = d[d.pareto.astype(bool)].sort_values("wall_time [s]")
     ax.plot(
@@ -105,7 +109,7 @@ def accuracy_chart(df: pd.DataFrame, *, title: str, floor: float = 1e-16, note: 
     ax.set_xscale("log")
     ax.set_yscale("log")
     xmin, xmax = d["wall_time [s]"].min(), d["wall_time [s]"].max()
-    ax.set_xlim(xmin / 3, xmax * 150)  # room for the labels right of the slowest points
+    ax.set_xlim(xmin / 3, max(lab[2] for lab in labels) * 60 if labels else xmax * 150)  # room for the labels
     if len(ly):  # the stacked labels may sit above / below every point: keep them inside the axes
         ys = np.concatenate([d.err_plot.to_numpy(float), ly])
         ax.set_ylim(ys.min() / 3, ys.max() * 3)
@@ -166,10 +170,10 @@ def kappa_panel(ax, kappa: pd.DataFrame) -> None:
     if (~ok_all).any():
         ax.axhline(top, color="0.6", lw=0.6, ls=":")
         ax.set_ylim(top=top * 3)
-    k = np.geomspace(kappa.kappa_over_C.min(), kappa.kappa_over_C.max(), 50)
+    kk = np.geomspace(kappa.kappa_over_C.min(), kappa.kappa_over_C.max(), 50)
     ax.loglog(
-        k,
-        1.0 / k * kappa.error[kappa.formulation == "mixed"].iloc[0] * kappa.kappa_over_C.iloc[0],
+        kk,
+        1.0 / kk * kappa.error[kappa.formulation == "mixed"].iloc[0] * kappa.kappa_over_C.iloc[0],
         "k:",
         lw=0.8,
         label="~ C/kappa (physical compressibility)",
@@ -270,8 +274,13 @@ def stability_charts(
     Five panels (three above, two centred below; no empty one), each legend under its panel, off the data.
     """
     plt = _plt()
-    fig = plt.figure(figsize=(16, 11), layout="constrained")
-    axes = fig.subplot_mosaic("AABBCC;.DDEE.")
+    fig = plt.figure(figsize=(16, 10.5))
+    # fixed spacing (not constrained layout, which collapses with wide legends): room under each row for its
+    # legends, which sit below their panels
+    axes = fig.subplot_mosaic(
+        "AABBCC;.DDEE.",
+        gridspec_kw=dict(left=0.06, right=0.985, top=0.91, bottom=0.14, hspace=0.68, wspace=1.3),
+    )
     limit_point_panel(axes["A"], limit)
     kappa_panel(axes["B"], kappa)
     viscous_step_panel(axes["C"], viscous, tolerance)

@@ -113,17 +113,16 @@ def fig3(
     la = float(result.inner_stretch[-1]) if inner_stretch is None else inner_stretch
     lb = float(result.outer_stretch[-1])
     a, b = la * A / UM, lb * outer_radius / UM
-    kw = dict(vmin=lo, vmax=hi, n_sub=n_sub)
-    coll = draw_field(a0, mesh, result.displacement, vm_pts, **kw)
+    coll = draw_field(a0, mesh, result.displacement, vm_pts, vmin=lo, vmax=hi, n_sub=n_sub)
     rc, w = 0.5 * (a + b), max(1.6 * (b - a), 2.0)
     cx, cy = rc / np.sqrt(2), rc / np.sqrt(2)
     a0.add_patch(Rectangle((cx - w, cy - w), 2 * w, 2 * w, fill=False, ec="r", lw=1.2))
     a0.set_title(f"(a) deformed section, p = {pressure / 1e3:g} kPa (wall {b - a:.1f} um thick)", fontsize=9)
-    draw_field(a1, mesh, result.displacement, vm_pts, **kw)
+    draw_field(a1, mesh, result.displacement, vm_pts, vmin=lo, vmax=hi, n_sub=n_sub)
     a1.set_xlim(cx - w, cx + w)
     a1.set_ylim(cy - w, cy + w)
     a1.set_title("(b) zoom on the deformed wall (red box in (a))", fontsize=9)
-    draw_field(a2, mesh, None, vm_pts, **kw)
+    draw_field(a2, mesh, None, vm_pts, vmin=lo, vmax=hi, n_sub=n_sub)
     a2.set_title(
         f"(c) the same field on the reference section\n(A = {A / UM:g} um, B = {outer_radius / UM:g} um)", fontsize=9
     )
@@ -173,7 +172,7 @@ def fig_stretch_pressure(
     Every FE series starts at the unloaded state (stretch 1, p = 0), which the FE also satisfies.
     """
     plt = _plt()
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.6), sharey=True)
+    fig, axes = plt.subplots(1, 2, figsize=(11, 5.2), sharey=True, layout="constrained")
     for s in sets:
         fe = s["fe"]
         p_fe = np.r_[0.0, fe.pressure]
@@ -194,9 +193,18 @@ def fig_stretch_pressure(
     for ax in axes:
         ax.grid(alpha=0.3)
         ax.set_ylim(bottom=0)
-    axes[0].legend(fontsize=7, title="lines: exact; circles: FE steps", title_fontsize=7)
-    fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(
+        handles,
+        labels,
+        fontsize=8,
+        loc="outside lower center",
+        ncol=min(len(labels), 6),
+        title="lines: exact; circles: FE steps (both panels)",
+        title_fontsize=8,
+        frameon=False,
+    )
+    fig.suptitle("\n".join(textwrap.wrap(title, 120)), fontsize=10)
     return fig
 
 

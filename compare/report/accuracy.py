@@ -59,8 +59,13 @@ def section(*, quick: bool = False) -> Section:
         "",
         "The chart shows each method's error against its wall time (log-log; bars: the spread of the repeated "
         "timings; red rings: the Pareto front, no method both more accurate and faster beyond the spread). "
-        f"What to conclude: the reduced quadrature path is exact to {quad.error:.0e} in {quad_us:.0f} us and "
-        "dominates every other method here; the diffrax path reaches "
+        f"What to conclude: the reduced quadrature path is exact to {quad.error:.0e} in {quad_us:.0f} us"
+        + (
+            " and dominates every other method here (the front is this one point)"
+            if df.pareto.sum() == 1 and bool(quad.pareto)
+            else "; on the front: " + "; ".join(f"{r.method} {r.setting}" for r in df[df.pareto].itertuples())
+        )
+        + "; the diffrax path reaches "
         f"{ode.error.min():.0e} at the tightest tolerance and {ode.error.max():.0e} at the loosest{same}; "
         "the FE falls from "
         f"{fe.error.max():.0e} to {fe.error.min():.0e} over the meshes at {fe['wall_time [s]'].min():.2g}.."

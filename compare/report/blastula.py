@@ -90,7 +90,7 @@ def section(traces: dict, *, quick: bool = False, progress: Callable[[str], None
 
     pts = subgrid(6)
     vm_pts = figures.elastic_von_mises_at(fe.mesh, fe.displacement, pts, C=C_BL, alpha=alpha)
-    R_pts = np.hypot(*figures.reference_points(fe.mesh, pts)) * fe.mesh.length_scale
+    R_pts = np.hypot(*figures.reference_points(fe.mesh, pts)) * A  # the shell mesh is scaled by A
     vm_pts_err = float(np.max(np.abs(vm_pts - np.interp(R_pts, np.asarray(prof.R), np.asarray(prof.von_mises)))))
     vm_pts_err /= float(np.max(np.asarray(prof.von_mises)))
     sec.save(figures.fig3(fe, prof, pressure=p, alpha=alpha, outer_radius=B, C=C_BL), "fig3_blastula_von_mises.png")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import functools
 import time
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -69,7 +70,7 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
     # the calibrated law comes from a static run on the REFERENCE mesh itself: its row measures the lumped-
     # relaxation assumption alone, not an independent prediction (labelled so); the shipped table comes from static
     # runs on level 3 (the reference mesh of the study) interpolated in x and alpha
-    laws = {
+    laws: dict[str, dict[str, Any]] = {
         "hertz": dict(equilibrium="hertz"),
         "calibrated on the reference mesh": dict(equilibrium=eq10, midplane=mid10),
     }
@@ -145,7 +146,7 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
             return f"{n}: not fitted (the law is the alpha = {fig10['alpha']:g} curve)"
         return f"{n} = {pf[n]:.3g} ({fit.interval_text(n)}){unit}"
 
-    residual = {
+    residual: dict[str, tuple[float, float]] = {
         k: _worst(at_ref[k], s_ref, t_ref)
         for k in ("calibrated on the reference mesh", "shipped FE table", "hertz", "FE coarser")
         if k in at_ref
@@ -224,7 +225,7 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
         static=True,
     )
 
-    def vm_reduced(t: np.ndarray) -> np.ndarray:
+    def vm_reduced(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """FE static mean von Mises at delta(t) (power-law interpolation between the static states, which
         follows vm ~ delta^k near first contact) times the lumped relaxation factor F_reduced / F_eq."""
         delta = FIG89["displacement"] * np.minimum(t / FIG89["ramp_time"], 1.0)

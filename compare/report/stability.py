@@ -217,8 +217,10 @@ def _map_caption(
             else "locks"
         )
         + (
-            " and its Newton fails at the largest kappa/C (crosses on the top band)"
-            if bool(k7.loc["displacement", "failed"])
+            " and its Newton fails at kappa/C = "
+            + ", ".join(f"{v:.0e}" for v in disp[disp.failed.astype(bool)].kappa_over_C)
+            + " (crosses on the top band)"
+            if disp.failed.astype(bool).any()
             else ""
         )
         + ": use the mixed form (the default). "

@@ -253,12 +253,12 @@ def spheroid_accuracy(
     ts = np.asarray(SPHEROID_TIMES)
     fe: dict[Any, tuple[dict, Any]] = {}
     for m in meshes:
-        walls = []
+        walls: list[float] = []
         for _ in range(int(fe_repeats)):  # every run includes its mesh set-up: the fastest is the least disturbed
             t0 = time.perf_counter()
             r = fes.compress(**FIG10, end_time=ts[-1], mesh=m)
             walls.append(time.perf_counter() - t0)
-        fe[m] = (_wall_columns(walls[0], np.asarray(walls)), r)
+        fe[m] = (_wall_columns(walls[0], np.asarray(walls, float)), r)
     sig = {m: np.interp(ts, r.time, r.nominal_stress) for m, (_, r) in fe.items()}
     h = [1.0 / fes.LEVELS[m][0] for m in meshes[-3:]]
     s_ref = np.array([richardson([sig[m][k] for m in meshes[-3:]], h)[1] for k in range(ts.size)])
@@ -286,14 +286,14 @@ def spheroid_accuracy(
         )
     for name, kw in equilibria.items():
         fn = jax.jit(lambda tt, kw=kw: rs.nominal_stress(tt, **FIG10, **kw))  # tables become constants
-        first, walls, s = timed_stats(
+        first, red_walls, s = timed_stats(
             cast(Callable[[], np.ndarray], lambda fn=fn: np.asarray(jax.block_until_ready(fn(ts)))), 21
         )
         rows.append(
             dict(
                 method=f"reduced ({name})",
                 setting=settings.get(name, name),
-                **_wall_columns(first, walls),
+                **_wall_columns(first, red_walls),
                 error=float(np.max(np.abs(s / s_ref - 1))),
                 sigma_0_2s=s[0],
                 sigma_1500s=s[1],
