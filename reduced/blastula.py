@@ -33,8 +33,14 @@ Numerics (everything is computed for ``p / C`` as a function of ``(lambda_a, k, 
 
 Stretch domain: ``lambda_a > 0``. ``lambda_a < 1`` is deflation (negative pressure, physical down to
 the collapse ``lambda_a -> 0`` where ``p -> -infinity``). ``lambda_a <= 0``, non-finite or non-numeric
-values raise ``ValueError`` in eager calls (inside ``jit`` no check can run: results there are NaN
-for ``lambda_a <= 0``).
+values raise ``ValueError`` in eager calls.
+
+Under ``jax.jit`` / ``vmap`` / ``grad`` (traced inputs) every input an eager call refuses (a stretch outside
+1e-30..1e30, zero, negative or non-finite; C <= 0; alpha < 0; radii not 0 < A < B; a non-finite pressure)
+raises at run time instead (``equinox.error_if``: the compiled program stops with a ``JaxRuntimeError``
+whose text names the quantity and its unit, as the eager message does, without the value); what an eager
+call refuses for its result rather than its input (a pressure beyond float64, a pressure above the limit
+point, no limit point) is the NaN flag. No extrapolated or sign-flipped number comes back.
 
 Eager calls check their inputs with NumPy, then run one compiled program per public function (the
 same core a user's ``jax.jit`` runs); one-point calls (Python numbers or size-1 arrays) take a fast
@@ -72,6 +78,10 @@ from tissuemech.reduced.material import dW_dI1
 from tissuemech.reduced.validation import (
     is_traced,
     scalar_values,
+    traced_checks,
+    traced_finite,
+    traced_material,
+    traced_radii,
     validate_choice,
     validate_finite,
     validate_int,
@@ -129,9 +139,27 @@ def _check_stretch(name: str, value: Any) -> np.ndarray | None:
     return v
 
 
+def _traced_stretch(name: str, value: Any) -> list[tuple[Any, str]]:
+    """Twin of :func:`_check_stretch` for a traced stretch: the run-time check (for ``traced_checks``) that it lies
+    in ``STRETCH_DOMAIN`` (zero, negative and non-finite values refused)."""
+    if not is_traced(value):
+        return []
+    v = jnp.asarray(value)
+    message = (
+        f"{name} must be positive (a/A > 0, dimensionless; values below 1 mean the cavity shrinks) and lie within "
+        f"{STRETCH_DOMAIN[0]:g}..{STRETCH_DOMAIN[1]:g}"
+    )
+    return [(~((v >= STRETCH_DOMAIN[0]) & (v <= STRETCH_DOMAIN[1])), message)]
+
+
+def _traced_shell(A, B, C, alpha) -> list[tuple[Any, str]]:
+    """The run-time checks of traced shell and material values (the twins of :func:`_validate`)."""
+    return traced_radii(A, B) + traced_material(C, alpha)
+
+
 def _validate(inner_radius, outer_radius, C, alpha) -> tuple[Any, Any, Any, Any]:
     """Check the shell and the material; (A, B, C, alpha) as float64 NumPy arrays where concrete,
-    the traced values as they came otherwise (what the compiled cores take)."""
+    the traced values as they came otherwise (what the compiled cores take; :func:`_traced_shell` checks them)."""
     a, b = validate_radii(inner_radius, outer_radius)
     c, al = validate_material(C, alpha)
     return _concrete(a, inner_radius), _concrete(b, outer_radius), _concrete(c, C), _concrete(al, alpha)
@@ -461,8 +489,9 @@ def pressure(
     Returns p in Pa, shape of the broadcast inputs.
 
     Accuracy: below 1e-10 relative for every input (module docstring, "Error control"). Eager calls
-    raise ``ValueError`` for bad inputs and where p would overflow float64; inside jit/vmap/grad the
-    one-panel rule is used and entries it cannot resolve (large alpha lambda_a^2) are NaN.
+    raise ``ValueError`` for bad inputs and where p would overflow float64; inside jit/vmap/grad bad inputs
+    raise at run time (``equinox.error_if``, the eager message without the value), the one-panel rule is used
+    and entries it cannot resolve (large alpha lambda_a^2, overflow) are NaN.
     Eager calls run one compiled program (the same one a user's ``jax.jit`` runs), after the input checks.
     """
     if method == "quadrature":
@@ -473,6 +502,7 @@ def pressure(
                 return p1.reshape(fast[2])
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
     A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
+    checks = _traced_stretch("inner_stretch", la) + _traced_shell(A, B, C_, al)  # run-time twins (traced values)
     validate_choice("method", method, ("quadrature", "ode"))
     if method == "ode":
         rt = validate_positive("rtol (relative tolerance of the ODE integrator)", rtol, "dimensionless")
@@ -490,9 +520,11 @@ def pressure(
                     f"reach the inner wall in {_ODE_MAX_STEPS} steps). Hint: use method='quadrature' (exact to 1e-13)."
                 )
             return np.asarray(p)  # eager results are NumPy arrays, whichever method
-        return p
+        return traced_checks(p, checks)
     p = _call(_pressure_core, la, (A, B, C_, al))
-    if is_traced(p) or not np.isnan(p).any():
+    if is_traced(p):
+        return traced_checks(p, checks)
+    if not np.isnan(p).any():
         return p
     k, omk = _geometry(A, B)
     return np.asarray(jnp.asarray(C_, dtype=jnp.float64) * _p_over_C(la, k, omk, al))
@@ -523,7 +555,8 @@ def pressure_derivative(
     Arguments as :func:`pressure` (inner_stretch > 0; A < B in m; C > 0 in Pa; alpha >= 0), broadcast.
     Returns dp/d lambda_a in Pa (to ~1e-14 for walls thicker than ~1e-2 of A; the two terms cancel as A/B -> 1:
     ~5e-16 / (wall / A), 4.9e-10 at a wall of 1e-6 A). Raises ``ValueError`` for bad inputs and for a slope beyond
-    the float64 range in eager calls.
+    the float64 range in eager calls; under jit/vmap/grad bad inputs raise at run time (``equinox.error_if``) and a
+    slope beyond float64 is NaN.
     """
     fast = _one_point(inner_stretch, (inner_radius, outer_radius, C, alpha))
     if fast is not None:
@@ -533,7 +566,10 @@ def pressure_derivative(
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
     A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
     out = _call(_pressure_derivative_core, la, (A, B, C_, al))
-    if is_traced(out) or np.isfinite(out).all():
+    if is_traced(out):  # the NaN flag where an eager call raises (a slope beyond the float64 range)
+        checks = _traced_stretch("inner_stretch", la) + _traced_shell(A, B, C_, al)
+        return traced_checks(jnp.where(jnp.isfinite(out), out, jnp.nan), checks)
+    if np.isfinite(out).all():
         return out
     bad = ~np.isfinite(np.asarray(out))
     la_b, al_b = (np.broadcast_to(np.asarray(v, dtype=float), bad.shape)[bad][0] for v in (la, al))
@@ -555,14 +591,17 @@ def outer_stretch(inner_stretch: Array, *, inner_radius: Array, outer_radius: Ar
     r"""Outer stretch lambda_b = b/B from incompressibility (dimensionless):
 
     lambda_b^3 = 1 + (lambda_a^3 - 1)(A/B)^3,  A = inner_radius, B = outer_radius (m).
-    Raises ``ValueError`` for bad inputs in eager calls.
+    Raises ``ValueError`` for bad inputs in eager calls; under jit/vmap/grad at run time (``equinox.error_if``).
     """
     fast = _one_point(inner_stretch, (inner_radius, outer_radius))
     if fast is not None:
         return _host(_outer_stretch_core(fast[0], fast[1])).reshape(fast[2])
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
     A, B = validate_radii(inner_radius, outer_radius)
-    return _call(_outer_stretch_core, la, (_concrete(A, inner_radius), _concrete(B, outer_radius)))
+    A, B = _concrete(A, inner_radius), _concrete(B, outer_radius)
+    return traced_checks(
+        _call(_outer_stretch_core, la, (A, B)), _traced_stretch("inner_stretch", la) + traced_radii(A, B)
+    )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -696,7 +735,8 @@ def limit_point(*, inner_radius: Array, outer_radius: Array, C: Array, alpha: Ar
     ``LimitPoint`` of arrays with NaN where there is no maximum.
     Gradients are exact (envelope theorem for p_max; implicit function theorem for the stretch).
     The scan runs in blocks of lanes: memory does not grow with the 256-node grid. Raises
-    ``ValueError`` for bad inputs in eager calls.
+    ``ValueError`` for bad inputs in eager calls; under jit/vmap/grad bad inputs (radii, C, alpha) raise at run
+    time (``equinox.error_if``) and p_max is NaN where the one-panel rule cannot resolve it.
     """
     fast = _one_point(_NO_X, (inner_radius, outer_radius, C, alpha))
     if fast is not None:
@@ -710,7 +750,7 @@ def limit_point(*, inner_radius: Array, outer_radius: Array, C: Array, alpha: Ar
     A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
     pmax, la, redo = _call(_limit_core, None, (A, B, C_, al))
     if is_traced(pmax):
-        return LimitPoint(pmax, la)
+        return LimitPoint(*traced_checks((pmax, la), _traced_shell(A, B, C_, al)))
     if np.asarray(redo).any():  # stiff states: the error-controlled quadrature (eager, rare)
         k, omk = _geometry(A, B)
         la_s = jnp.where(jnp.isnan(la), 1.0, la)
@@ -973,7 +1013,9 @@ def inner_stretch_solve(
     and where the one-panel quadrature cannot resolve the pressure integral at the solution to 1e-10
     (very stiff states, large alpha lambda_a^2: :func:`inner_stretch` solves those eagerly);
     ``lambda_a`` is NaN there. ``pressure = 0`` gives exactly 1. Negative pressures deflate
-    (lambda_a < 1). No input validation (use :func:`inner_stretch` for checked eager calls).
+    (lambda_a < 1). No input check raises (use :func:`inner_stretch` for checked calls): a shell or material
+    that :func:`inner_stretch` refuses (radii not 0 < A < B, C <= 0, alpha < 0, non-finite) gives NaN and
+    ``converged`` False.
     Derivatives (jax.grad) follow the implicit function theorem: d lambda_a/dp = 1/(dp/dlambda_a).
 
     ``max_inner_stretch`` (optional, per entry) bounds the search: pass the limit stretch
@@ -988,6 +1030,9 @@ def inner_stretch_solve(
     mx = INVERSE_STRETCH_RANGE[1] if max_inner_stretch is None else max_inner_stretch
     mx = jnp.where(jnp.isnan(jnp.asarray(mx, jnp.float64)), INVERSE_STRETCH_RANGE[1], mx)
     la = _inverse(pt, k, omk, alpha, mx)
+    A, B = (jnp.asarray(v, dtype=jnp.float64) for v in (inner_radius, outer_radius))
+    valid = (A > 0) & (B > A) & jnp.isfinite(B) & (C > 0) & jnp.isfinite(C) & (alpha >= 0) & jnp.isfinite(alpha)
+    la = jnp.where(valid, la, jnp.nan)  # a shell or material that eager calls refuse: NaN, not converged
     return la, ~jnp.isnan(la)
 
 
@@ -1019,8 +1064,9 @@ def inner_stretch(pressure: Array, *, inner_radius: Array, outer_radius: Array, 
 
     Eager calls raise ``ValueError`` where no stable state exists: the pressure exceeds the limit
     point (the message gives the limit pressure), or the stretch would leave 0.5 <= lambda_a <= 10.
-    Inside ``jit``/``vmap`` no exception can be raised: those entries are NaN (NaN convention; use
-    :func:`inner_stretch_solve` for the explicit ``converged`` flag).
+    Inside ``jit``/``vmap`` those entries are NaN (NaN convention; use :func:`inner_stretch_solve` for the
+    explicit ``converged`` flag), while bad inputs (a non-finite pressure, radii, C, alpha) raise at run time
+    (``equinox.error_if``, the eager message without the value).
     """
     fast = _one_point(pressure, (inner_radius, outer_radius, C, alpha), stretch=False)
     if fast is not None:
@@ -1032,8 +1078,8 @@ def inner_stretch(pressure: Array, *, inner_radius: Array, outer_radius: Array, 
     p = _concrete(validate_finite("pressure", pressure, "Pa"), pressure)
     A, B, C_, al = _validate(inner_radius, outer_radius, C, alpha)
     if is_traced(pressure, inner_radius, outer_radius, C, alpha):  # differentiable path (implicit function)
-        la, _ = inner_stretch_solve(pressure, inner_radius=inner_radius, outer_radius=outer_radius, C=C, alpha=alpha)
-        return la
+        la, _ = inner_stretch_solve(p, inner_radius=A, outer_radius=B, C=C_, alpha=al)
+        return traced_checks(la, traced_finite("pressure", p, "Pa") + _traced_shell(A, B, C_, al))
     la, conv, rule_ok = _call(_inverse_core, p, (A, B, C_, al))
     if is_traced(la):  # concrete inputs inside a user's jit/vmap
         return jnp.where(conv & rule_ok, la, jnp.nan)
@@ -1158,7 +1204,9 @@ def profiles(
     l^3 = 1 + (lambda_a^3 - 1)(A/R)^3, r = l R;
     sigma_r(R) = -int_{lambda_b}^{l} g(s) ds (the pressure integral of a shell with inner radius R),
     sigma_theta = sigma_r + 2 W'(I1)(l^2 - l^-4), I1 = 2 l^2 + l^-4; von Mises |sigma_theta - sigma_r|.
-    Inputs broadcast; the profile axis is appended last.
+    Inputs broadcast; the profile axis is appended last. Eager calls raise ``ValueError`` for bad inputs; under
+    jit/vmap/grad they raise at run time (``equinox.error_if``) and stresses the one-panel rule cannot resolve
+    (large alpha l^2) are NaN.
     """
     fast = _one_point(inner_stretch, (inner_radius, outer_radius, C, alpha)) if type(n) is int and n >= 2 else None
     if fast is not None:
@@ -1172,7 +1220,9 @@ def profiles(
     n = validate_int("n (number of points through the wall)", n, minimum=2)
     fields, redo = _call(_profiles_core, la, (A, B, C_, al), n)
     out = Profiles(*(fields[..., i, :] for i in range(6)))
-    if is_traced(redo) or not np.asarray(redo).any():
+    if is_traced(redo):
+        return Profiles(*traced_checks(tuple(out), _traced_stretch("inner_stretch", la) + _traced_shell(A, B, C_, al)))
+    if not np.asarray(redo).any():
         return out
     # stiff states (large alpha l^2): sigma_r by the error-controlled composite rule (eager, rare)
     R, r, lam, _, _, _ = out

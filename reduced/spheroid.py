@@ -38,25 +38,39 @@ Loading
 ``displacement`` a number (m) and ``ramp_time`` (s): the approach grows linearly to ``displacement``
 over ``ramp_time`` and is then held. The kink is handled exactly: the ramp and the hold are separate
 pieces, and during the hold the branches decay in closed form, q_m(t) = q_m(t_r) e^{-(t-t_r)/tau_m}.
-Over the ramp, two paths that agree to ~1e-13 (``method=``):
+Over the ramp, two methods that agree to ~1e-13, each a small object carrying its own options
+(``method=``; the strings ``"quadrature"`` / ``"ode"`` name their defaults):
 
-* ``"quadrature"`` (default): q_m is the convolution beta_m int e^{-(t-s)/tau_m} dF_eq/ds ds, summed
-  between consecutive output times with the kernel absorbed exactly by z = e^{-(t-s)/tau} and the
-  sqrt(t) of first contact removed by a square substitution, 16-point Gauss-Legendre per interval
-  (graded into a stiff interval's boundary layer): no time stepping, any stiffness tau << t_r; with Hertz
-  against the closed form at most 4.7e-9 for tau / t_r in [1e-4, 1e3] (at tau ~ 0.026 t_r; 1e-10 for
-  tau in [0.1, 1] t_r, ~1e-15 for tau >= t_r: ``python notes/stiff_kernel_scan.py``; ~1e-8 with the
-  spline table);
-* ``"ode"``: diffrax integrates the ODE in v = sqrt(t / t_r) with steps landing on the output times;
-  a PID controller at ``rtol``/``atol`` (1e-10). ``solver=None`` picks the explicit ``Tsit5`` when the
-  parameters are concrete and ramp_time/tau <= 10, else the L-stable ESDIRK ``Kvaerno5``.
+* :class:`Quadrature` (default, ``Quadrature(nodes=16)``): q_m is the convolution
+  beta_m int e^{-(t-s)/tau_m} dF_eq/ds ds, summed between consecutive output times with the kernel absorbed
+  exactly by z = e^{-(t-s)/tau} and the sqrt(t) of first contact removed by a square substitution, 16-point
+  Gauss-Legendre per interval (graded into a stiff interval's boundary layer): no time stepping, any stiffness
+  tau << t_r; with Hertz against the closed form (Dawson's integral) at most 4.7e-9 for tau / t_r in
+  [1e-4, 1e3] (at tau ~ 0.026 t_r; 1e-10 for tau in [0.1, 1] t_r, ~1e-15 for tau >= t_r, measured at 701
+  log-spaced ratios; ~1e-8 with the spline table). It has no tolerance, solver or adjoint: an ODE keyword passed with it raises;
+* :class:`ODE` (``ODE(solver=None, stepsize_controller=None, *, rtol=1e-10, atol=1e-10, adjoint="reverse",
+  max_steps=16384)``): diffrax integrates the ODE in v = sqrt(t / t_r) with steps landing on the output
+  times. ``solver=None`` picks the explicit ``Tsit5`` when the parameters are concrete and ramp_time/tau <= 10,
+  else the L-stable ESDIRK ``Kvaerno5``. The loose keywords ``rtol``, ``atol``, ``max_steps``, ``solver``,
+  ``adjoint`` of :func:`force` still set it with ``method="ode"``.
 
-``displacement`` a callable delta(t) (m, JAX-traceable) instead: one diffrax solve (``method`` ignored)
-over the output times, ``jump_times`` (s) naming any kinks of the history.
+``displacement`` a callable delta(t) (m, JAX-traceable) instead: one diffrax solve over the output times
+(``method=ODE(...)`` or the loose keywords set it; the default Quadrature has no history path),
+``jump_times`` (s) naming any kinks of the history. ``displacement=(times, approaches)`` (arrays in s and m,
+times from 0) is a measured history, linear between the samples (:class:`PiecewiseLinear`, its samples the
+kinks) and held after the last; unloading is allowed while the plates push (the force stays >= 0 N).
+
+Creep: :func:`approach` gives delta(t) under a force ramped linearly and held (the same lumped law, solved
+for the approach).
 
 Every public function broadcasts over array parameters (one call = a grid of curves; output shape
 ``param_shape + t.shape``) and works under jit / vmap / grad / jacfwd. Eager calls validate inputs
-and raise on solver failure; inside jit a failed solve gives NaN (check with ``jnp.isnan``).
+and raise on solver failure. Under jit / vmap / grad (traced inputs) every input an eager call refuses
+(non-positive radius, C, ramp_time, tau or approach; negative alpha, beta or t; an approach at or past the
+diameter or the law's table, alpha outside the table; a history that is non-finite, negative, not 0 at t = 0,
+past the diameter or the table, or whose force turns negative) raises at run time instead
+(``equinox.error_if``: a ``JaxRuntimeError`` holding the eager message without the value); a failed solve
+gives NaN (check with ``jnp.isnan``). No extrapolated, clipped or zero number comes back for a refused input.
 """
 
 from __future__ import annotations
@@ -66,7 +80,7 @@ import json
 import math
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any, NamedTuple, Union, cast
+from typing import Any, Union, cast
 
 import diffrax
 import equinox as eqx
@@ -76,7 +90,14 @@ import numpy as np
 
 from tissuemech.reduced.interp import Spline1D, Spline2D
 from tissuemech.reduced.validation import (
+    InputTypeError,
     is_traced,
+    traced_branches,
+    traced_checks,
+    traced_material,
+    traced_nonnegative,
+    traced_positive,
+    traced_times,
     validate_branches,
     validate_finite,
     validate_int,
@@ -92,6 +113,13 @@ __all__ = [
     "midplane_radius",
     "equilibrium_force",
     "hertz_f",
+    "hertz_force",
+    "Quadrature",
+    "ODE",
+    "Method",
+    "as_method",
+    "approach",
+    "PiecewiseLinear",
     "MasterCurve",
     "master_curve",
     "DATA_FILE",
@@ -115,9 +143,43 @@ Midplane = Union[str, Callable, tuple, "MasterCurve", "MidplaneLaw", None]
 
 
 def hertz_f(x: Any) -> jnp.ndarray:
-    """Hertz master curve f(x) = F / (C a0^2) = (32/3) x^(3/2), x = delta / (2 a0) (E* = 8 C)."""
+    """The Hertz plate law of :func:`hertz_force` in dimensionless form: f(x) = F / (C a0^2) = (32/3) x^(3/2) at
+    x = delta / (2 a0) (x < 0, no contact, gives 0). No input check (the law inside every compiled model)."""
     x = jnp.maximum(jnp.asarray(x, dtype=jnp.float64), 0.0)
     return (32.0 / 3.0) * x * _sqrt_safe(x)  # derivative 16 sqrt(x): finite (0) at first contact
+
+
+def hertz_force(approach: Any, *, radius: Any, C: Any) -> jnp.ndarray:
+    """Small-strain Hertz force F (N) of a ball of Fung material squeezed between two rigid frictionless plates.
+
+    Each plate makes a Hertz contact with the ball (radius a0) and takes half the total approach delta:
+    F = (4/3) E* sqrt(a0) (delta/2)^(3/2) with E* = E / (1 - nu^2) = 8 C, the incompressible (nu = 1/2)
+    small-strain limit of the Fung law (shear modulus 2 C, Young's modulus E = 6 C; alpha drops out). In
+    master-curve form F = C a0^2 f(x), f(x) = (32/3) x^(3/2), x = delta / (2 a0) (:func:`hertz_f`, the law of
+    :class:`Hertz`, ``equilibrium="hertz"``).
+
+    approach  total approach delta of the plates (m), any shape, 0 <= delta < 2 radius.
+    radius    ball radius a0 (m, > 0).       C   Fung stiffness (Pa, > 0).
+    Returns F (N), shape broadcast(approach, radius, C). Eager calls raise ValueError for a bad value (naming it
+    and its unit); under jit/vmap/grad the same checks raise at run time (``equinox.error_if``, message without
+    the value).
+    """
+    if not is_traced(approach, radius, C):
+        r_checked = validate_positive("radius (of the ball)", radius, "m")
+        validate_positive("C (the Fung stiffness, shear modulus / 2)", C, "Pa")
+        _approach_max(
+            "approach", validate_finite("approach (the total approach of the plates)", approach, "m"), r_checked
+        )
+    else:  # concrete values checked now, traced ones at run time
+        validate_positive("radius (of the ball)", radius, "m")
+        validate_positive("C (the Fung stiffness, shear modulus / 2)", C, "Pa")
+        validate_finite("approach (the total approach of the plates)", approach, "m")
+        checks = traced_positive("radius (of the ball)", radius, "m")
+        checks += traced_positive("C (the Fung stiffness, shear modulus / 2)", C, "Pa")
+        checks += _traced_approach("approach", approach, radius, 0.0, ())
+    r = jnp.asarray(radius, dtype=jnp.float64)
+    out = jnp.asarray(C, dtype=jnp.float64) * r**2 * hertz_f(jnp.asarray(approach, dtype=jnp.float64) / (2.0 * r))
+    return out if not is_traced(approach, radius, C) else traced_checks(out, checks)
 
 
 def _sqrt_safe(x):
@@ -151,6 +213,8 @@ class MasterCurve:
         if np.any(~np.isfinite(f)):
             raise ValueError("master curve: f values must be finite")
         self.x, self.metadata = x, dict(metadata or {})
+        self._h: Spline1D | Spline2D
+        self._g: Spline1D | Spline2D | None
         self.x_max = float(x[-1])
         pos = x > 0
         hz = (32.0 / 3.0) * x[pos] ** 1.5
@@ -196,25 +260,25 @@ class MasterCurve:
     def f(self, x: Any, alpha: Any = 0.0) -> jnp.ndarray:
         """F_eq / (C a0^2) at x = delta/(2 a0)."""
         s = _sqrt_safe(jnp.maximum(jnp.asarray(x, dtype=jnp.float64), 0.0))
-        h = self._h(s) if self.alpha is None else self._h(s, alpha)
+        h = self._h(s) if isinstance(self._h, Spline1D) else self._h(s, alpha)
         return hertz_f(x) * h
 
     def f_curve(self, alpha: Any = 0.0) -> Callable:
         """x -> F_eq/(C a0^2) at one alpha (alpha interpolation done once: fast inside ODEs)."""
-        h = self._h if self.alpha is None else self._h.curve(alpha)
+        h = self._h if isinstance(self._h, Spline1D) else self._h.curve(alpha)
         return lambda x: hertz_f(x) * h(_sqrt_safe(jnp.maximum(jnp.asarray(x, dtype=jnp.float64), 0.0)))
 
     def g_curve(self, alpha: Any = 0.0) -> Callable:
         """x -> r_mid / a0 at one alpha."""
         if self._g is None:
             raise ValueError("this master curve has no midplane-radius table g; use midplane='incompressible'")
-        return self._g if self.alpha is None else self._g.curve(alpha)
+        return self._g if isinstance(self._g, Spline1D) else self._g.curve(alpha)
 
     def g(self, x: Any, alpha: Any = 0.0) -> jnp.ndarray:
         """r_mid / a0 at x = delta/(2 a0)."""
         if self._g is None:
             raise ValueError("this master curve has no midplane-radius table g; use midplane='incompressible'")
-        return self._g(x) if self.alpha is None else self._g(x, alpha)
+        return self._g(x) if isinstance(self._g, Spline1D) else self._g(x, alpha)
 
     def check_range(self, x_max: Any, alpha: Any) -> None:
         """Raise ValueError (eager values only) outside the tabulated x and alpha."""
@@ -237,6 +301,29 @@ class MasterCurve:
                     f"alpha = {span} is outside the calibrated table "
                     f"(alpha in [{lo:g}, {hi:g}]); use equilibrium='hertz' or extend the table."
                 )
+
+    def range_checks(self, x_max: Any, alpha: Any) -> list[tuple[Any, str]]:
+        """The jit-safe twin of :meth:`check_range`: ``(bad, message)`` pairs for
+        :func:`~tissuemech.reduced.validation.traced_checks` (x_max beyond the table, alpha outside its grid)."""
+        out = [
+            (
+                jnp.asarray(x_max) > self.x_max * (1 + 1e-12),
+                f"compression delta/(2 a0) is beyond the calibrated table (up to {self.x_max:.4g}, i.e. "
+                f"{100 * self.x_max:.3g} % of the diameter). Use equilibrium='hertz' or a callable, or extend the table "
+                "with `python -m tissuemech.compare.calibrate --x-max ...`.",
+            )
+        ]
+        if self.alpha is not None:
+            lo, hi = self.alpha_range
+            a = jnp.asarray(alpha)
+            out.append(
+                (
+                    (a < lo - 1e-12) | (a > hi + 1e-12),
+                    f"alpha is outside the calibrated table (alpha in [{lo:g}, {hi:g}]); use equilibrium='hertz' or "
+                    "extend the table.",
+                )
+            )
+        return out
 
 
 def _concrete(v):
@@ -296,6 +383,11 @@ class EquilibriumLaw(eqx.Module):
     def check(self, x_max: Any, alpha: Any) -> None:
         """Raise ValueError (eager values only) where x up to ``x_max`` or ``alpha`` is outside the law."""
 
+    def traced_checks(self, x_max: Any, alpha: Any) -> list[tuple[Any, str]]:
+        """The jit-safe twin of :meth:`check`: ``(bad, message)`` pairs, raised at run time by
+        :func:`~tissuemech.reduced.validation.traced_checks` (``equinox.error_if``)."""
+        return []
+
     @property
     def table(self) -> MasterCurve | None:
         """The master-curve table behind the law (None for closed forms and callables)."""
@@ -303,8 +395,8 @@ class EquilibriumLaw(eqx.Module):
 
 
 class Hertz(EquilibriumLaw):
-    """Small-strain Hertz contact between two rigid plates: F = (4/3) E* sqrt(a0) (delta/2)^(3/2) with
-    E* = 8 C (incompressible), i.e. f(x) = F_eq / (C a0^2) = (32/3) x^(3/2), x = delta / (2 a0).
+    """The small-strain Hertz plate law :func:`hertz_force` (two contacts, E* = 8 C) as a law object:
+    f(x) = F_eq / (C a0^2) = (32/3) x^(3/2), x = delta / (2 a0) (:func:`hertz_f`).
 
     Independent of alpha; valid for any 0 <= x < 1 (no table range; 4 % soft against the FE at x = 0.05,
     30 % at x = 0.3)."""
@@ -339,6 +431,10 @@ class FEMTable(EquilibriumLaw):
     def check(self, x_max: Any, alpha: Any) -> None:
         """x <= the table's last knot and alpha inside its grid (eager values only)."""
         self.master.check_range(x_max, alpha)
+
+    def traced_checks(self, x_max: Any, alpha: Any) -> list[tuple[Any, str]]:
+        """The run-time twin of :meth:`check` (``equinox.error_if``)."""
+        return self.master.range_checks(x_max, alpha)
 
     @property
     def table(self) -> MasterCurve:
@@ -394,6 +490,11 @@ class MidplaneLaw(eqx.Module):
     def check(self, x_max: Any, alpha: Any) -> None:
         """Raise ValueError (eager values only) where x up to ``x_max`` or ``alpha`` is outside the law."""
 
+    def traced_checks(self, x_max: Any, alpha: Any) -> list[tuple[Any, str]]:
+        """The jit-safe twin of :meth:`check`: ``(bad, message)`` pairs, raised at run time by
+        :func:`~tissuemech.reduced.validation.traced_checks` (``equinox.error_if``)."""
+        return []
+
     @property
     def table(self) -> MasterCurve | None:
         """The master-curve table behind the law (None otherwise)."""
@@ -404,8 +505,8 @@ class Incompressible(MidplaneLaw):
     """The volume-preserving oblate estimate: a spheroid keeping the ball's volume when its height
     2 a0 shrinks by delta has g(x) = r_mid / a0 = 1 / sqrt(1 - x) (= 1 + x/2 + ... at small x).
 
-    Valid for 0 <= x <= X_MAX = 0.999 (r_mid up to 31.6 a0): eager calls beyond it raise; traced calls are capped
-    there, so they stay finite."""
+    Valid for 0 <= x <= X_MAX = 0.999 (r_mid up to 31.6 a0): eager calls of the public functions beyond it raise,
+    traced ones raise at run time (:meth:`guard`); the curve itself is capped there, so it stays finite."""
 
     X_MAX = 0.999
 
@@ -421,6 +522,16 @@ class Incompressible(MidplaneLaw):
                 f"compression delta/(2 a0) = {np.max(xv):.6g} is beyond the incompressible midplane law's range "
                 f"(up to {self.X_MAX}, where r_mid = {1 / np.sqrt(1 - self.X_MAX):.3g} a0): the plates nearly touch"
             )
+
+    def traced_checks(self, x_max: Any, alpha: Any) -> list[tuple[Any, str]]:
+        """The run-time twin of :meth:`check` (``equinox.error_if``)."""
+        return [
+            (
+                jnp.asarray(x_max) > self.X_MAX * (1 + 1e-12),
+                f"compression delta/(2 a0) is beyond the incompressible midplane law's range (up to {self.X_MAX}, "
+                f"where r_mid = {1 / np.sqrt(1 - self.X_MAX):.3g} a0): the plates nearly touch",
+            )
+        ]
 
 
 class FEMMidplane(MidplaneLaw):
@@ -443,6 +554,10 @@ class FEMMidplane(MidplaneLaw):
     def check(self, x_max: Any, alpha: Any) -> None:
         """x <= the table's last knot and alpha inside its grid (eager values only)."""
         self.master.check_range(x_max, alpha)
+
+    def traced_checks(self, x_max: Any, alpha: Any) -> list[tuple[Any, str]]:
+        """The run-time twin of :meth:`check` (``equinox.error_if``)."""
+        return self.master.range_checks(x_max, alpha)
 
     @property
     def table(self) -> MasterCurve:
@@ -480,6 +595,18 @@ class TabulatedMidplane(MidplaneLaw):
                 f"compression delta/(2 a0) = {np.max(xv):.4g} is beyond the midplane table (up to {self.x_max:.4g}, "
                 f"i.e. {100 * self.x_max:.3g} % of the diameter); extend the table or use midplane='incompressible'."
             )
+
+    def traced_checks(self, x_max: Any, alpha: Any) -> list[tuple[Any, str]]:
+        """The run-time twin of :meth:`check` (``equinox.error_if``)."""
+        if self.x_max is None:
+            return []
+        return [
+            (
+                jnp.asarray(x_max) > self.x_max * (1 + 1e-12),
+                f"compression delta/(2 a0) is beyond the midplane table (up to {self.x_max:.4g}, i.e. "
+                f"{100 * self.x_max:.3g} % of the diameter); extend the table or use midplane='incompressible'.",
+            )
+        ]
 
 
 class UserMidplane(MidplaneLaw):
@@ -591,19 +718,131 @@ def _cached_table(kind: str, key: tuple):
     """One table object per content: a user's (x, f) or (x, g) arrays passed again in a later call give
     the same object, hence an equal law and reused compiled code (laws are static arguments)."""
     arrays = [np.frombuffer(b, dtype=float).reshape(shape) for shape, b in key]
-    return MasterCurve(*cast(list[Any], arrays)) if kind == "f" else _Midplane1D(*arrays)
+    return MasterCurve(arrays[0], arrays[1]) if kind == "f" else _Midplane1D(arrays[0], arrays[1])
 
 
 # ---------------------------------------------------------------- the lumped ODE
 
 
-class _Opts(NamedTuple):
-    rtol: float
-    atol: float
-    max_steps: int
+_ODE_DEFAULTS = dict(rtol=1e-10, atol=1e-10, max_steps=16384, solver=None, adjoint="reverse")
+_ODE_KEYWORDS = tuple(_ODE_DEFAULTS)
+
+
+class Quadrature(eqx.Module):
+    """The default method for a ramp-and-hold (``displacement`` a number): the exact-kernel quadrature of the
+    branch convolutions (module docstring, "Loading"): no time stepping, any stiffness tau << ramp_time, every
+    output time at once; with Hertz within 4.7e-9 of the closed form for tau / t_r in [1e-4, 1e3].
+
+    ``nodes``  Gauss-Legendre nodes per interval between consecutive output times (>= 2; default 16, the
+               accuracy above). It has no tolerance, solver, adjoint or step limit: passing one of the ODE
+               keywords (``rtol``, ``atol``, ``max_steps``, ``solver``, ``adjoint``) with it raises. A callable
+               ``displacement`` (any history) has no quadrature path: it is always integrated by :class:`ODE`
+               (with ``method=Quadrature()``, the default, the loose keywords set that ODE)."""
+
+    nodes: int
+
+    def __init__(self, nodes: Any = 16):
+        self.nodes = validate_int("nodes (Gauss-Legendre nodes per interval of the quadrature)", nodes, minimum=2)
+
+
+class ODE(eqx.Module):
+    """diffrax integration of the lumped ODE (module docstring, "Loading"): for a ramp-and-hold in v =
+    sqrt(t / t_r) with steps landing on the output times, for a callable history in t.
+
+    ``solver``               a diffrax solver; None (default) picks the explicit ``Tsit5`` when the parameters
+                             are concrete and ramp_time / tau <= 10, else the L-stable ESDIRK ``Kvaerno5``.
+    ``stepsize_controller``  an adaptive diffrax controller (default ``diffrax.PIDController(rtol, atol)``); the
+                             steps are clipped to land on the output times (``diffrax.ClipStepSizeController``).
+    ``rtol``, ``atol``       tolerances of the default controller (dimensionless: the branch forces are scaled by
+                             the largest equilibrium force), 1e-10 each; not with ``stepsize_controller``.
+    ``adjoint``              "reverse" (``diffrax.RecursiveCheckpointAdjoint``, for jax.grad / jacrev), "forward"
+                             (``diffrax.ForwardMode``, for jax.jacfwd / jvp) or a diffrax adjoint.
+    ``max_steps``            the step limit (a whole number >= 1, default 16384).
+
+    Eager calls raise RuntimeError when the solve fails; inside jit a failed solve gives NaN."""
+
     solver: Any
+    stepsize_controller: Any
     adjoint: Any
-    method: str = "quadrature"
+    max_steps: int
+
+    def __init__(
+        self,
+        solver: Any = None,
+        stepsize_controller: Any = None,
+        *,
+        rtol: Any = None,
+        atol: Any = None,
+        adjoint: Any = "reverse",
+        max_steps: Any = 16384,
+    ):
+        if stepsize_controller is None:
+            rtol = _ODE_DEFAULTS["rtol"] if rtol is None else rtol
+            atol = _ODE_DEFAULTS["atol"] if atol is None else atol
+            validate_positive("rtol (relative tolerance of the ODE solver)", rtol, "dimensionless")
+            validate_positive("atol (absolute tolerance of the ODE solver)", atol, "dimensionless")
+            stepsize_controller = diffrax.PIDController(rtol=float(rtol), atol=float(atol))
+        elif rtol is not None or atol is not None:
+            given = "rtol" if rtol is not None else "atol"
+            raise InputTypeError(
+                f"{given} (tolerance of the ODE solver) goes into stepsize_controller when one is given; pass "
+                f"ODE(stepsize_controller=diffrax.PIDController(rtol=..., atol=...)), not both"
+            )
+        elif not isinstance(stepsize_controller, diffrax.AbstractAdaptiveStepSizeController):
+            raise InputTypeError(
+                "stepsize_controller (of the ODE method) must be an adaptive diffrax controller, e.g. "
+                f"diffrax.PIDController(rtol=1e-10, atol=1e-10); got {stepsize_controller!r}"
+            )
+        if solver is not None and not isinstance(solver, diffrax.AbstractSolver):
+            raise InputTypeError(f"solver (of the ODE method) must be a diffrax solver or None; got {solver!r}")
+        self.solver = solver
+        self.stepsize_controller = stepsize_controller
+        self.adjoint = _adjoint(adjoint)
+        self.max_steps = validate_int("max_steps (of the ODE solver)", max_steps, minimum=1)
+
+
+Method = str | Quadrature | ODE
+_QUADRATURE = Quadrature()  # the default method
+
+
+def as_method(method: Any, displacement: Any = 0.0, **keywords: Any) -> Quadrature | ODE:
+    """The method object for a ``method=`` value and the loose ODE keywords of :func:`force` (``rtol``, ``atol``,
+    ``max_steps``, ``solver``, ``adjoint``; None = not given): ``"quadrature"`` -> :class:`Quadrature`,
+    ``"ode"`` -> ``ODE(**keywords)``; an object is returned as it is. For a callable ``displacement`` (a history,
+    which only the ODE integrates) the result is always an :class:`ODE`.
+
+    Raises ValueError for an unknown method, and InputTypeError (a ValueError and a TypeError) for an ODE keyword
+    that would have no effect (with the quadrature method) or is given twice (loose and inside ``ODE(...)``)."""
+    given = {k: v for k, v in keywords.items() if v is not None}
+    unknown = set(given) - set(_ODE_KEYWORDS)
+    if unknown:
+        raise InputTypeError(
+            f"unknown keyword(s) {sorted(unknown)} of the method; the ODE keywords are {_ODE_KEYWORDS}"
+        )
+    if isinstance(method, str) and method in ("quadrature", "ode"):
+        method = Quadrature() if method == "quadrature" else ODE(**given)
+        given = {} if isinstance(method, ODE) else given
+    elif not isinstance(method, (Quadrature, ODE)):
+        raise ValueError(
+            "method must be 'quadrature' (fast default for a ramp-and-hold), 'ode' (diffrax), Quadrature(...) or "
+            f"ODE(...); got {method!r}"
+        )
+    if isinstance(method, ODE):
+        if given:
+            name = next(iter(given))
+            raise InputTypeError(
+                f"{name} is given twice: as a keyword and inside method=ODE(...); pass it to ODE({name}=...) only"
+            )
+        return method
+    if callable(displacement):  # a history: the ODE integrates it, the loose keywords are its options
+        return ODE(**given)
+    if given:
+        name = next(iter(given))
+        raise InputTypeError(
+            f"{name} has no effect with the quadrature method (the default for a ramp-and-hold); pass "
+            f"method=ODE({name}=...) to integrate the ODE instead"
+        )
+    return method
 
 
 def _adjoint(kind: Any):
@@ -620,7 +859,7 @@ def _adjoint(kind: Any):
 
 @functools.partial(jax.jit, static_argnums=(4,))
 def _run(flat_t, params, betas, taus, static):
-    law, mid, history, jumps, o, stress, shape = static
+    law, mid, history, jumps, method, solver, stress, shape = static
     disp = history if history is not None else None
 
     def one(p, bs, ts, batch_axis=None):
@@ -638,7 +877,8 @@ def _run(flat_t, params, betas, taus, static):
             law,
             mid,
             jumps,
-            o,
+            method,
+            solver,
             stress,
             batch_axis,
         )
@@ -657,10 +897,21 @@ _GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(16)
 _ZETA = (_GL_NODES + 1.0) / 2.0  # Gauss-Legendre on [0, 1] in zeta, eta = zeta^2
 _ETA = _ZETA**2
 _W_ETA = _ZETA * _GL_WEIGHTS  # d eta = 2 zeta d zeta, times the [0, 1] weights w / 2
+
+
+def _gauss_eta(nodes: int) -> tuple[np.ndarray, np.ndarray]:
+    """eta = zeta^2 at the Gauss-Legendre nodes zeta on [0, 1] and the weights in eta (``nodes`` points)."""
+    if nodes == 16:
+        return _ETA, _W_ETA
+    x, w = np.polynomial.legendre.leggauss(nodes)
+    zeta = (x + 1.0) / 2.0
+    return zeta**2, zeta * w
+
+
 _CHUNK = 8  # ramp intervals integrated per step of the chunk loop (the rest of a chunk loop is skipped)
 
 
-def _ramp_hold_quadrature(t, f, X, tr, betas, taus, knots=None, batch_axis=None):
+def _ramp_hold_quadrature(t, f, X, tr, betas, taus, knots=None, batch_axis=None, nodes: int = 16):
     """Dimensionless F/(C a0^2) at times t for x(t) = X min(t/tr, 1), by exact-kernel quadrature.
 
     In ramp units s = t/tr (k_m = tr/tau_m), q_m(s) = beta_m int_0^s e^{-k_m (s-u)} phi(u) du with
@@ -673,7 +924,7 @@ def _ramp_hold_quadrature(t, f, X, tr, betas, taus, knots=None, batch_axis=None)
     a boundary layer of width sqrt(z0) in eta (its integrand is singular at eta = +-i sqrt(z0 / (1 - z0)));
     in zeta that distance is z0^(1/4), so the same 16 nodes resolve it: against the closed form (Hertz,
     Dawson's integral) the largest error over tau / t_r in [1e-4, 1e3] drops from 5.9e-7 (Gauss in eta,
-    at tau ~ 0.023 t_r) to 4.7e-9 (``python notes/stiff_kernel_scan.py [--eta]``). No time stepping: every output
+    at tau ~ 0.023 t_r) to 4.7e-9 (measured against the closed form at 701 log-spaced tau / t_r). No time stepping: every output
     point at once.
 
     The sorted points (output times clipped to the ramp, and ``knots``) are walked in chunks of
@@ -703,8 +954,8 @@ def _ramp_hold_quadrature(t, f, X, tr, betas, taus, knots=None, batch_axis=None)
     if batch_axis is not None:
         active = jax.lax.pmax(active, batch_axis)
     k = (tr / taus)[:, None]  # (n, 1)
-    eta = jnp.asarray(_ETA)
-    w_eta = 2.0 * eta * jnp.asarray(_W_ETA)
+    eta_np, w_np = _gauss_eta(nodes)
+    eta, w_eta = jnp.asarray(eta_np), 2.0 * jnp.asarray(eta_np) * jnp.asarray(w_np)
     bcol = betas[:, None]
 
     def integrate(q, s0, s1):
@@ -746,7 +997,7 @@ def _ramp_hold_quadrature(t, f, X, tr, betas, taus, knots=None, batch_axis=None)
     return feq + jnp.sum(q, axis=-1), ok
 
 
-def _ramp_hold(t, f, X, tr, betas, taus, o: _Opts):
+def _ramp_hold(t, f, X, tr, betas, taus, o: ODE, solver: Any):
     """Dimensionless F/(C a0^2) at times t (1-D, any order) for x(t) = X min(t/tr, 1)."""
     n = betas.shape[0]
     fX = f(X)
@@ -767,16 +1018,14 @@ def _ramp_hold(t, f, X, tr, betas, taus, o: _Opts):
     order = jnp.argsort(vs)
     sol = diffrax.diffeqsolve(
         diffrax.ODETerm(rhs),
-        o.solver,
+        solver,
         t0=0.0,
         t1=1.0,
         dt0=1e-3,
         y0=jnp.zeros(n),
         saveat=diffrax.SaveAt(ts=vs[order], t1=True),
         # steps land on the output times: saved values are step values, not the (lower-order) interpolant
-        stepsize_controller=diffrax.ClipStepSizeController(
-            diffrax.PIDController(rtol=o.rtol, atol=o.atol), step_ts=vs[order]
-        ),
+        stepsize_controller=diffrax.ClipStepSizeController(o.stepsize_controller, step_ts=vs[order]),
         max_steps=o.max_steps,
         adjoint=o.adjoint,
         throw=False,
@@ -788,7 +1037,7 @@ def _ramp_hold(t, f, X, tr, betas, taus, o: _Opts):
     return feq + jnp.sum(q, axis=-1), sol.result == diffrax.RESULTS.successful
 
 
-def _history(t, f, x_of_t, betas, taus, jumps, o: _Opts):
+def _history(t, f, x_of_t, betas, taus, jumps, o: ODE, solver: Any):
     """Dimensionless force for a general approach history x(t) (t sorted ascending inside)."""
     n = betas.shape[0]
     feq = f(x_of_t(t))
@@ -803,13 +1052,13 @@ def _history(t, f, x_of_t, betas, taus, jumps, o: _Opts):
 
     order = jnp.argsort(t)
     controller = diffrax.ClipStepSizeController(
-        diffrax.PIDController(rtol=o.rtol, atol=o.atol),
+        o.stepsize_controller,
         step_ts=t[order],
         jump_ts=None if jumps is None else jnp.asarray(jumps, dtype=jnp.float64),
     )
     sol = diffrax.diffeqsolve(
         diffrax.ODETerm(rhs),
-        o.solver,
+        solver,
         t0=0.0,
         t1=T,
         dt0=T * 1e-4,
@@ -825,7 +1074,21 @@ def _history(t, f, x_of_t, betas, taus, jumps, o: _Opts):
 
 
 def _curve(
-    t, radius, C, alpha, betas, taus, displacement, ramp_time, law, mid, jumps, o, stress: bool, batch_axis=None
+    t,
+    radius,
+    C,
+    alpha,
+    betas,
+    taus,
+    displacement,
+    ramp_time,
+    law,
+    mid,
+    jumps,
+    method,
+    solver,
+    stress: bool,
+    batch_axis=None,
 ):
     """Force (N) or nominal stress (Pa) at flat times t for scalar parameters (``law``/``mid``: law objects)."""
     f = law.curve(alpha=alpha, radius=radius, C=C)
@@ -834,21 +1097,65 @@ def _curve(
         def x_of_t(tt):
             return displacement(tt) / (2.0 * radius)
 
-        fhat, ok = _history(t, f, x_of_t, betas, taus, jumps, o)
+        fhat, ok = _history(t, f, x_of_t, betas, taus, jumps, method, solver)
         x_t = x_of_t(t)
     else:
         X = displacement / (2.0 * radius)
-        if o.method == "quadrature":
+        if isinstance(method, Quadrature):
             knots = law.knots(displacement, radius)
-            fhat, ok = _ramp_hold_quadrature(t, f, X, ramp_time, betas, taus, knots, batch_axis)
+            fhat, ok = _ramp_hold_quadrature(t, f, X, ramp_time, betas, taus, knots, batch_axis, method.nodes)
         else:
-            fhat, ok = _ramp_hold(t, f, X, ramp_time, betas, taus, o)
+            fhat, ok = _ramp_hold(t, f, X, ramp_time, betas, taus, method, solver)
         x_t = X * jnp.clip(t / ramp_time, 0.0, 1.0)
     out = fhat * C * radius**2
     if stress:
         g = mid.curve(alpha=alpha, radius=radius)
         out = out / (jnp.pi * (radius * g(x_t)) ** 2)
     return jnp.where(ok, out, jnp.nan), ok
+
+
+class PiecewiseLinear:
+    """A measured approach history delta(t) (m): linear between the samples ``times`` (s, from 0, strictly increasing)
+    and ``approaches`` (m), held at the last value after the last time. A callable for ``force(displacement=...)``
+    (what ``displacement=(times, approaches)`` builds); compared and hashed by content, so compiled code is reused
+    for equal data."""
+
+    def __init__(self, times: Any, approaches: Any):
+        tv = validate_times("times (of the measured approach history)", times, unit="s", ascending=True, strictly=True)
+        dv = validate_finite("approaches (of the measured approach history)", approaches, "m")
+        tv, dv = np.asarray(tv, dtype=float), np.asarray(dv, dtype=float)
+        if tv.ndim != 1 or dv.shape != tv.shape or tv.size < 2:
+            raise ValueError(
+                "displacement=(times, approaches) needs two 1-D arrays of equal length >= 2 (s and m); got shapes "
+                f"{tv.shape} and {dv.shape}"
+            )
+        if tv[0] != 0.0:
+            raise ValueError(
+                f"times (of the measured approach history) must start at 0 s (first contact); got {tv[0]:g} s"
+            )
+        self.times, self.approaches = tv, dv
+        self._key = (tv.tobytes(), dv.tobytes())
+
+    def __call__(self, t: Any) -> jnp.ndarray:
+        return jnp.interp(t, jnp.asarray(self.times), jnp.asarray(self.approaches))
+
+    def __hash__(self) -> int:
+        return hash(self._key)
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, PiecewiseLinear) and self._key == other._key
+
+
+def _measured_history(spec: tuple) -> tuple[Callable, tuple[float, ...]]:
+    """The history callable of ``displacement=(times, approaches)`` and its kinks (traced samples: an interpolating
+    closure without kinks, checked at run time like any traced history)."""
+    if len(spec) != 2:
+        raise ValueError("displacement as a tuple must be (times, approaches): arrays in s and m")
+    if is_traced(*spec):
+        times, approaches = (jnp.asarray(v, dtype=jnp.float64) for v in spec)
+        return (lambda t: jnp.interp(t, times, approaches)), ()
+    history = PiecewiseLinear(*spec)
+    return history, tuple(float(v) for v in history.times[1:-1])
 
 
 def _evaluate(
@@ -872,6 +1179,9 @@ def _evaluate(
     stress,
 ):
     br = validate_branches(branches)
+    if isinstance(displacement, tuple):  # a measured history (times, approaches): piecewise linear, kinks at the times
+        displacement, kinks = _measured_history(displacement)
+        jump_times = kinks if jump_times is None else tuple(jump_times) + kinks
     eager = not is_traced(
         t,
         radius,
@@ -881,9 +1191,16 @@ def _evaluate(
         *(v for b in br for v in b),
         *(() if callable(displacement) else (displacement,)),
     )
+    if eager and callable(displacement) and _closes_over_tracers(displacement):
+        eager = False  # a history built from traced values (inside the user's jit): checked at run time
+    checks = []
     if eager:
         _check_inputs(t, radius, C, alpha, displacement, ramp_time, equilibrium, midplane, jump_times, stress)
-    _check_solver_options(rtol, atol, max_steps)
+    else:  # the run-time twins, attached to the result below
+        checks = _traced_inputs(
+            t, radius, C, alpha, br, displacement, ramp_time, equilibrium, midplane, jump_times, stress
+        )
+    method = as_method(method, displacement, rtol=rtol, atol=atol, max_steps=max_steps, solver=solver, adjoint=adjoint)
     t_arr = jnp.asarray(t, dtype=jnp.float64)  # after the checks: their messages name t, numpy's would not
     betas = tuple(jnp.asarray(b, dtype=jnp.float64) for b, _ in br)
     taus = tuple(jnp.asarray(tau, dtype=jnp.float64) for _, tau in br)
@@ -904,7 +1221,8 @@ def _evaluate(
             f"the parameter arrays do not broadcast together ({given}): give them shapes that broadcast, e.g. "
             "(2, 1) and (3,) for a 2 x 3 grid"
         ) from None
-    if solver is None:
+    solver = method.solver if isinstance(method, ODE) else None
+    if isinstance(method, ODE) and solver is None:
         solver = diffrax.Kvaerno5()  # L-stable: safe for any tau / ramp ratio
         if eager and br and not callable(displacement):
             stiff = np.max(
@@ -912,11 +1230,6 @@ def _evaluate(
             )
             if stiff <= 10.0:
                 solver = diffrax.Tsit5()  # non-stiff: the explicit solver is ~4x faster
-    if method not in ("quadrature", "ode"):
-        raise ValueError(
-            f"method must be 'quadrature' (fast default for a ramp-and-hold) or 'ode' (diffrax); got {method!r}"
-        )
-    o = _Opts(float(rtol), float(atol), int(max_steps), solver, _adjoint(adjoint), method)
     law = as_equilibrium_law(equilibrium)
     mid = as_midplane_law(midplane, equilibrium) if stress else None
     static = (
@@ -924,7 +1237,8 @@ def _evaluate(
         mid,
         displacement if callable(displacement) else None,
         None if jump_times is None else tuple(float(j) for j in jump_times),
-        o,
+        method,
+        solver,
         stress,
         shape,
     )
@@ -932,16 +1246,15 @@ def _evaluate(
     if eager and not bool(np.all(np.asarray(ok))):
         raise RuntimeError(
             f"the lumped viscoelastic ODE failed for {int(np.size(ok) - np.sum(np.asarray(ok)))} of "
-            f"{int(np.size(ok))} parameter sets. Hint: raise max_steps (now {max_steps}), loosen rtol/atol, "
+            f"{int(np.size(ok))} parameter sets. Hint: raise max_steps (now {cast(ODE, method).max_steps}), loosen "
+            "rtol/atol, "
             "or check that the relaxation times are not absurdly short compared with the ramp."
         )
     out = out.reshape(shape + t_arr.shape)
+    if not eager:
+        out = traced_checks(out, checks + ([(out < 0, _LOSE_CONTACT)] if callable(displacement) else []))
     if eager and callable(displacement) and bool(np.any(np.asarray(out) < 0)):
-        raise ValueError(
-            "displacement history: the plate force turns negative (the plates would lose contact: the "
-            "approach decreases faster than the ball relaxes); the lumped model holds only while the "
-            "plates push (force >= 0 N). Shorten the history or unload more slowly"
-        )
+        raise ValueError(_LOSE_CONTACT)
     return out
 
 
@@ -956,12 +1269,12 @@ def force(
     ramp_time: Any = None,
     equilibrium: Equilibrium = "fem",
     jump_times: Sequence[float] | None = None,
-    rtol: float = 1e-10,
-    atol: float = 1e-10,
-    max_steps: int = 16384,
+    rtol: float | None = None,
+    atol: float | None = None,
+    max_steps: int | None = None,
     solver: Any = None,
-    adjoint: Any = "reverse",
-    method: str = "quadrature",
+    adjoint: Any = None,
+    method: Method = _QUADRATURE,
 ) -> jnp.ndarray:
     r"""Plate force F(t) in N of the lumped generalized-Maxwell spheroid.
 
@@ -971,9 +1284,19 @@ def force(
     radius       ball radius a0 (m).       C, alpha   Fung parameters (Pa, -).
     branches     sequence of (beta, tau): energy factor (-) and relaxation time (s); () = elastic.
     displacement total approach delta of the plates (m) reached at ``ramp_time`` (s) and then held;
-                 or a callable delta(t) (m) for any history (``jump_times``: its kinks, s).
+                 or a callable delta(t) (m) for any history (``jump_times``: its kinks, s); or a measured
+                 history ``(times, approaches)`` (arrays in s and m, linear between samples, held after).
     equilibrium  "hertz", "fem" (FE-calibrated table), an (x, f) table or a callable (module doc).
+    method       :class:`Quadrature` (default; "quadrature") or :class:`ODE` (``ODE(solver, stepsize_controller,
+                 rtol=, atol=, adjoint=, max_steps=)``; "ode"): how the branches are integrated over a ramp.
+    rtol, atol, max_steps, solver, adjoint
+                 the loose spelling of the ODE options (defaults 1e-10, 1e-10, 16384, auto, "reverse"): with
+                 ``method="ode"`` or a callable displacement only; with the quadrature they would have no effect
+                 and raise (InputTypeError, a ValueError naming the keyword).
     Parameters broadcast: the result has shape ``broadcast(params).shape + t.shape``.
+    Eager calls raise ValueError for a bad input (naming it and its unit) and RuntimeError for a failed solve;
+    under jit/vmap/grad the same input checks raise at run time (``equinox.error_if``, module docstring) and a
+    failed solve gives NaN.
     """
     return _evaluate(
         t,
@@ -1008,17 +1331,19 @@ def nominal_stress(
     equilibrium: Equilibrium = "fem",
     midplane: Midplane = None,
     jump_times: Sequence[float] | None = None,
-    rtol: float = 1e-10,
-    atol: float = 1e-10,
-    max_steps: int = 16384,
+    rtol: float | None = None,
+    atol: float | None = None,
+    max_steps: int | None = None,
     solver: Any = None,
-    adjoint: Any = "reverse",
-    method: str = "quadrature",
+    adjoint: Any = None,
+    method: Method = _QUADRATURE,
 ) -> jnp.ndarray:
     r"""Nominal stress sigma~(t) = F(t) / (pi r_mid(delta(t))^2) in Pa (the seed's observable).
 
     Same arguments as :func:`force`; ``midplane`` chooses r_mid: "incompressible" (a0/sqrt(1 - x)),
     "fem" (calibrated), an (x, g) table, a callable r_mid(delta, *, radius, alpha) (m), or None (auto).
+    Errors as :func:`force` (eager: ValueError; under jit/vmap/grad: at run time, ``equinox.error_if``), the
+    midplane law's range included.
     """
     return _evaluate(
         t,
@@ -1052,7 +1377,8 @@ def equilibrium_force(
                   F_eq(delta, *, radius, C, alpha) (N), or a law object (:class:`Hertz`, :class:`FEMTable`...).
     Returns F_eq (N), shape broadcast(displacement, radius, C).
     Raises ValueError (eager calls) for a bad value (naming it and its unit), an unknown law, or an
-    approach beyond the law's table. Eager calls validate here and run one compiled kernel.
+    approach beyond the law's table. Eager calls validate here and run one compiled kernel. Under jit/vmap/grad
+    the same checks raise at run time (``equinox.error_if``, the eager message without the value).
     """
     fast = _plain_numbers(displacement, radius, C, alpha)
     if fast is not None:  # one point given as plain numbers: the checks in scalar arithmetic (~1 us)
@@ -1071,14 +1397,21 @@ def equilibrium_force(
                 type(law).check(law, hi / (2.0 * r), a)
                 return _equilibrium_core(law, displacement, r, c, a)
     if not is_traced(displacement, radius, C, alpha):
-        r = validate_positive("radius (of the ball)", radius, "m")
+        rv = validate_positive("radius (of the ball)", radius, "m")
         validate_material(C, alpha)
-        d = validate_finite("displacement (the total approach of the plates)", displacement, "m")
-        x_hi = _approach_max("displacement", d, r)
+        dv = validate_finite("displacement (the total approach of the plates)", displacement, "m")
+        x_hi = _approach_max("displacement", dv, rv)
         law = as_equilibrium_law(equilibrium)
         type(law).check(law, x_hi, alpha)
-        return _equilibrium_core(law, d, r, np.asarray(C, dtype=float), np.asarray(alpha, dtype=float))
-    return _equilibrium_core(as_equilibrium_law(equilibrium), displacement, radius, C, alpha)
+        return _equilibrium_core(law, dv, rv, np.asarray(C, dtype=float), np.asarray(alpha, dtype=float))
+    # traced (jit/vmap/grad): concrete values checked now, traced ones at run time (equinox.error_if)
+    validate_positive("radius (of the ball)", radius, "m")
+    validate_material(C, alpha)
+    validate_finite("displacement (the total approach of the plates)", displacement, "m")
+    law = as_equilibrium_law(equilibrium)
+    checks = traced_positive("radius (of the ball)", radius, "m") + traced_material(C, alpha)
+    checks += _traced_approach("displacement", displacement, radius, alpha, (law,))
+    return traced_checks(_equilibrium_core(law, displacement, radius, C, alpha), checks)
 
 
 @functools.partial(jax.jit, static_argnums=(0,))
@@ -1109,7 +1442,8 @@ def midplane_radius(
                   a callable r_mid(delta, *, radius, alpha) (m), or a law object (:class:`Incompressible`...).
     Returns r_mid (m), shape broadcast(displacement, radius).
     Raises ValueError (eager calls) for a bad value (naming it and its unit), an unknown law, or an
-    approach beyond the law's table. Eager calls validate here and run one compiled kernel.
+    approach beyond the law's table. Eager calls validate here and run one compiled kernel. Under jit/vmap/grad
+    the same checks raise at run time (``equinox.error_if``, the eager message without the value).
     """
     fast = _plain_numbers(displacement, radius, alpha)
     if fast is not None:  # one point given as plain numbers: the checks in scalar arithmetic (~1 us)
@@ -1128,14 +1462,22 @@ def midplane_radius(
                 type(law).check(law, hi / (2.0 * r), a)
                 return _midplane_core(law, displacement, r, a)
     if not is_traced(displacement, radius, alpha):
-        r = validate_positive("radius (of the ball)", radius, "m")
+        rv = validate_positive("radius (of the ball)", radius, "m")
         validate_nonnegative("alpha (the Fung stiffening exponent)", alpha, "dimensionless")
-        d = validate_finite("displacement (the total approach of the plates)", displacement, "m")
-        x_hi = _approach_max("displacement", d, r)
+        dv = validate_finite("displacement (the total approach of the plates)", displacement, "m")
+        x_hi = _approach_max("displacement", dv, rv)
         law = as_midplane_law(midplane)
         type(law).check(law, x_hi, alpha)
-        return _midplane_core(law, d, r, np.asarray(alpha, dtype=float))
-    return _midplane_core(as_midplane_law(midplane), displacement, radius, alpha)
+        return _midplane_core(law, dv, rv, np.asarray(alpha, dtype=float))
+    # traced (jit/vmap/grad): concrete values checked now, traced ones at run time (equinox.error_if)
+    validate_positive("radius (of the ball)", radius, "m")
+    validate_nonnegative("alpha (the Fung stiffening exponent)", alpha, "dimensionless")
+    validate_finite("displacement (the total approach of the plates)", displacement, "m")
+    law = as_midplane_law(midplane)
+    checks = traced_positive("radius (of the ball)", radius, "m")
+    checks += traced_nonnegative("alpha (the Fung stiffening exponent)", alpha, "dimensionless")
+    checks += _traced_approach("displacement", displacement, radius, alpha, (law,))
+    return traced_checks(_midplane_core(law, displacement, radius, alpha), checks)
 
 
 @functools.partial(jax.jit, static_argnums=(0,))
@@ -1193,12 +1535,6 @@ def _plain_numbers(*values: Any) -> tuple[float, ...] | None:
     return tuple(out)
 
 
-def _check_solver_options(rtol: Any, atol: Any, max_steps: Any) -> None:
-    validate_positive("rtol (relative tolerance of the ODE solver)", rtol, "dimensionless")
-    validate_positive("atol (absolute tolerance of the ODE solver)", atol, "dimensionless")
-    validate_int("max_steps (of the ODE solver)", max_steps, minimum=1)
-
-
 def _approach_max(name: str, d: Any, r: Any) -> float:
     """max of x = d / (2 r) after :func:`_check_approach` (two passes over d when r is one number; the
     full check, with its message, only when something is wrong)."""
@@ -1210,6 +1546,26 @@ def _approach_max(name: str, d: Any, r: Any) -> float:
     x = d / (2.0 * r)
     _check_approach(name, x)
     return float(np.max(x))
+
+
+def _traced_approach(
+    name: str, displacement: Any, radius: Any, alpha: Any, laws: Sequence[Any], positive=False
+) -> list[tuple[Any, str]]:
+    """The run-time twins of :func:`_check_approach` and the laws' ``check`` for a traced call, as ``(bad, message)``
+    pairs for ``traced_checks``: x = delta / (2 radius) finite, >= 0 (> 0 with ``positive``), below 1 and in every
+    law's range."""
+    x = jnp.asarray(displacement, dtype=jnp.float64) / (2.0 * jnp.asarray(radius, dtype=jnp.float64))
+    what = f"{name} (the total approach of the plates, in m)"
+    checks = [(~jnp.isfinite(x), f"{what} must be finite")]
+    if positive:
+        checks.append((x <= 0, f"{name} (the total approach of the plates) must be positive (in m)"))
+    else:
+        checks.append((x < 0, f"{what} must not be negative"))
+    checks.append((x >= 1, f"{what} must be smaller than the ball's diameter 2 * radius"))
+    x_max = jnp.max(x)
+    for law in laws:
+        checks.extend(law.traced_checks(x_max, alpha))
+    return checks
 
 
 def _check_approach(name: str, x_over_diameter: np.ndarray, where: str = "") -> None:
@@ -1226,6 +1582,70 @@ def _check_approach(name: str, x_over_diameter: np.ndarray, where: str = "") -> 
             f"{name} (the total approach of the plates, in m) must be smaller than the ball's diameter "
             f"2 * radius{where}: got delta/(2 radius) = {np.max(x_over_diameter):.4g}"
         )
+
+
+_LOSE_CONTACT = (
+    "displacement history: the plate force turns negative (the plates would lose contact: the "
+    "approach decreases faster than the ball relaxes); the lumped model holds only while the "
+    "plates push (force >= 0 N). Shorten the history or unload more slowly"
+)
+
+
+def _closes_over_tracers(history: Callable) -> bool:
+    """Whether a displacement history returns traced values at t = 0 (it closes over the user's traced values)."""
+    try:
+        return is_traced(history(jnp.zeros(())))
+    except Exception:  # the eager checks report it with their message
+        return False
+
+
+def _traced_inputs(t, radius, C, alpha, br, displacement, ramp_time, equilibrium, midplane, jump_times, stress):
+    """The checks of a traced call of force / nominal_stress: the eager ones on the concrete values now (each skips a
+    traced value), their twins on the traced ones at run time (``equinox.error_if``, same messages without the
+    value). Returns the run-time checks as ``(bad, message)`` pairs, attached to the result by ``traced_checks``."""
+    validate_times("t (output times, t = 0 is first contact)", t, unit="s")
+    validate_positive("radius (of the ball)", radius, "m")
+    validate_material(C, alpha)
+    if jump_times is not None:
+        validate_times("jump_times (kinks of the displacement history)", jump_times, unit="s")
+    if not callable(displacement):
+        validate_positive("displacement (the total approach of the plates)", displacement, "m")
+        if ramp_time is None:
+            raise ValueError("ramp_time (s) is needed with a numeric displacement (linear ramp, then hold)")
+        validate_positive("ramp_time (duration of the loading ramp)", ramp_time, "s")
+    eq = as_equilibrium_law(equilibrium)
+    laws = [eq, as_midplane_law(midplane, equilibrium)] if stress else [eq]
+    checks = traced_times("t (output times, t = 0 is first contact)", t, unit="s")
+    checks += traced_positive("radius (of the ball)", radius, "m") + traced_material(C, alpha) + traced_branches(br)
+    if callable(displacement):
+        checks += _traced_history(t, displacement, radius, alpha, laws)
+    else:
+        checks += traced_positive("ramp_time (duration of the loading ramp)", ramp_time, "s")
+        checks += _traced_approach("displacement", displacement, radius, alpha, laws, positive=True)
+    return checks
+
+
+def _traced_history(t, history, radius, alpha, laws) -> list[tuple[Any, str]]:
+    """The run-time twins of the eager history checks: delta(t) at the output times and 257 even times up to the
+    last (the eager probe) finite, >= 0, below the diameter, 0 at t = 0 and in every law's range."""
+    tt = jnp.ravel(jnp.asarray(t, dtype=jnp.float64))
+    probe = jnp.concatenate([tt, jnp.linspace(0.0, 1.0, 257) * jnp.max(tt)])
+    x = jax.vmap(history)(probe) / (2.0 * jnp.min(jnp.asarray(radius, dtype=jnp.float64)))
+    name = "displacement history (the total approach of the plates, in m)"
+    checks = [
+        (~jnp.isfinite(x), f"{name} must be finite at every time"),
+        (x < 0, f"{name} must not be negative at every time"),
+        (x >= 1, f"{name} must be smaller than the ball's diameter 2 * radius at every time"),
+        (
+            jnp.abs(x[tt.size]) > 1e-12,
+            "displacement history: delta(0) must be 0 m: the model starts at first contact (branches at rest); start "
+            "the history at 0",
+        ),
+    ]
+    x_max = jnp.max(x)
+    for law in laws:
+        checks.extend(law.traced_checks(x_max, alpha))
+    return checks
 
 
 def _check_inputs(
@@ -1256,7 +1676,7 @@ def _check_inputs(
             raise ValueError(
                 f"displacement (a callable delta(t) in m) must return one number per time; got shape {d.shape}"
             )
-        x = d / (2.0 * float(np.min(r)))
+        x = d / (2.0 * float(np.min(cast(np.ndarray, r))))
         _check_approach("displacement history", x, " at every time")
         if abs(float(x[0])) > 1e-12:
             raise ValueError(
@@ -1275,3 +1695,162 @@ def _check_inputs(
     x_max = np.asarray(displacement, dtype=float) / (2 * np.asarray(radius, dtype=float))
     for law in laws():
         cast(Any, type(law)).check(law, x_max, alpha)
+
+
+# ---------------------------------------------------------------- creep: the approach under a prescribed force
+
+
+def approach(
+    t: Any,
+    *,
+    radius: Any,
+    C: Any,
+    alpha: Any,
+    branches: Sequence[tuple[Any, Any]] = (),
+    force: Any,
+    ramp_time: Any,
+    equilibrium: Equilibrium = "fem",
+    method: ODE | str = "ode",
+) -> jnp.ndarray:
+    r"""Approach delta(t) in m of the plates under a plate force ramped linearly to ``force`` (N) over ``ramp_time``
+    (s) and then held: the creep of the lumped generalized-Maxwell spheroid (the inverse problem of :func:`force`).
+
+    The lumped law F = F_eq(delta) + sum_m q_m, dq_m/dt = -q_m/tau_m + beta_m dF_eq/dt with F(t) prescribed is an
+    ODE for phi = F_eq(delta) (N) and the q_m:
+
+        dphi/dt = (dF/dt + sum_m q_m / tau_m) / (1 + sum_m beta_m),   dq_m/dt = -q_m / tau_m + beta_m dphi/dt,
+
+    phi = q_m = 0 at t = 0 (first contact), integrated by diffrax (``method``: an :class:`ODE`, default ``Kvaerno5``
+    at rtol = atol = 1e-10, steps landing on the output times and the end of the ramp); then delta = F_eq^{-1}(phi)
+    by Newton on the equilibrium law (from the Hertz inverse; exact for ``"hertz"``). Under a held force the ball
+    creeps from the instantaneous approach F_eq^{-1}(force / (1 + sum beta)) to the relaxed F_eq^{-1}(force), with
+    retardation times tau_m (1 + sum beta) for one branch.
+
+    t            output times (s), any shape, >= 0.       radius   ball radius a0 (m).   C, alpha   Fung (Pa, -).
+    branches     sequence of (beta, tau): energy factor (-) and relaxation time (s); () = elastic.
+    force        the held plate force (N, > 0), reached at ``ramp_time`` (s, > 0).
+    equilibrium  as :func:`force` ("hertz", "fem", a table, a callable or a law object).
+    Scalar parameters (vmap over them for a grid); jit / vmap / grad work. Eager calls raise ValueError for a bad
+    input (naming it and its unit) or a force whose relaxed approach is past the law's range or the diameter, and
+    RuntimeError for a failed solve; under jit the same checks raise at run time (``equinox.error_if``) and a failed
+    solve gives NaN.
+    """
+    br = validate_branches(branches)
+    validate_times("t (output times, t = 0 is first contact)", t, unit="s")
+    validate_positive("radius (of the ball)", radius, "m")
+    validate_material(C, alpha)
+    validate_positive("force (the held plate force)", force, "N")
+    validate_positive("ramp_time (duration of the loading ramp)", ramp_time, "s")
+    for name, v in (("radius", radius), ("C", C), ("alpha", alpha), ("force", force), ("ramp_time", ramp_time)):
+        if np.ndim(v) != 0:
+            raise ValueError(
+                f"{name} must be one number for approach (vmap over it for several); got shape {np.shape(v)}"
+            )
+    law = as_equilibrium_law(equilibrium)
+    ode = ODE() if isinstance(method, str) and method == "ode" else method
+    if not isinstance(ode, ODE):
+        raise ValueError(f"method must be 'ode' or ODE(...) for approach (a creep ODE); got {method!r}")
+    eager = not is_traced(t, radius, C, alpha, force, ramp_time, *(v for b in br for v in b))
+    checks = (
+        []
+        if eager
+        else (
+            traced_times("t (output times, t = 0 is first contact)", t, unit="s")
+            + traced_positive("radius (of the ball)", radius, "m")
+            + traced_material(C, alpha)
+            + traced_branches(br)
+            + traced_positive("force (the held plate force)", force, "N")
+            + traced_positive("ramp_time (duration of the loading ramp)", ramp_time, "s")
+        )
+    )
+    betas = jnp.asarray([b for b, _ in br] or [0.0], dtype=jnp.float64)
+    taus = jnp.asarray([tau for _, tau in br] or [1.0], dtype=jnp.float64)
+    t_arr = jnp.asarray(t, dtype=jnp.float64)
+    x, x_relaxed, ok = _creep(
+        t_arr.reshape(-1),
+        *(jnp.asarray(v, dtype=jnp.float64) for v in (radius, C, alpha, force, ramp_time)),
+        betas,
+        taus,
+        (law, ode, ode.solver if ode.solver is not None else diffrax.Kvaerno5()),
+    )
+    what = "force (the held plate force, in N)"
+    range_checks = [
+        (~(x_relaxed < 1.0), f"{what} drives the relaxed approach past the ball's diameter 2 * radius"),
+        *[
+            (bad, f"{what} drives the relaxed approach out of the equilibrium law: {m}")
+            for bad, m in law.traced_checks(x_relaxed, alpha)
+        ],
+    ]
+    if eager:
+        xr = float(x_relaxed)
+        if not xr < 1.0:
+            raise ValueError(
+                f"{what} = {float(force):g} drives the relaxed approach past the ball's diameter 2 * radius"
+            )
+        try:
+            law.check(xr, alpha)
+        except ValueError as exc:
+            raise ValueError(
+                f"{what} = {float(force):g} drives the relaxed approach out of the equilibrium law: {exc}"
+            ) from None
+        if not bool(ok):
+            raise RuntimeError(
+                "the creep ODE failed (diffrax). Hint: raise max_steps of method=ODE(...), or loosen rtol/atol"
+            )
+        return (2.0 * float(radius) * x).reshape(np.shape(t))
+    delta = jnp.where(ok, 2.0 * jnp.asarray(radius, dtype=jnp.float64) * x, jnp.nan).reshape(t_arr.shape)
+    return traced_checks(delta, checks + range_checks)
+
+
+@functools.partial(jax.jit, static_argnums=(8,))
+def _creep(t, radius, C, alpha, force, ramp_time, betas, taus, static):
+    """(x(t) = delta / (2 a0) at the flat times t, the relaxed x under the held force, solver ok) of :func:`approach`."""
+    law, ode, solver = static
+    f = law.curve(alpha=alpha, radius=radius, C=C)
+    beta_sum = jnp.sum(betas)
+
+    def rhs(tt, y, args):
+        phi, q = y  # phi = F_eq / force, q_m / force (dimensionless)
+        dF = jnp.where(tt < ramp_time, 1.0 / ramp_time, 0.0)
+        dphi = (dF + jnp.sum(q / taus)) / (1.0 + beta_sum)
+        return dphi, -q / taus + betas * dphi
+
+    order = jnp.argsort(t)
+    ts = t[order]
+    T = jnp.maximum(jnp.max(t), 1e-300 * ramp_time)
+    controller = diffrax.ClipStepSizeController(
+        ode.stepsize_controller, step_ts=ts, jump_ts=jnp.reshape(ramp_time, (1,))
+    )
+    sol = diffrax.diffeqsolve(
+        diffrax.ODETerm(rhs),
+        solver,
+        t0=0.0,
+        t1=T,
+        dt0=jnp.minimum(T, ramp_time) * 1e-4,
+        y0=(jnp.zeros(()), jnp.zeros_like(betas)),
+        saveat=diffrax.SaveAt(ts=ts),
+        stepsize_controller=controller,
+        max_steps=ode.max_steps,
+        adjoint=ode.adjoint,
+        throw=False,
+    )
+    phi = jnp.zeros(t.shape).at[order].set(sol.ys[0])
+    target = phi * force / (C * radius**2)  # f(x) = F_eq / (C a0^2)
+    return _inverse_law(f, target), _inverse_law(f, force / (C * radius**2)), sol.result == diffrax.RESULTS.successful
+
+
+def _inverse_law(f: Callable, target: Any, steps: int = 30) -> jnp.ndarray:
+    """x >= 0 with f(x) = target (f increasing from f(0) = 0): Newton from the Hertz inverse (3 target / 32)^(2/3),
+    kept inside [0, 0.999]; 0 for target <= 0. A fixed number of steps, so jit / vmap / grad go through."""
+    target = jnp.asarray(target, dtype=jnp.float64)
+    pos = target > 0
+    tp = jnp.where(pos, target, 1.0)
+    x0 = jnp.minimum((3.0 * tp / 32.0) ** (2.0 / 3.0), 0.999)
+
+    def step(_, x):
+        fx, dfx = jax.jvp(f, (x,), (jnp.ones_like(x),))
+        x_new = x - (fx - tp) / jnp.where(dfx > 0, dfx, 1.0)
+        return jnp.clip(jnp.where(jnp.isfinite(x_new), x_new, x), 1e-300, 0.999)
+
+    x = jax.lax.fori_loop(0, steps, step, x0)
+    return jnp.where(pos, x, 0.0)

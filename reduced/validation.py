@@ -10,8 +10,13 @@ Wrong types (text, None, a bool, a dict...) raise :class:`InputTypeError`, which
 ``InputError`` (so a ``ValueError``) and a ``TypeError``: ``except ValueError`` catches every bad
 input, ``except TypeError`` still catches the type errors.
 
-Values that are JAX tracers (inside ``jit``/``vmap``/``grad``) cannot be inspected: every check
-returns without a word for them (models then follow their documented NaN convention).
+Values that are JAX tracers (inside ``jit``/``vmap``/``grad``) cannot be inspected: every eager check
+returns without a word for them. Their jit-safe twins (``traced_*``) return the same checks of the traced
+values as ``(bad, message)`` pairs, which :func:`traced_checks` attaches to a function's result with
+``equinox.branched_error_if``: the compiled program raises at run time (a ``JaxRuntimeError`` whose text
+holds the message, naming the quantity and its unit; the value itself cannot be printed), for any entry,
+also under ``vmap``; ``grad`` passes through. For a concrete value the twins return nothing (the eager
+check covers it), so a model calls both.
 """
 
 from __future__ import annotations
@@ -24,7 +29,9 @@ from typing import Any, SupportsInt, cast
 import numpy as np
 
 try:  # jax is a core dependency; keep this module importable for pure-NumPy callers anyway
+    import equinox as eqx
     import jax
+    import jax.numpy as jnp
 except ImportError:  # pragma: no cover
     jax = None  # type: ignore[assignment]  # optional-module fallback
 
@@ -43,6 +50,14 @@ __all__ = [
     "validate_choice",
     "validate_times",
     "scalar_values",
+    "traced_checks",
+    "traced_finite",
+    "traced_positive",
+    "traced_nonnegative",
+    "traced_material",
+    "traced_radii",
+    "traced_branches",
+    "traced_times",
 ]
 
 
@@ -288,3 +303,94 @@ def validate_times(
                 f"{v.ravel()[i]:g}"
             )
     return v
+
+
+# ---------------------------------------------------------------- jit-safe twins (equinox.error_if)
+
+_TRACED = " (checked at run time: a traced value cannot be printed)"
+Checks = list[tuple[Any, str]]  # (bad, message) pairs: bad a boolean array, True where the input is refused
+
+
+def traced_checks(out: Any, checks: Sequence[tuple[Any, str]]) -> Any:
+    """``out`` (an array or a pytree of arrays: a function's result) with the ``(bad, message)`` checks attached as
+    one run-time check (``equinox.branched_error_if``): the compiled program raises the message of the first pair
+    with any True entry (a ``JaxRuntimeError`` holding it). Under vmap the check reduces over the batch; grad passes
+    through. Attach the checks to what a function returns, so that they run whenever a result is used (a check on
+    an unused value is dropped by the compiler). Every pair concrete: raises :class:`InputError` at once instead."""
+    if not checks:
+        return out
+    anys = [jnp.any(jnp.asarray(bad)) for bad, _ in checks]
+    if not is_traced(*anys):
+        for flag, (_, message) in zip(anys, checks):
+            if bool(flag):
+                raise InputError(message)
+        return out
+    flags = jnp.stack(anys)
+    out = jax.tree_util.tree_map(lambda v: v if isinstance(v, jax.Array) else jnp.asarray(v), out)
+    return eqx.branched_error_if(out, jnp.any(flags), jnp.argmax(flags), [m + _TRACED for _, m in checks])
+
+
+def traced_finite(name: str, value: Any, unit: str = "") -> Checks:
+    """Twin of :func:`validate_finite`: the run-time check of a traced value (none for a concrete one: the eager
+    check covers it), for :func:`traced_checks`."""
+    if not is_traced(value):
+        return []
+    return [(~jnp.isfinite(value), f"{name} must be a finite number{_unit_phrase(unit)}")]
+
+
+def traced_positive(name: str, value: Any, unit: str = "") -> Checks:
+    """Twin of :func:`validate_positive` (finite and > 0) for a traced value."""
+    if not is_traced(value):
+        return []
+    v = jnp.asarray(value)
+    return [(~(v > 0) | ~jnp.isfinite(v), f"{name} must be positive{_unit_phrase(unit)} and finite")]
+
+
+def traced_nonnegative(name: str, value: Any, unit: str = "") -> Checks:
+    """Twin of :func:`validate_nonnegative` (finite and >= 0) for a traced value."""
+    if not is_traced(value):
+        return []
+    v = jnp.asarray(value)
+    return [(~(v >= 0) | ~jnp.isfinite(v), f"{name} must not be negative{_unit_phrase(unit)}")]
+
+
+def traced_material(C: Any, alpha: Any) -> Checks:
+    """Twin of :func:`validate_material` (C > 0 in Pa, alpha >= 0, both finite) for traced values."""
+    out = traced_positive("C (the Fung stiffness, shear modulus / 2)", C, "Pa")
+    if is_traced(alpha):
+        a = jnp.asarray(alpha)
+        message = "alpha (the Fung stiffening exponent) must be >= 0 (dimensionless, 0 is neo-Hookean) and finite"
+        out.append((~(a >= 0) | ~jnp.isfinite(a), message))
+    return out
+
+
+def traced_radii(inner_radius: Any, outer_radius: Any) -> Checks:
+    """Twin of :func:`validate_radii` (0 < inner_radius < outer_radius, in m) for traced values."""
+    if not is_traced(inner_radius, outer_radius):
+        return []
+    a, b = jnp.asarray(inner_radius), jnp.asarray(outer_radius)
+    return [
+        (~(a > 0) | ~jnp.isfinite(a), "inner_radius must be positive (in m) and finite"),
+        (~(b > 0) | ~jnp.isfinite(b), "outer_radius must be positive (in m) and finite"),
+        (~(a < b), "inner_radius must be smaller than outer_radius (the wall needs a positive thickness, in m)"),
+    ]
+
+
+def traced_branches(branches: Sequence[tuple[Any, Any]]) -> Checks:
+    """Twin of :func:`validate_branches` (beta >= 0, tau > 0 in s) for the traced entries of checked branches."""
+    out: Checks = []
+    for k, (beta, tau) in enumerate(branches):
+        out += traced_nonnegative(f"beta (energy factor of branch {k})", beta, "dimensionless")
+        out += traced_positive(f"tau (relaxation time of branch {k})", tau, "s")
+    return out
+
+
+def traced_times(name: str, t: Any, *, unit: str = "s", ascending: bool = False) -> Checks:
+    """Twin of :func:`validate_times` for traced times: finite, >= 0 (and ascending when asked)."""
+    if not is_traced(t):
+        return []
+    v = jnp.asarray(t)
+    out = [(~jnp.isfinite(v) | (v < 0), f"{name} must be finite and >= 0{_unit_phrase(unit)}")]
+    if ascending:
+        out.append((jnp.diff(v.ravel()) < 0, f"{name} must be in ascending order{_unit_phrase(unit)}"))
+    return out

@@ -63,6 +63,12 @@ from tissuemech.reduced import blastula
 from tissuemech.reduced.material import dW_dI1
 from tissuemech.reduced.validation import (
     is_traced,
+    traced_branches,
+    traced_checks,
+    traced_finite,
+    traced_material,
+    traced_positive,
+    traced_radii,
     validate_branches,
     validate_finite,
     validate_int,
@@ -197,8 +203,10 @@ def inflate(
     Returns ``Inflation(t, inner_stretch, outer_stretch)``. Raises RuntimeError (with the time
     reached and a hint) when the integration fails, e.g. when the shell creeps past its limit point;
     ValueError (naming the quantity and unit) for bad inputs, e.g. a pressure history p(t) that is not
-    finite at some time. Inside jit no check can run: a failed solve, or output times that are
-    negative, non-finite or not ascending, give NaN stretches.
+    finite at some time. Under jit/vmap/grad (traced inputs) the checks of the radii, C, alpha, the branches,
+    ramp_time, the pressure and a pressure history raise at run time (``equinox.error_if``, the eager message
+    without the value); a failed solve, a shell that bursts (at once or later), or output times that are
+    negative, non-finite or not ascending give NaN stretches (the NaN flag).
     """
     validate_radii(inner_radius, outer_radius)
     validate_material(C, alpha)
@@ -208,16 +216,21 @@ def inflate(
     validate_int("max_steps (of the ODE solver)", max_steps, minimum=1)
     if not is_traced(t):
         tn = validate_times("t (output times, t = 0 is when loading starts)", t, unit="s", ascending=True)
-        if tn.ndim != 1:
+        if tn is not None and tn.ndim != 1:
             raise ValueError(f"t (output times) must be a 1-D array of times in s; got shape {tn.shape}")
     t = jnp.asarray(t, dtype=jnp.float64)
     if ramp_time is not None:
         validate_positive("ramp_time", ramp_time, "s")
+    # traced values: the same checks at run time (equinox.error_if on the result; concrete ones were checked above)
+    checks = [] if ramp_time is None else traced_positive("ramp_time", ramp_time, "s")
+    checks += traced_radii(inner_radius, outer_radius) + traced_material(C, alpha) + traced_branches(br)
     if callable(pressure):
         p_fun = pressure
         jumps = None
-        if not is_traced(t):
+        if not is_traced(t) and not _closes_over_tracers(pressure):
             _check_pressure_history(pressure, np.asarray(t))
+        else:
+            checks += _traced_pressure_history(pressure, t)
     else:
         validate_finite("pressure", pressure, "Pa")
         if not is_traced(pressure) and np.ndim(pressure) != 0:
@@ -225,6 +238,7 @@ def inflate(
                 f"pressure must be a single number in Pa (or a callable p(t)); got shape {np.shape(pressure)}"
             )
         tr = 0.0 if ramp_time is None else ramp_time
+        checks += traced_finite("pressure", pressure, "Pa")
         p_fun = _Ramp(jnp.asarray(pressure, dtype=jnp.float64), jnp.asarray(tr, dtype=jnp.float64))
         jumps = None if ramp_time is None else jnp.asarray([tr], dtype=jnp.float64)
     C = jnp.asarray(C, dtype=jnp.float64)
@@ -232,7 +246,25 @@ def inflate(
     beta = jnp.asarray([b for b, _ in br] or [0.0], dtype=jnp.float64)
     tau = jnp.asarray([s for _, s in br] or [1.0], dtype=jnp.float64)
     la, lb = _solve(t, p_fun, jumps, inner_radius, outer_radius, C, alpha, beta, tau, rtol, atol, max_steps)
+    la, lb = traced_checks((la, lb), checks)
     return Inflation(t, la, lb)
+
+
+def _closes_over_tracers(history: Callable) -> bool:
+    """Whether a pressure history returns traced values at t = 0 (it closes over the user's traced values)."""
+    try:
+        return is_traced(history(jnp.zeros(())))
+    except Exception:  # the eager check reports it with its message
+        return False
+
+
+def _traced_pressure_history(pressure: Callable, t: Array) -> list[tuple[Any, str]]:
+    """The run-time twin of :func:`_check_pressure_history`: p(t) finite at the output times and 257 even times up
+    to the last."""
+    tt = jnp.ravel(t)
+    probe = jnp.concatenate([tt, jnp.linspace(0.0, 1.0, 257) * jnp.max(tt)])
+    p = jax.vmap(pressure)(probe)
+    return [(~jnp.isfinite(p), "pressure history p(t) must be finite (in Pa)")]
 
 
 def _check_pressure_history(pressure: Callable, t: np.ndarray) -> None:

@@ -46,7 +46,7 @@ def test_force_matches_convolution_quadrature():
     F = np.asarray(sp.force(T, **FIG10))
     ref = np.array([reference_force(t, 150.0, 0.4, 200.0) for t in T])
     assert np.max(np.abs(F - ref)) < 1e-7 * ref.max()
-    tight = np.asarray(sp.force(T, **FIG10, rtol=1e-12, atol=1e-12))
+    tight = np.asarray(sp.force(T, **FIG10, method=sp.ODE(rtol=1e-12, atol=1e-12)))
     assert np.max(np.abs(tight - ref)) < 1e-9 * ref.max()
 
 
@@ -104,7 +104,7 @@ def test_nominal_stress_incompressible_area():
 def test_gradients_forward_and_reverse_agree_with_finite_differences():
     t = jnp.array([0.1, 0.2, 300.0])
 
-    def model(p, adjoint):
+    def model(p, method="quadrature"):
         return sp.force(
             t,
             radius=A0,
@@ -113,20 +113,21 @@ def test_gradients_forward_and_reverse_agree_with_finite_differences():
             branches=[(p[1], p[2])],
             displacement=D,
             ramp_time=TR,
-            adjoint=adjoint,
+            method=method,
             equilibrium="hertz",
         )
 
     p = jnp.array([150.0, 0.4, 200.0])
-    Jf = np.asarray(jax.jacfwd(lambda q: model(q, "forward"))(p))
-    Jr = np.asarray(jax.jacrev(lambda q: model(q, "reverse"))(p))
+    Jf = np.asarray(jax.jacfwd(model)(p))
+    Jr = np.asarray(jax.jacrev(model)(p))
+    # the ODE path: forward-mode sensitivities (adjoint "forward") and the reverse adjoint agree with them
+    Jof = np.asarray(jax.jacfwd(lambda q: model(q, sp.ODE(adjoint="forward")))(p))
+    Jor = np.asarray(jax.jacrev(lambda q: model(q, sp.ODE(adjoint="reverse")))(p))
+    assert np.allclose(Jof, Jor, rtol=1e-8, atol=1e-20)
+    assert np.allclose(Jof, Jf, rtol=1e-7, atol=1e-20)
     h = np.array([1e-3, 1e-6, 1e-3])
     Jfd = np.stack(
-        [
-            (np.asarray(model(p.at[k].add(h[k]), "reverse")) - np.asarray(model(p.at[k].add(-h[k]), "reverse")))
-            / (2 * h[k])
-            for k in range(3)
-        ],
+        [(np.asarray(model(p.at[k].add(h[k]))) - np.asarray(model(p.at[k].add(-h[k])))) / (2 * h[k]) for k in range(3)],
         axis=1,
     )
     assert np.allclose(Jf, Jr, rtol=1e-8, atol=1e-20)
@@ -142,8 +143,6 @@ def test_gradients_forward_and_reverse_agree_with_finite_differences():
             displacement=150e-6,
             ramp_time=TR,
             equilibrium="fem",
-            rtol=1e-13,
-            atol=1e-13,
         )
         da = np.asarray(
             jax.jacfwd(
@@ -156,7 +155,6 @@ def test_gradients_forward_and_reverse_agree_with_finite_differences():
                     displacement=150e-6,
                     ramp_time=TR,
                     equilibrium="fem",
-                    adjoint="forward",
                 )
             )(0.25)
         )
@@ -560,3 +558,123 @@ def test_table_laws_broadcast_over_alpha_arrays():
     assert r.shape == (3,)
     assert np.allclose(r, [float(sp.midplane_radius(x, radius=A0, alpha=a, midplane="fem")) for x, a in zip(d, al)])
     assert len(set(np.round(F / F[0], 8))) == 3  # alpha matters in the table: the check has teeth
+
+
+def test_hertz_force_is_the_plate_law_of_the_reduced_layer():
+    d = np.array([0.0, 1e-6, D, 300e-6])
+    F = np.asarray(sp.hertz_force(d, radius=A0, C=150.0))
+    assert np.allclose(F, hertz(d), rtol=1e-14, atol=0)  # two contacts, E* = 8 C (E = 6 C, nu = 1/2)
+    E, nu = 6.0 * 150.0, 0.5
+    one_contact = (4.0 / 3.0) * E / (1 - nu**2) * np.sqrt(A0) * (D / 2) ** 1.5
+    assert float(sp.hertz_force(D, radius=A0, C=150.0)) == pytest.approx(one_contact, rel=1e-14)
+    # the law object and the dimensionless curve are the same law
+    assert float(sp.equilibrium_force(D, radius=A0, C=150.0, alpha=0.7, equilibrium="hertz")) == float(
+        sp.hertz_force(D, radius=A0, C=150.0)
+    )
+    assert float(sp.hertz_f(D / (2 * A0))) * 150.0 * A0**2 == pytest.approx(
+        float(sp.hertz_force(D, radius=A0, C=150.0))
+    )
+    with pytest.raises(ValueError, match=r"^approach \(the total approach of the plates, in m\) must not be negative"):
+        sp.hertz_force(-1e-6, radius=A0, C=150.0)
+    with pytest.raises(ValueError, match=r"^C\b"):
+        sp.hertz_force(D, radius=A0, C=-1.0)
+    with pytest.raises(ValueError, match="diameter"):
+        sp.hertz_force(2 * A0, radius=A0, C=150.0)
+
+
+def test_method_objects_and_their_spellings():
+    kw = {**FIG10, "branches": [(0.8, 0.5)]}
+    # the strings name the default objects: identical numbers
+    Fq = np.asarray(sp.force(T, **kw))
+    assert np.array_equal(Fq, np.asarray(sp.force(T, **kw, method="quadrature")))
+    assert np.array_equal(Fq, np.asarray(sp.force(T, **kw, method=sp.Quadrature())))
+    Fo = np.asarray(sp.force(T, **kw, method="ode", rtol=1e-11, atol=1e-11, max_steps=5000))
+    assert np.array_equal(Fo, np.asarray(sp.force(T, **kw, method=sp.ODE(rtol=1e-11, atol=1e-11, max_steps=5000))))
+    import diffrax
+
+    ctrl = diffrax.PIDController(rtol=1e-11, atol=1e-11)
+    Fk = np.asarray(sp.force(T, **kw, method=sp.ODE(diffrax.Kvaerno5(), ctrl, adjoint="forward")))
+    assert np.max(np.abs(Fk - Fo)) < 1e-9 * Fo.max() and np.max(np.abs(Fq - Fo)) < 1e-9 * Fo.max()
+    # more quadrature nodes: the same curve
+    assert np.max(np.abs(np.asarray(sp.force(T, **kw, method=sp.Quadrature(nodes=24))) - Fq)) < 1e-9 * Fq.max()
+    assert sp.as_method("quadrature") == sp.Quadrature() and sp.as_method("ode", rtol=1e-8) == sp.ODE(rtol=1e-8)
+
+
+@pytest.mark.parametrize(
+    "name, value", [("rtol", 1e-8), ("atol", 1e-8), ("max_steps", 100), ("solver", None), ("adjoint", "forward")]
+)
+def test_ode_keyword_with_the_quadrature_raises(name, value):
+    import diffrax
+
+    value = diffrax.Tsit5() if name == "solver" else value
+    with pytest.raises(TypeError, match=rf"^{name} has no effect with the quadrature method.*method=ODE\({name}="):
+        sp.force(T, **FIG10, **{name: value})
+    with pytest.raises(ValueError, match=rf"^{name} has no effect"):  # an InputTypeError: both
+        sp.nominal_stress(T, **FIG10, method=sp.Quadrature(), **{name: value})
+    with pytest.raises(TypeError, match=rf"^{name} is given twice"):
+        sp.force(T, **FIG10, method=sp.ODE(), **{name: value})
+
+
+def test_method_errors_name_the_option():
+    with pytest.raises(ValueError, match=r"^method must be"):
+        sp.force(T, **FIG10, method=5)
+    with pytest.raises(ValueError, match=r"^nodes\b"):
+        sp.Quadrature(nodes=1)
+    with pytest.raises(ValueError, match=r"^rtol\b"):
+        sp.ODE(rtol=-1.0)
+    with pytest.raises(TypeError, match=r"^rtol .*stepsize_controller"):
+        import diffrax
+
+        sp.ODE(stepsize_controller=diffrax.PIDController(rtol=1e-8, atol=1e-8), rtol=1e-8)
+    with pytest.raises(ValueError, match=r"^adjoint\b"):
+        sp.ODE(adjoint="sideways")
+
+
+def test_history_takes_the_loose_ode_keywords():
+    ramp = lambda t: D * jnp.minimum(t / TR, 1.0)
+    a = np.asarray(sp.force(T, **{**FIG10, "displacement": ramp}, jump_times=[TR], rtol=1e-12, atol=1e-12))
+    b = np.asarray(
+        sp.force(T, **{**FIG10, "displacement": ramp}, jump_times=[TR], method=sp.ODE(rtol=1e-12, atol=1e-12))
+    )
+    assert np.array_equal(a, b)
+    ref = np.array([reference_force(t, 150.0, 0.4, 200.0) for t in T])
+    assert np.max(np.abs(a - ref)) < 1e-9 * ref.max()
+
+
+def test_approach_creep_of_a_linear_law_against_the_closed_form():
+    """Under F = F0 min(t / t_r, 1) and a linear law F_eq = K delta, one branch (beta, tau) creeps as a standard
+    linear solid: q = beta F0/t_r tau (1 - e^{-t/tau_r}) over the ramp, then q(t_r) e^{-(t - t_r)/tau_r}, with the
+    retardation time tau_r = tau (1 + beta), and delta = (F - q) / K."""
+    K, F0, beta, tau = 2.0, 1e-5, 0.4, 200.0
+    lin = lambda d, *, radius, C, alpha: K * d
+    d = np.asarray(
+        sp.approach(T, radius=A0, C=150.0, alpha=0.2, branches=[(beta, tau)], force=F0, ramp_time=TR, equilibrium=lin)
+    )
+    taur, rate = tau * (1 + beta), F0 / TR
+    q_ramp = beta * rate * tau * (1 - np.exp(-np.minimum(T, TR) / taur))
+    q = np.where(T <= TR, q_ramp, q_ramp * np.exp(-(T - TR) / taur))
+    ref = (F0 * np.minimum(T / TR, 1.0) - q) / K
+    assert np.max(np.abs(d - ref)) < 1e-8 * ref.max()
+    assert d[-1] == pytest.approx(F0 / K, rel=1e-3)  # relaxed: F_eq^{-1}(F0)
+    with pytest.raises(ValueError, match=r"^force \(the held plate force\) must be positive \(in N\)"):
+        sp.approach(T, radius=A0, C=150.0, alpha=0.2, force=-1.0, ramp_time=TR, equilibrium="hertz")
+    with pytest.raises(ValueError, match=r"relaxed approach out of the equilibrium law"):
+        sp.approach(T, radius=A0, C=150.0, alpha=0.2, force=1.0, ramp_time=TR)  # past the table
+
+
+def test_approach_round_trip_through_a_measured_history():
+    """delta(t) = approach(F ramp-hold) fed back to force(displacement=(times, approaches)) gives F again (to the
+    piecewise-linear interpolation of 200 samples); an elastic ball follows the Hertz inverse exactly."""
+    F0, br = 1e-5, [(0.4, 200.0)]
+    kw = dict(radius=A0, C=150.0, alpha=0.2, equilibrium="hertz")
+    td = np.union1d(np.linspace(0, TR, 101) ** 1.5 / TR**0.5, np.geomspace(TR, 1000, 100))
+    dd = np.asarray(sp.approach(td, **kw, branches=br, force=F0, ramp_time=TR))
+    t = np.array([0.05, 0.1, 0.2, 1.0, 10.0, 100.0, 1000.0])
+    F = np.asarray(sp.force(t, **kw, branches=br, displacement=(td, dd), method=sp.ODE(rtol=1e-8, atol=1e-8)))
+    assert np.max(np.abs(F - F0 * np.minimum(t / TR, 1.0))) < 1e-4 * F0
+    elastic = np.asarray(sp.approach(t, **kw, force=F0, ramp_time=TR))
+    hertz_inverse = 2 * A0 * (3 * F0 * np.minimum(t / TR, 1.0) / (32 * 150.0 * A0**2)) ** (2 / 3)
+    assert np.allclose(elastic, hertz_inverse, rtol=1e-10)
+    # jit and grad: the relaxed approach scales as C^(-2/3)
+    g = jax.grad(lambda c: sp.approach(jnp.array([1000.0]), **{**kw, "C": c}, force=F0, ramp_time=TR)[0])(150.0)
+    assert float(g) == pytest.approx(-2 / 3 * elastic[-1] / 150.0, rel=1e-8)
