@@ -36,6 +36,9 @@ def _one_line_error(capsys, argv, *needles):
         (b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR", ("binary",)),
         (b"0.1,nan\n", ("line 1", "not a finite number")),
         (b"-0.1,1.0\n0.2,2.0\n", ("line 1", "negative")),
+        (b"time [min];force [uN]\r\n0,2;8,61\r\n0,4;8,59\r\n\r\n", ("line 2", "decimal commas", "decimal=','")),
+        (b"8.61,0.2\n8.59,0.4\n8.57,0.6\n", ("line 2", "time runs backwards in column 1", "swapped")),
+        (b"0.1,1.0\n0.1,2.0\n0.2,2.5\n", ("lines 1 and 2", "appears twice")),
     ],
 )
 def test_malformed_files_one_line(tmp_path, capsys, content, needles):
@@ -96,8 +99,14 @@ def test_repeated_displacement_option_and_out_checked_first(tmp_path, capsys):
     assert cap.out == "" and "--out" in cap.err and "is a file" in cap.err
     out = tmp_path / "res"
     assert main([*base, "--displacement-um", "50", "--displacement-um", "200", "--out", str(out)]) == 0
-    d = json.loads((out / "fit.json").read_text())["inputs"]["displacement_m"]
-    assert d == pytest.approx([50e-6, 200e-6])
+    printed = capsys.readouterr().out
+    assert "residuals of record 1: lag-1 autocorrelation" in printed and "residuals of record 2" in printed
+    saved = json.loads((out / "fit.json").read_text())
+    assert saved["inputs"]["displacement_m"] == pytest.approx([50e-6, 200e-6])
+    assert len(saved["residual_diagnostics"]) == 2 and saved["errors"] == "robust"
+    # one displacement for the two levels: refused before the fit, saying what to give
+    err = _one_line_error(capsys, [*base, "--displacement-um", "50", "--out", str(out)], "given once for 2 files")
+    assert "--displacement-um D1 D2" in err
 
 
 def test_old_fit_cli_module_is_an_alias():

@@ -113,3 +113,110 @@ def test_record_errors_name_the_file(tmp_path):
         f.write_text("time_s,stress_Pa\n" + body)
         with pytest.raises(ValueError, match=rf"r\.csv: .*{match}"):
             fit.load_records([str(f)], **kw)
+
+
+# ---------------------------------------------------------------- traps of lab-style files (issue 34)
+
+KW = dict(radius=500e-6, displacements=[100e-6], ramp_time=5.0)
+
+
+def _lab_record(n: int = 600, t_end: float = 1200.0, ramp: float = 5.0, seed: int = 0):
+    """(time s, nominal stress Pa) of a relaxation record sampled like a lab instrument (uniform), 1 % noise."""
+    from tissuemech.reduced import spheroid
+
+    t = np.linspace(t_end / n, t_end, n)
+    y = np.asarray(
+        spheroid.nominal_stress(
+            t, radius=500e-6, C=150.0, alpha=0.2, branches=[(0.4, 200.0)], displacement=100e-6, ramp_time=ramp
+        )
+    )
+    return t, y * (1 + 0.01 * np.random.default_rng(seed).standard_normal(n))
+
+
+def _write(path, header, rows, sep=",", crlf=True):
+    nl = "\r\n" if crlf else "\n"
+    text = (header + nl if header else "") + nl.join(sep.join(f"{v:.6g}" for v in r) for r in rows) + nl + nl
+    path.write_bytes(text.encode())
+    return str(path)
+
+
+def test_lab_style_file_with_units_crlf_and_trailing_blank_line_is_read(tmp_path):
+    """`time [min],force [uN]`, CRLF, a blank last line: minutes and micronewtons are converted to s and N."""
+    t, y = _lab_record()
+    F = y * math.pi * (500e-6) ** 2  # any force column will do: its conversion is what is checked
+    f = _write(tmp_path / "lab.csv", "time [min],force [uN]", zip(t / 60, F * 1e6))
+    (rec,), forces = fit.load_records([f], **KW)
+    assert forces == [True] and np.allclose(rec[0], t, rtol=1e-5)
+
+
+def test_time_running_backwards_names_file_line_column_and_swap(tmp_path):
+    """A headerless file with the columns swapped (stress first: it falls as the tissue relaxes) was fitted with exit
+    code 0 and success=True; now one line naming the file, the line, the column and the likely swap."""
+    t, y = _lab_record()
+    f = _write(tmp_path / "swapped.csv", "", zip(y[10:], t[10:]))
+    with pytest.raises(ValueError) as exc:
+        fit.load_records([f], **KW)
+    msg = str(exc.value)
+    assert "\n" not in msg and msg.startswith(f"{f}, line ")
+    assert "time runs backwards in column 1 (no header)" in msg and "swapped" in msg
+    with pytest.raises(ValueError, match=r"record 0: time runs backwards at sample 2 \(2 s, then 1 s\)"):
+        fit.relaxation([(np.array([1.0, 2.0, 1.0]), np.array([1.0, 2.0, 3.0]), 1e-4)], radius=5e-4, ramp_time=1.0)
+
+
+def test_duplicated_times_are_refused(tmp_path):
+    f = _write(tmp_path / "dup.csv", "time_s,stress_Pa", [(0.1, 1.0), (0.2, 2.0), (0.2, 2.1), (0.3, 2.0)], crlf=False)
+    with pytest.raises(
+        ValueError, match=r"dup\.csv, lines 3 and 4: the time 0\.2 s appears twice in column 1 \('time_s'\)"
+    ):
+        fit.load_records([f], **KW)
+
+
+def test_minutes_read_as_seconds_are_refused(tmp_path):
+    """Minute times without a unit were read as seconds and fitted silently: the record then peaks early in the stated
+    ramp and falls before its end, which no loading ramp does. With the unit in the header the same file is fine."""
+    t, y = _lab_record()
+    bad = _write(tmp_path / "minutes.csv", "time,stress", zip(t / 60, y))
+    with pytest.raises(ValueError) as exc:
+        fit.load_records([bad], **KW)
+    msg = str(exc.value)
+    assert "\n" not in msg and msg.startswith(f"{bad}: the stress peaks at t = ")
+    assert "column 1 ('time')" in msg and "Minutes read as seconds" in msg and "'time [min]'" in msg
+    good = _write(tmp_path / "minutes_ok.csv", "time [min],stress [Pa]", zip(t / 60, y))
+    (rec,), _ = fit.load_records([good], **KW)
+    assert np.allclose(rec[0], t, rtol=1e-5)
+    # the other way round: milliseconds read as seconds keep rising long after the stated ramp
+    ms = _write(tmp_path / "ms.csv", "time,stress", zip(t[t < 60] * 1000, y[t < 60]))
+    with pytest.raises(ValueError, match=r"still rises until t = .*\(milliseconds read as seconds\?\)"):
+        fit.load_records([ms], **KW)
+
+
+def test_one_displacement_for_two_levels_is_refused(tmp_path):
+    """One --displacement-um for the 50 and 200 um example files fitted both at 50 um and advised "add records at two
+    or more compression levels"; their long-time stresses differ ~9-fold: one line saying what to give instead."""
+    from pathlib import Path
+
+    ex = Path(__file__).resolve().parents[1] / "examples" / "data"
+    files = [str(ex / "spheroid_50um.csv"), str(ex / "spheroid_200um.csv")]
+    with pytest.raises(ValueError) as exc:
+        fit.load_records(files, radius=500e-6, displacements=[50e-6], ramp_time=0.2)
+    msg = str(exc.value)
+    assert "\n" not in msg and "--displacement-um 50 was given once for 2 files" in msg
+    assert "spheroid_50um.csv" in msg and "spheroid_200um.csv" in msg and "--displacement-um D1 D2" in msg
+    recs, _ = fit.load_records(files, radius=500e-6, displacements=[50e-6, 200e-6], ramp_time=0.2)
+    assert [r[2] for r in recs] == [50e-6, 200e-6]
+
+
+@pytest.mark.parametrize("sep", [";", "\t", " "])
+def test_decimal_commas_are_named(tmp_path, sep):
+    """`0,2;8,61` reported "ragged rows": now the file, the line, what decimal commas are and how to read them."""
+    f = tmp_path / "comma.csv"
+    f.write_bytes(f"time [min]{sep}force [uN]\r\n0,2{sep}8,61\r\n0,4{sep}8,59\r\n".encode())
+    with pytest.raises(ValueError) as exc:
+        fit.read_table(f)
+    msg = str(exc.value)
+    assert "\n" not in msg and msg.startswith(f"{f}, line 2: ")
+    assert "decimal commas" in msg and "decimal=','" in msg
+    # a plain comma-separated file, also with spaces after the commas, is no decimal-comma file
+    g = tmp_path / "plain.csv"
+    g.write_text("1, 2\n3, 4\n")
+    assert fit.read_table(g).values.shape == (2, 2)

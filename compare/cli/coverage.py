@@ -30,7 +30,28 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--no-fe", action="store_true", help="reduced-made records only (a couple of minutes)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--csv", default=None, help="write every fit (one row per parameter) to this CSV")
+    p.add_argument(
+        "--scenarios",
+        nargs="*",
+        default=None,
+        metavar="NAME",
+        help="run the error-model rows instead (all when no NAME is given): "
+        + "; ".join(f"'{k}'" for k in _scenario_names()),
+    )
+    p.add_argument("--n-scenario", type=int, default=200, help="fits per error-model row (default 200)")
+    p.add_argument(
+        "--intervals",
+        choices=["profile", "wald"],
+        default="profile",
+        help="interval method of the fits (default profile)",
+    )
     return p
+
+
+def _scenario_names() -> list[str]:
+    from tissuemech.compare.studies.coverage import SCENARIOS
+
+    return list(SCENARIOS)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -40,6 +61,23 @@ def run(args: argparse.Namespace) -> int:
     from tissuemech.compare.fit import DEFAULT_MODEL_ERROR_REL, model_error_of
     from tissuemech.compare.studies import coverage
 
+    if args.scenarios is not None:
+        names = args.scenarios or list(coverage.SCENARIOS)
+        unknown = [n for n in names if n not in coverage.SCENARIOS]
+        if unknown:
+            raise ValueError(f"--scenarios: unknown {unknown}; choose from {list(coverage.SCENARIOS)}")
+        if args.n_scenario < 1:
+            raise ValueError(f"--n-scenario must be >= 1; got {args.n_scenario}")
+        df = coverage.scenario_study(names, args.n_scenario, seed=args.seed, intervals=args.intervals)
+        if args.csv:
+            df.to_csv(args.csv, index=False)
+        table = coverage.summarise_scenarios(df)
+        cov = table.pivot_table(index=["scenario", "parameter"], columns="errors", values="coverage %", sort=False)
+        with pd.option_context("display.width", 200, "display.max_columns", 20):
+            print(table[table["errors"] == "default"].to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+            print("\ncoverage % of the Wald intervals under each error model ('default': the fits' own intervals):")
+            print(cov.to_string(float_format=lambda v: f"{v:.0f}"))
+        return 0
     if args.n_reduced < 0 or args.n_fe < 0:
         raise ValueError(f"--n-reduced and --n-fe must be >= 0; got {args.n_reduced} and {args.n_fe}")
     eps = model_error_of("fem")

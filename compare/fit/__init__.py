@@ -3,9 +3,10 @@ r"""Fit the lumped generalized-Maxwell spheroid model to compression-relaxation 
 Where things are: :mod:`.records` (Record, the CSV reader, the checks a record must pass), :mod:`.model`
 (parameters, the JAX residual and its Jacobian, bounds, the model-error term of a law), :mod:`.problem`
 (weighted residuals, the bounded solver), :mod:`.intervals` (Wald / profile intervals, identifiability),
-:mod:`.result` (FitResult), :mod:`.estimation` (:func:`relaxation`), :mod:`.design` (experiment design:
-predicted interval widths). The names below are re-exported here: ``from tissuemech.compare.fit import
-relaxation, read_csv, FitResult, Record``.
+:mod:`.diagnostics` (residual diagnostics, the error model of the intervals), :mod:`.result` (FitResult),
+:mod:`.estimation` (:func:`relaxation`), :mod:`.design` (experiment design: predicted interval widths).
+The names below are re-exported here: ``from tissuemech.compare.fit import relaxation, read_csv, FitResult,
+Record``.
 
 Model (``reduced.spheroid``; SI units): for a ball of radius ``a0`` (m) pressed by a total approach
 ``delta(t)`` (m, linear ramp over ``ramp_time`` then held), the nominal stress is
@@ -34,7 +35,10 @@ in ``[1e-6, alpha_max]``, alpha_max = the table's upper alpha for table laws, el
 JAX model: an unweighted pass, the per-record noise estimate s_j^2 = RSS_j / (n_j - P n_j / N), a
 weighted pass.
 
-Intervals (95 %): the Gauss-Newton (Wald) interval ``theta_i +- t sd_i`` is checked against the
+Intervals (95 %): by default (``errors="robust"``, :mod:`.diagnostics`) ``sd_i`` comes from a covariance that
+allows for a smooth model misfit of estimated size and for correlated, uneven noise (never below the
+Gauss-Newton one), and the profile threshold ``t^2`` below is raised by the same variance ratio;
+``errors="white"`` keeps the Gauss-Newton covariance. The Wald interval ``theta_i +- t sd_i`` is checked against the
 profile likelihood: at each Wald end the other parameters are re-optimised, and if the rise of the
 chi-square there is not within 10 % of ``t^2`` (t the 97.5 % Student quantile with N - P degrees of
 freedom) the end is replaced by the root of the profile (``chi2_profile(theta_i) - chi2_min = t^2``,

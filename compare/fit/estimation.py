@@ -10,6 +10,7 @@ from typing import Any
 import jax.numpy as jnp
 import numpy as np
 
+from tissuemech.compare.fit.diagnostics import ERROR_MODELS, residual_diagnostics, robust_covariance
 from tissuemech.compare.fit.intervals import LOG_SPAN, Profiler, exp_or_inf, identifiability, inverse_eigenvalues
 from tissuemech.compare.fit.model import (
     BETA_BOUNDS,
@@ -23,7 +24,7 @@ from tissuemech.compare.fit.model import (
     table_of,
 )
 from tissuemech.compare.fit.problem import Problem, masked_solver, safe
-from tissuemech.compare.fit.records import as_records, check_information
+from tissuemech.compare.fit.records import as_records, check_information, check_ramp
 from tissuemech.compare.fit.result import FitResult
 from tissuemech.reduced.material import validate_positive
 
@@ -44,6 +45,7 @@ def relaxation(
     max_nfev: int = 200,
     model_error: float | str | None = "auto",
     intervals: str = "profile",
+    errors: str = "robust",
 ) -> FitResult:
     r"""Fit ``(C, alpha, beta_m, tau_m)`` to compression-relaxation records (module doc: the statistics).
 
@@ -57,6 +59,10 @@ def relaxation(
                  nominal stress (Pa), JAX-traceable; default ``reduced.spheroid.nominal_stress``.
     model_error  relative 1-sigma error of the model's force per record (e.g. 0.005), ``"auto"``
                  (:func:`model_error_of`: the FE table's ``model_error_rel``), or None/0 for none.
+    errors       the error model of the intervals (:mod:`tissuemech.compare.fit.diagnostics`): "robust"
+                 (default: a smooth discrepancy of estimated size plus an autocorrelation- and
+                 heteroscedasticity-consistent noise covariance) or "white" (white noise, the model exact:
+                 the Gauss-Newton covariance); "ess", "hac", "discrepancy" for comparison.
     intervals    "profile" (Wald checked against, and where poor replaced by, the profile likelihood)
                  or "wald" (Gauss-Newton ellipse only; fast, for large studies of well-posed problems).
 
@@ -70,20 +76,25 @@ def relaxation(
     validate_positive("ramp_time (duration of the loading ramp)", ramp_time, "s")
     names = parameter_names(n_branches)
     check_information(recs, names)
+    for k, rec in enumerate(recs):
+        check_ramp(rec.time, rec.nominal_stress, float(ramp_time), f"record {k}")
     if intervals not in ("profile", "wald"):
         raise ValueError(f"intervals must be 'profile' or 'wald'; got {intervals!r}")
+    if errors not in ERROR_MODELS:
+        raise ValueError(f"errors must be one of {', '.join(map(repr, ERROR_MODELS))}; got {errors!r}")
     mc = table_of(equilibrium)
     x = max(r.displacement for r in recs) / (2 * radius)
     if x >= 0.999:  # the plates would (nearly) touch: no law of this model holds there
+        d_max = max(r.displacement for r in recs)
         raise ValueError(
-            f"the approach {max(r.displacement for r in recs):.4g} m is {x:.3g} of the ball's diameter 2 radius = "
-            f"{2 * radius:.4g} m: it must be below it (check the displacement and the radius; on the command line "
-            "--displacement-um and --radius-um)"
+            f"the plates approach by {d_max * 1e6:.4g} um, {x:.3g} times the ball's diameter of {2e6 * radius:.4g} um "
+            f"(radius {1e6 * radius:.4g} um), but they touch when the approach reaches the diameter: check the "
+            "displacement and the radius (given in m; on the command line --displacement-um and --radius-um, in um)"
         )
     if mc is not None and x > mc.x_max * (1 + 1e-12):
         raise ValueError(
-            f"compression delta/(2 a0) = {x:.4g} is beyond the calibrated table (up to {mc.x_max:.4g}); "
-            "use equilibrium='hertz' (small compressions only) or a shorter approach"
+            f"the approach is {x:.4g} of the ball's diameter, beyond the calibrated table (it reaches "
+            f"{mc.x_max:.4g}): use equilibrium='hertz' (small compressions only) or a shorter approach"
         )
     if isinstance(model_error, str):
         if model_error != "auto":
@@ -168,7 +179,6 @@ def relaxation(
     from scipy.stats import t as student_t
 
     tq = float(student_t.ppf(0.975, dof))
-    q = tq * tq
     fisher_z = Jz.T @ Jz
     lam, V = np.linalg.eigh(0.5 * (fisher_z + fisher_z.T))
     cov_z = (V * inverse_eigenvalues(lam)) @ V.T
@@ -203,7 +213,32 @@ def relaxation(
             "add the measurement noise"
         )
 
-    sd = np.sqrt(np.abs(np.diag(cov)))
+    # the error model: per-record residual diagnostics, and the covariance the intervals rest on
+    model_z = prob.model(z[:P]) * prob.factor(z)
+    rdata_w = prob.data_residual(z) / prob.sig
+    diags = tuple(residual_diagnostics(rdata_w[prob.idx == j]) for j in range(R))
+    wald_by_model: dict[str, dict[str, tuple[float, float]]] = {}
+    if noise_free:
+        emf = None
+        cov_used = cov
+        tqs = np.full(P, tq)
+    else:
+        emf = robust_covariance(
+            Jz, r, prob.idx, N, P, model_z, prob.sig, [rec.time for rec in recs], float(ramp_time), white=cov
+        )
+        for m, c_m in emf.covariances.items():  # Wald intervals under every error model, for comparison studies
+            t_m = _quantiles(emf, m, P, dof)
+            h_m = t_m * np.sqrt(np.abs(np.diag(c_m)))
+            wald_by_model[m] = {
+                nm: (exp_or_inf(float(max(z[i] - h_m[i], lo[i]))), exp_or_inf(float(min(z[i] + h_m[i], hi[i]))))
+                for i, nm in enumerate(names)
+            }
+        cov_used = emf.covariances[errors]
+        tqs = _quantiles(emf, errors, P, dof)
+    sd_white = np.sqrt(np.abs(np.diag(cov)))
+    sd = np.sqrt(np.abs(np.diag(cov_used)))
+    # the profile likelihood is in the fit's (white) units: its threshold grows with the variance inflation
+    inflation = np.where(sd_white > 0, (sd / np.where(sd_white > 0, sd_white, 1.0)) ** 2, 1.0)
     p = np.exp(z[:P])
     ivals: dict[str, tuple[float, float]] = {}
     kinds: dict[str, str] = {}
@@ -228,7 +263,8 @@ def relaxation(
         if noise_free:
             ivals[nm], kinds[nm], methods[nm] = (math.nan, math.nan), "n/a", "n/a"
             continue
-        h = tq * sd[i]
+        h = tqs[i] * sd[i]
+        q_i = tqs[i] ** 2 * max(float(inflation[i]), 1e-12)
         ends, hows = [], []
         for side in (-1, 1):
             if intervals == "wald":
@@ -241,7 +277,7 @@ def relaxation(
                 else:
                     how = "wald"
             else:
-                c, how = prof.end(i, side, h, q)
+                c, how = prof.end(i, side, h, q_i)
             ends.append(to_linear(i, c, how, side))
             hows.append(how)
         lo_open = hows[0] in ("bound", "open")
@@ -269,7 +305,7 @@ def relaxation(
         intervals=ivals,
         residual=float(np.sqrt(np.mean(rdata**2))),
         identifiability=ident,
-        covariance=cov,
+        covariance=cov_used,
         success=success,
         message=str(sol.message) + "".join(f"; {f}" for f in flags),
         nfev=nfev,
@@ -281,4 +317,25 @@ def relaxation(
         flags=tuple(flags),
         dof=int(dof),
         model_error_factors=tuple(float(v) for v in np.exp(z[P:])) if extra else (),
+        diagnostics=diags,
+        errors=errors if emf is not None else "white",
+        discrepancy=float(emf.discrepancy) if emf is not None else 0.0,
+        covariances=dict(emf.covariances) if emf is not None else {"white": cov},
+        correlation=tuple(emf.rho) if emf is not None else (),
+        wald_by_error_model=wald_by_model,
     )
+
+
+def _quantiles(emf: Any, errors: str, P: int, dof: int) -> np.ndarray:
+    """97.5 % Student quantile per parameter: N - P degrees of freedom for the noise, and where a discrepancy term
+    carries part of the variance, Satterthwaite's effective degrees of freedom (the discrepancy's size is estimated
+    from only the coefficients the parameters leave estimable)."""
+    from scipy.stats import t as student_t
+
+    if errors in ("robust", "discrepancy") and emf.discrepancy > 0:
+        share = np.clip(emf.discrepancy_share, 0.0, 1.0)
+        nu_d = max(float(emf.dof_discrepancy), 1.0)
+    else:
+        share, nu_d = np.zeros(P), math.inf
+    nu = 1.0 / np.maximum(share**2 / nu_d + (1.0 - share) ** 2 / max(dof, 1), 1e-300)
+    return np.array([float(student_t.ppf(0.975, max(v, 1.0))) for v in nu])

@@ -39,6 +39,7 @@ __all__ = [
     "as_records",
     "check_record",
     "check_information",
+    "check_ramp",
     "Table",
     "read_table",
     "read_csv",
@@ -79,6 +80,13 @@ def as_records(records: Sequence[Any]) -> list[Record]:
             raise ValueError(f"record {k}: time and stress must be finite numbers (found NaN or inf)")
         if np.any(t < 0):
             raise ValueError(f"record {k}: time must not be negative (s); got {t.min():g}")
+        back = np.nonzero(np.diff(t) < 0)[0]
+        if back.size:
+            i = int(back[0]) + 1
+            raise ValueError(
+                f"record {k}: time runs backwards at sample {i} ({t[i - 1]:g} s, then {t[i]:g} s): give each record's "
+                "samples in time order (and check that time and stress are not swapped)"
+            )
         validate_positive(f"record {k}: displacement (the total approach of the plates)", d, "m")
         out.append(Record(t, s, float(d)))
     if not out:
@@ -157,6 +165,23 @@ def _header_fields(line: str) -> list[str]:
     return out
 
 
+_DECIMAL_COMMA = re.compile(r"^[+-]?\d*,\d+(?:[eE][+-]?\d+)?$")
+
+
+def _decimal_commas(line: str) -> bool:
+    """True for a data line written with decimal commas: fields separated by ';', a tab or spaces, at least one
+    of the form ``0,2`` and all numbers once ',' reads '.' (``0,2;8,61``; a comma-separated line is never one)."""
+    for sep in (";", "\t"):
+        if sep in line:
+            parts = [f.strip() for f in line.split(sep)]
+            break
+    else:
+        parts = line.split()
+    if len(parts) < 2 or not any(_DECIMAL_COMMA.match(f) for f in parts):
+        return False
+    return all(_DECIMAL_COMMA.match(f) or _number(f) is not None for f in parts)
+
+
 def _number(text: str) -> float | None:
     try:
         v = float(text)
@@ -200,6 +225,13 @@ def read_table(path: str | Path) -> Table:
             continue
         if any(ch < " " and ch != "\t" for ch in s):
             raise ValueError(f"{path}, line {no}: control characters (a binary file?), not a text CSV")
+        if "," in s and _decimal_commas(s):
+            raise ValueError(
+                f"{path}, line {no}: {s!r} uses decimal commas (0,2 meaning 0.2); this reader needs decimal points: "
+                "export the file with '.' as the decimal separator (or replace ',' by '.' when the fields are "
+                "separated by ';' or tabs), or read it with pandas.read_csv(path, sep=';', decimal=',') and pass "
+                "the columns to tissuemech.compare.fit.relaxation"
+            )
         fields = _split(s)
         nums = [_number(f) for f in fields]
         if ncol is None and not header and not rows and any(v is None for v in nums):
@@ -321,15 +353,99 @@ def load_records(
             raise ValueError(f"{p}: no displacement: give --displacement-um (um) or a '# displacement_um: ...' line")
         ti, vi, t_si, y_si, force = _columns(table, quantity)
         t, y = table.values[:, ti] * t_si, table.values[:, vi] * y_si
+        tcol = f"column {ti + 1}" + (f" ({table.header[ti]!r})" if ti < len(table.header) else " (no header)")
         if np.any(t < 0):
             i = int(np.argmax(t < 0))
             raise ValueError(f"{p}, line {table.lines[i]}: time must not be negative (s); got {t[i]:g}")
+        _check_times(p, table, t, y, tcol)
         check_record((t, y, d), str(p))  # the fit's own checks, naming the file
+        check_ramp(t, y, ramp_time, str(p), tcol)
         if force:
             y = y / (math.pi * _incompressible_rmid(t, radius, d, ramp_time) ** 2)
         recs.append((t, y, d))
         forces.append(force)
+    if displacements is not None and len(displacements) == 1 and len(paths) > 1:
+        _check_shared_displacement(paths, recs, displacements[0])
     return recs, forces
+
+
+def _check_times(path: str, table: Table, t: np.ndarray, y: np.ndarray, tcol: str) -> None:
+    """One-line errors for a time column that runs backwards (swapped columns?) or repeats a time."""
+    dt = np.diff(t)
+    back = np.nonzero(dt < 0)[0]
+    if back.size:
+        i = int(back[0]) + 1
+        swapped = bool(np.all(np.diff(y) > 0)) if y.size > 2 else False
+        hint = (
+            "the other column increases: are the columns swapped? Put time first or name them in a header line "
+            "(stress_Pa,time_s)"
+            if swapped
+            else "the samples must be in time order from first contact (sort them; or name the columns in a header "
+            "line, time_s,stress_Pa, if time is not the first)"
+        )
+        raise ValueError(
+            f"{path}, line {table.lines[i]}: time runs backwards in {tcol} ({t[i - 1]:g} s, then {t[i]:g} s): {hint}"
+        )
+    same = np.nonzero(dt == 0)[0]
+    if same.size:
+        i = int(same[0]) + 1
+        raise ValueError(
+            f"{path}, lines {table.lines[i - 1]} and {table.lines[i]}: the time {t[i]:g} s appears twice in {tcol}: "
+            "each sample needs its own time (times rounded to too few digits? export more decimals; two records in "
+            "one file? give one file per compression level)"
+        )
+
+
+def check_ramp(t: np.ndarray, y: np.ndarray, ramp_time: float, what: str, column: str = "the time column") -> None:
+    """ValueError (one line, starting with ``what``) when a record's rise contradicts the stated ramp time: the
+    stress peaks early in the ramp and has clearly fallen by its end (minutes read as seconds: the times are 60
+    times too small), or it still clearly rises long after the ramp's end (milliseconds read as seconds). "Clearly":
+    by more than 5 noise sd (from the second differences) and 2 % of the peak."""
+    t, y = np.asarray(t, dtype=float), np.asarray(y, dtype=float)
+    if t.size < 8 or not ramp_time > 0:
+        return
+    d2 = np.diff(y, 2)
+    noise = 1.4826 * float(np.median(np.abs(d2 - np.median(d2)))) / math.sqrt(6.0)
+    k = int(np.argmax(y))
+    peak, t_pk = float(y[k]), float(t[k])
+    tol = max(5.0 * noise, 0.02 * abs(peak))
+    in_ramp = np.nonzero(t <= ramp_time)[0]
+    if t_pk < 0.5 * ramp_time and in_ramp.size >= 4 and in_ramp[-1] > k:
+        end = float(np.mean(y[in_ramp[-3:]]))
+        if peak - end > tol:
+            raise ValueError(
+                f"{what}: the stress peaks at t = {t_pk:.3g} s and has fallen by {100 * (peak - end) / peak:.0f} % "
+                f"when the stated ramp ends ({ramp_time:g} s), but a loading ramp only raises it: is {column} in "
+                "seconds? Minutes read as seconds look like this: name the unit in a header line ('time [min]') or "
+                "convert the times to s; otherwise check the ramp time"
+            )
+    after = np.nonzero(t >= ramp_time)[0]
+    if t_pk > 3.0 * ramp_time and after.size >= 4 and after[0] < k:
+        start = float(np.mean(y[after[:3]]))
+        if peak - start > tol:
+            raise ValueError(
+                f"{what}: the stress still rises until t = {t_pk:.3g} s, {t_pk / ramp_time:.3g} ramp times after the "
+                f"stated ramp ends ({ramp_time:g} s), but it relaxes once the plates stop: is {column} in seconds "
+                "(milliseconds read as seconds?) and the ramp time right? Name the unit in a header line "
+                "('time [ms]') or convert the times to s"
+            )
+
+
+def _check_shared_displacement(paths: Sequence[str], recs: Sequence[tuple], d: float) -> None:
+    """One displacement for several files is right only for replicates at one compression level: their long-time
+    stresses then agree; a spread beyond 1.5-fold means different levels."""
+    ends = []
+    for _, y, _ in recs:
+        tail = y[-max(1, y.size // 20) :]
+        ends.append(float(np.mean(tail)))
+    lo, hi = int(np.argmin(ends)), int(np.argmax(ends))
+    if ends[lo] > 0 and ends[hi] / ends[lo] > 1.5:
+        raise ValueError(
+            f"--displacement-um {d / UM:g} was given once for {len(paths)} files, but their long-time stresses differ "
+            f"{ends[hi] / ends[lo]:.2g}-fold ({paths[lo]} {ends[lo]:.3g} Pa, {paths[hi]} {ends[hi]:.3g} Pa): records "
+            "at different compression levels need one displacement each (--displacement-um D1 D2 ... in file order, "
+            f"or a '# displacement_um:' line per file); replicates at one level: repeat it ({' '.join([f'{d / UM:g}'] * len(paths))})"
+        )
 
 
 def read_csv(path: str, *, displacement: float, time_column: str | int = 0, stress_column: str | int = 1) -> Record:

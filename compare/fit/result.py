@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from tissuemech.compare.fit.diagnostics import RecordDiagnostics
 from tissuemech.compare.fit.intervals import Identifiability
 from tissuemech.compare.fit.model import PARAMETER_UNITS
 
@@ -31,7 +32,13 @@ class FitResult:
     noise         estimated noise standard deviation of each record (Pa)
     model_error   relative 1-sigma model-error term used (0: none)
     identifiability  :class:`Identifiability` (Fisher eigen-decomposition and ``report``)
-    covariance    covariance of log-parameters (P x P), model-error factors marginalised
+    covariance    covariance of log-parameters (P x P) the intervals rest on (``errors``), model-error
+                  factors marginalised; ``covariances`` the same under each error model considered
+    diagnostics   per record: lag-1 autocorrelation and runs test of the residuals (:class:`RecordDiagnostics`)
+    errors        the error model of the intervals ("robust" or "white", :mod:`.diagnostics`)
+    discrepancy   estimated relative RMS size of each record's smooth discrepancy term (0: none found)
+    correlation   per record: the residuals' lag-1 autocorrelation used for prewhitening (0 .. 0.97)
+    wald_by_error_model  the Wald 95 % interval of each parameter under each error model (comparison studies)
     success       True when the optimizer converged AND the intervals are usable (no flag below)
     flags         warnings that make intervals unusable or one-sided, in words
     message       optimizer message (and flags); ``nfev`` model evaluations of the final pass
@@ -53,6 +60,12 @@ class FitResult:
     flags: tuple[str, ...] = field(default=())
     dof: int = 0
     model_error_factors: tuple[float, ...] = field(default=())
+    diagnostics: tuple[RecordDiagnostics, ...] = field(default=())
+    errors: str = "white"
+    discrepancy: float = 0.0
+    covariances: dict[str, np.ndarray] = field(default_factory=dict)
+    correlation: tuple[float, ...] = field(default=())
+    wald_by_error_model: dict[str, dict[str, tuple[float, float]]] = field(default_factory=dict)
 
     @property
     def report(self) -> str:
@@ -89,6 +102,22 @@ class FitResult:
             lines.append("noise sd per record: " + ", ".join(f"{s:.3g}" for s in self.noise) + " Pa")
         if self.model_error:
             lines.append(f"model-error term: {100 * self.model_error:.3g} % (1 sigma, per record, on the force)")
+        if self.errors == "robust":
+            rho = ", ".join(f"{v:.2f}" for v in self.correlation)
+            misfit = (
+                f"a smooth model misfit (estimated {100 * self.discrepancy:.2g} % RMS per shape term) and "
+                if self.discrepancy > 0
+                else ""
+            )
+            lines.append(
+                f"intervals allow for {misfit}correlated, uneven noise (lag-1 correlation used per record: {rho})"
+                + ("" if self.discrepancy > 0 else "; no smooth model misfit found in the residuals")
+            )
+        elif self.errors != "white":
+            lines.append(f"intervals: error model {self.errors!r}")
+        for j, dg in enumerate(self.diagnostics):
+            tag = "  <- not white noise" if dg.correlated else ""
+            lines.append(f"residuals of record {j + 1}: {dg.text()}{tag}")
         for f in self.flags:
             lines.append(f"WARNING: {f}")
         return "\n".join(lines) + "\n" + self.report
@@ -113,6 +142,23 @@ class FitResult:
             "noise_sd_Pa": [num(s) for s in self.noise],
             "model_error_rel": num(self.model_error),
             "model_error_factors": [num(v) for v in self.model_error_factors],
+            "errors": self.errors,
+            "discrepancy_rel": num(self.discrepancy),
+            "prewhitening_rho": [num(v) for v in self.correlation],
+            "residual_diagnostics": [
+                {
+                    "n": d.n,
+                    "lag1_autocorrelation": num(d.r1),
+                    "runs": d.runs,
+                    "runs_expected": num(d.runs_expected),
+                    "runs_z": num(d.runs_z),
+                    "runs_p": num(d.runs_p),
+                }
+                for d in self.diagnostics
+            ],
+            "covariance_log_by_error_model": {
+                k: [[num(v) for v in row] for row in np.asarray(c)] for k, c in self.covariances.items()
+            },
             "covariance_log": [[num(v) for v in row] for row in np.asarray(self.covariance)],
             "dof": int(self.dof),
             "success": bool(self.success),

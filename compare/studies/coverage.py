@@ -33,6 +33,7 @@ import pandas as pd
 
 from tissuemech.compare import cases
 from tissuemech.compare.fit import Z95, parameter_names, relaxation
+from tissuemech.compare.fit.diagnostics import discrepancy_basis
 
 __all__ = [
     "PROTOCOL",
@@ -42,6 +43,11 @@ __all__ = [
     "reduced_records",
     "fe_records",
     "add_noise",
+    "add_misfit",
+    "DENSE",
+    "SCENARIOS",
+    "scenario_study",
+    "summarise_scenarios",
     "fit_many",
     "wilson",
     "summarise",
@@ -108,9 +114,128 @@ def fe_records(truth: dict, protocol: dict = PROTOCOL, mesh="default", n_ramp: i
     return out
 
 
-def add_noise(records: Sequence[tuple], noise: float, rng: np.random.Generator) -> list[tuple]:
-    """White Gaussian noise of sd ``noise`` x each record's peak stress."""
-    return [(t, y + noise * np.max(np.abs(y)) * rng.standard_normal(y.shape), d) for t, y, d in records]
+def add_noise(
+    records: Sequence[tuple], noise: float, rng: np.random.Generator, kind: str = "white", rho: float = 0.9
+) -> list[tuple]:
+    """Gaussian noise on each record: ``kind`` "white" (sd ``noise`` x the record's peak stress), "ar1" (stationary
+    AR(1) in sample order with lag-1 correlation ``rho`` and the same marginal sd) or "proportional" (sd ``noise``
+    x the stress at each point)."""
+    out = []
+    for t, y, d in records:
+        e = rng.standard_normal(y.shape)
+        if kind == "white":
+            dy = noise * np.max(np.abs(y)) * e
+        elif kind == "ar1":
+            x = np.empty_like(e)
+            x[0] = e[0]
+            c = math.sqrt(1.0 - rho * rho)
+            for k in range(1, e.size):
+                x[k] = rho * x[k - 1] + c * e[k]
+            dy = noise * np.max(np.abs(y)) * x
+        elif kind == "proportional":
+            dy = noise * np.abs(y) * e
+        else:
+            raise ValueError(f"noise kind must be 'white', 'ar1' or 'proportional'; got {kind!r}")
+        out.append((t, y + dy, d))
+    return out
+
+
+def add_misfit(records: Sequence[tuple], amplitude: float, rng: np.random.Generator, ramp_time: float) -> list[tuple]:
+    """A smooth relative model misfit on each record: y (1 + delta(t)), delta a random smooth function of log time
+    of root-mean-square ``amplitude`` over the record's log-time span: the sum of the record's
+    :func:`~tissuemech.compare.fit.diagnostics.discrepancy_basis` shapes (Legendre polynomials of degree 0..5 in
+    log(t + ramp_time)) with independent normal weights (a fresh draw per record).
+    This is the misfit the "robust" error model assumes; a misfit concentrated in the shapes the parameters
+    absorb cannot be told from the parameters by any residual analysis."""
+    out = []
+    for t, y, d in records:
+        B = discrepancy_basis(np.asarray(t), ramp_time)
+        a = rng.standard_normal(B.shape[1]) * amplitude / math.sqrt(B.shape[1])
+        out.append((t, y * (1.0 + B @ a), d))
+    return out
+
+
+# lab-style dense records: 2000 samples every 0.75 s over the 1500 s hold (the 0.2 s ramp is not resolved)
+DENSE = dict(PROTOCOL, times=tuple(np.linspace(0.75, 1500.0, 2000)))
+# the rows of the error-model study: records (protocol), 1 % noise of a kind, a smooth misfit (relative amplitude)
+SCENARIOS: dict[str, dict] = {
+    "white": dict(protocol=PROTOCOL, kind="white", misfit=0.0),
+    "white, dense": dict(protocol=DENSE, kind="white", misfit=0.0),
+    "AR(1) 0.9, dense": dict(protocol=DENSE, kind="ar1", misfit=0.0),
+    "proportional": dict(protocol=PROTOCOL, kind="proportional", misfit=0.0),
+    "proportional, dense": dict(protocol=DENSE, kind="proportional", misfit=0.0),
+    "misfit 0.5 %": dict(protocol=PROTOCOL, kind="white", misfit=0.005),
+    "misfit 0.5 %, dense": dict(protocol=DENSE, kind="white", misfit=0.005),
+}
+
+
+def scenario_study(
+    names: Sequence[str] = tuple(SCENARIOS),
+    n: int = 200,
+    *,
+    noise: float = 0.01,
+    seed: int = 0,
+    intervals: str = "profile",
+    log=sys.stderr,
+) -> pd.DataFrame:
+    """``n`` reduced-made fits per scenario of :data:`SCENARIOS` (fresh truth and noise each, ``model_error=0``):
+    one row per fit, parameter and error model ("default": the fit's own intervals, ``intervals`` method, error
+    model "robust"; the others: Wald intervals of :attr:`FitResult.wald_by_error_model`)."""
+    rng = np.random.default_rng(seed)
+    rows = []
+    for name in names:
+        sc = SCENARIOS[name]
+        prot = sc["protocol"]
+        t0 = time.perf_counter()
+        for k, truth in enumerate(sample_truths(n, rng)):
+            recs = add_noise(reduced_records(truth, prot), noise, rng, kind=sc["kind"])
+            if sc["misfit"]:
+                recs = add_misfit(recs, sc["misfit"], rng, prot["ramp_time"])
+            try:
+                res = relaxation(
+                    recs, radius=prot["radius"], ramp_time=prot["ramp_time"], model_error=0.0, intervals=intervals
+                )
+            except (ValueError, RuntimeError):
+                res = None
+            for p in NAMES:
+                base = dict(scenario=name, job=k, parameter=p, truth=truth[p])
+                if res is None:
+                    rows.append(dict(base, errors="default", estimate=math.nan, lo=math.nan, hi=math.nan, inside=False))
+                    continue
+                lo, hi = res.intervals[p]
+                rows.append(
+                    dict(base, errors="default", estimate=res.params[p], lo=lo, hi=hi, inside=lo <= truth[p] <= hi)
+                )
+                for m, iv in res.wald_by_error_model.items():
+                    lo, hi = iv[p]
+                    rows.append(dict(base, errors=m, estimate=res.params[p], lo=lo, hi=hi, inside=lo <= truth[p] <= hi))
+            if log is not None and (k + 1) % 50 == 0:
+                print(f"  {name}: {k + 1}/{n} fits, {time.perf_counter() - t0:.0f} s", file=log)
+        if log is not None:
+            print(f"{name}: {n} fits in {time.perf_counter() - t0:.0f} s", file=log)
+    return pd.DataFrame(rows)
+
+
+def summarise_scenarios(df: pd.DataFrame) -> pd.DataFrame:
+    """Coverage (%) per scenario, error model and parameter, with its Wilson 95 % range and the median relative
+    width (%)."""
+    out = []
+    for (sc, m, p), g in df.groupby(["scenario", "errors", "parameter"], sort=False):
+        k, n = int(g["inside"].sum()), len(g)
+        a, b = wilson(k, n)
+        width = ((g["hi"] - g["lo"]) / g["truth"] * 100).replace([np.inf], np.nan)
+        out.append(
+            {
+                "scenario": sc,
+                "errors": m,
+                "parameter": p,
+                "fits": n,
+                "coverage %": 100 * k / n,
+                "Wilson 95 %": f"{100 * a:.0f}-{100 * b:.0f}",
+                "median width %": float(np.nanmedian(width)) if width.notna().any() else math.nan,
+            }
+        )
+    return pd.DataFrame(out)
 
 
 def fit_many(
