@@ -32,6 +32,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from tissuemech.reduced.material import hertz_plate_f
+
 __all__ = [
     "MasterCurves",
     "tabulate",
@@ -63,7 +65,7 @@ class MasterCurves(NamedTuple):
 
 def hertz_f(x: np.ndarray) -> np.ndarray:
     """Small-strain Hertz law in master-curve form: F/(C a0^2) = (32/3) x^1.5 (E* = 8 C)."""
-    return (32.0 / 3.0) * np.asarray(x, dtype=float) ** 1.5
+    return hertz_plate_f(np.asarray(x, dtype=float))
 
 
 def static_curve(

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from tissuemech.compare.cases import BLASTULA_C, BLASTULA_INNER_RADIUS, FIG4_OUTER_RADIUS
+from tissuemech.reduced.material import hertz_plate_f
 
 __all__ = ["shell_pressure", "shell_inner_stretch", "exact_lumped_force", "lumped_equilibrium", "hertz_force"]
 
@@ -106,5 +107,4 @@ def hertz_force(delta: np.ndarray, *, radius: float, C: float) -> np.ndarray:
     F = (32/3) C a0^2 x^(3/2), x = delta / (2 a0). Args: delta total plate approach (m); radius a0 (m);
     C Fung stiffness (Pa).
     """
-    x = np.asarray(delta, float) / (2 * radius)
-    return (32.0 / 3.0) * C * radius**2 * x**1.5
+    return C * radius**2 * hertz_plate_f(np.asarray(delta, float) / (2 * radius))

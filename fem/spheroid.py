@@ -42,7 +42,7 @@ from tissuemech.fem.output import SpheroidField, SpheroidResult
 from tissuemech.fem.problem import SPHEROID_MARGIN, SceneProblem, check_mesh, mesh_spec, roundoff_floor, secant
 from tissuemech.fem.stepping import Step, TimedState
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
-from tissuemech.reduced.material import validate_branches, validate_material, validate_positive
+from tissuemech.reduced.material import hertz_plate_f, validate_branches, validate_material, validate_positive
 
 log = logging.getLogger(__name__)
 
@@ -76,8 +76,9 @@ X_MIN = 1e-6
 
 
 def hertz_force(approach, radius: float, C: float):
-    """Hertz force (N) of a ball between two plates, total approach delta (m): (4/3) E* sqrt(a0) (delta/2)^1.5, E* = 8 C."""
-    return 4.0 / 3.0 * 8.0 * C * np.sqrt(radius) * (np.asarray(approach, float) / 2) ** 1.5
+    """Hertz force (N) of a ball between two plates, total approach delta (m): (4/3) E* sqrt(a0) (delta/2)^1.5, E* = 8 C
+    (:func:`tissuemech.reduced.material.hertz_plate_f`, the shared law)."""
+    return C * radius**2 * hertz_plate_f(np.asarray(approach, float) / (2 * radius))
 
 
 def _level(mesh):

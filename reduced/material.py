@@ -43,6 +43,7 @@ except ImportError:  # pragma: no cover
     jnp = None  # type: ignore[assignment]  # optional-module fallback
 
 __all__ = [
+    "hertz_plate_f",
     "fung_energy",
     "dW_dI1",
     "d2W_dI1",
@@ -82,6 +83,22 @@ def _expm1_over(alpha, x):
     safe_alpha = xp.where(small, 1.0, alpha)
     safe_ax = xp.where(small, 0.0, ax)
     return xp.where(small, series, xp.expm1(safe_ax) / safe_alpha)
+
+
+def hertz_plate_f(x):
+    """The small-strain Hertz law of a Fung ball between two rigid frictionless plates, in master-curve form:
+    f(x) = F / (C a0^2) = (32/3) x^(3/2) at x = delta / (2 a0) (delta the total approach, a0 the radius).
+
+    Each plate makes a Hertz contact with the ball and takes half the approach: F = (4/3) E* sqrt(a0)
+    (delta/2)^(3/2) with E* = E / (1 - nu^2) = 8 C, the incompressible small-strain limit of this law (shear
+    modulus 2 C, Young's modulus 6 C; alpha drops out). The one definition of the law: the reduced model, the FE
+    scene and the references all call it. x <= 0 (no contact) gives 0; the derivative 16 sqrt(x) is finite (0)
+    at first contact, under JAX too. NumPy or JAX by the input; no input check.
+    """
+    xp = _xp(x)
+    x = xp.maximum(xp.asarray(x, dtype=float) if xp is np else x, 0.0)
+    root = xp.sqrt(xp.where(x > 0, x, 1.0)) * (x > 0)
+    return (32.0 / 3.0) * x * root
 
 
 def fung_energy(I1bar, C, alpha):

@@ -89,6 +89,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from tissuemech.reduced.interp import Spline1D, Spline2D
+from tissuemech.reduced.material import hertz_plate_f
 from tissuemech.reduced.validation import (
     InputTypeError,
     is_traced,
@@ -145,8 +146,7 @@ Midplane = Union[str, Callable, tuple, "MasterCurve", "MidplaneLaw", None]
 def hertz_f(x: Any) -> jnp.ndarray:
     """The Hertz plate law of :func:`hertz_force` in dimensionless form: f(x) = F / (C a0^2) = (32/3) x^(3/2) at
     x = delta / (2 a0) (x < 0, no contact, gives 0). No input check (the law inside every compiled model)."""
-    x = jnp.maximum(jnp.asarray(x, dtype=jnp.float64), 0.0)
-    return (32.0 / 3.0) * x * _sqrt_safe(x)  # derivative 16 sqrt(x): finite (0) at first contact
+    return hertz_plate_f(jnp.asarray(x, dtype=jnp.float64))  # the one definition (reduced.material)
 
 
 def hertz_force(approach: Any, *, radius: Any, C: Any) -> jnp.ndarray:

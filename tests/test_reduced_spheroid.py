@@ -294,13 +294,16 @@ def test_master_curve_small_x_behaviour():
 def test_master_curve_matches_fresh_fe_at_random_points():
     """The shipped table against fresh FE runs (its own level, other x and alpha than its knots)."""
     assert sp.DATA_FILE.exists(), "the shipped master-curve table is missing"
-    from tissuemech.compare.bench.fem_spheroid import static_force
+    from tissuemech.fem.spheroid import compress
 
     mc = sp.master_curve()
     level = int(mc.metadata.get("mesh", 2))
     rng = np.random.default_rng(10)
     for x, alpha in zip(rng.uniform(0.015, 0.3, 2), rng.uniform(0.05, 1.45, 2)):
-        fe = static_force(float(x), float(alpha), level)
+        run = compress(radius=A0, C=150.0, alpha=float(alpha), branches=(), displacement=2 * A0 * float(x),
+                       ramp_time=1.0, end_time=1.0, static=True, mesh=level,
+                       n_static=max(2, int(np.ceil(x / 0.05 - 1e-9))))  # fmt: skip
+        fe = float(run.force[-1]) / (150.0 * A0**2)
         assert float(mc.f(x, alpha)) / fe == pytest.approx(1.0, abs=1e-4)
 
 

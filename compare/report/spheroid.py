@@ -119,7 +119,7 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
     # from the fit's own default starting point (compare.fit.initial_guess: it does not know the answer)
     rng = np.random.default_rng(0)
     ts, ys = t_ref, s_ref * (1 + 0.01 * rng.standard_normal(keep.sum()))
-    model = functools.partial(rs.nominal_stress, midplane=mid10, adjoint="forward")  # calibrated law + midplane
+    model = functools.partial(rs.nominal_stress, midplane=mid10)  # calibrated law + midplane
     fit = relaxation(
         [(ts, ys, fig10["displacement"])],
         radius=fig10["radius"],
