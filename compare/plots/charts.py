@@ -201,7 +201,7 @@ def viscous_step_panel(ax, viscous: pd.DataFrame, tolerance: float = 1e-3) -> No
 def stiff_solver_panel(ax, stiff: pd.DataFrame) -> None:
     """Accepted + rejected diffrax steps vs tau / ramp time, explicit against implicit.
 
-    Explicit solvers that coincide (Tsit5 and Dopri5 take the same steps) stay visible: a large hollow
+    Explicit solvers that nearly coincide (Tsit5 and Dopri5 take nearly as many steps) stay visible: a large hollow
     marker around a small filled one, and '+' around 'x' where they gave up.
     """
     for k, (name, g) in enumerate(stiff.groupby("solver", sort=False)):

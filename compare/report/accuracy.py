@@ -35,8 +35,7 @@ def section(*, quick: bool = False) -> Section:
         if abs(ea / eb - 1) < 0.01
     ]
     same = (
-        f" ({'; '.join(twins)} give the same error: the solver takes the same steps, so their markers coincide "
-        "and both labels point at them)"
+        f" ({'; '.join(twins)} give the same error to 1 %, so their markers coincide and both labels point at them)"
         if twins
         else ""
     )
