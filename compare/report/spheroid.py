@@ -98,8 +98,9 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
             df,
             title="Spheroid Fig. 10 case: sigma~ at t = 0.2 s and 1500 s vs the Richardson-extrapolated FE",
             floor=1e-8,
-            note="FE labels: fem.spheroid mesh level (number of Q2/P1 elements), the fastest of "
-            f"{2 if quick else 3} runs, mesh set-up included; reduced: the lumped Maxwell model with the law named "
+            note="FE labels: fem.spheroid mesh level (number of Q2/P1 elements), "
+            + ("one run" if quick else "the fastest of 3 runs")
+            + ", mesh set-up included; reduced: the lumped Maxwell model with the law named "
             "(jitted; the fastest of 21 calls after compile); 'static run on level "
             f"{ref_level}' is calibrated on the reference mesh, so it is not independent of the reference.",
         ),
