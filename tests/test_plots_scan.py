@@ -147,6 +147,11 @@ def test_curve_bundles(spheroid_lhs, blastula_grid):
             for B, C, a in combos
         ]
         assert min(errs) < 1e-8
+        # the curve ends at its limit point: no point of the re-stiffening branch beyond the limit stretch
+        B, C, a = combos[int(np.argmin(errs))]
+        lim = red.limit_point(inner_radius=50e-6, outer_radius=B, C=C, alpha=a)
+        if lim is not None and np.isfinite(float(lim.pressure)):
+            assert np.all(la[np.isfinite(la)] <= float(lim.inner_stretch) * (1 + 1e-9))
 
 
 @pytest.mark.slow

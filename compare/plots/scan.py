@@ -417,6 +417,12 @@ def curve_bundle(
             raise ValueError("the limit points of the blastula curves could not be computed")
         lim_pressure = np.asarray(lim.pressure)[: len(combos)]
         lim_stretch = np.asarray(lim.inner_stretch)[: len(combos)]
+        # a shell with a limit point has no equilibrium above it: the curve ends there (the solve would return the
+        # re-stiffening branch beyond the limit stretch, drawn as broken fragments)
+        past = np.isfinite(lim_pressure)[:, None] & (
+            (p[None, :] > lim_pressure[:, None]) | (la > lim_stretch[:, None] * (1 + 1e-9))
+        )
+        la = np.where(past, np.nan, la)
         j = list(names).index(color_by) if color_by in names else None
         if j is None:
             raise ValueError(f"blastula curves are coloured by one of {list(names)}; got {color_by!r}")
