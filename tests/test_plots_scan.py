@@ -221,3 +221,16 @@ def test_sensitivity_chart_and_labels(blastula_grid, tmp_path):
     assert all(t.endswith("%") for t in texts) and len(texts) == 8
     fig.savefig(tmp_path / "s.png")
     assert sp.axis_label("t_half") == "half-relaxation time (s)" and sp.axis_label("radius") == "radius a0 (um)"
+
+
+def test_blastula_bundle_ends_at_the_limit_point():
+    """A low-alpha shell bursts at its limit point and re-stiffens far beyond it: the bundle draws the curve up to
+    the limit stretch only (it drew fragments of the re-stiffening branch above the limit pressure)."""
+    from tissuemech.reduced import blastula as red
+
+    table = scan.blastula(alpha=[0.02], outer_radius=[75e-6], C=[200.0], pressure=(0.0, 1000.0), n=3)
+    ax = sp.curve_bundle(table, "alpha").axes[0]
+    lim = red.limit_point(inner_radius=50e-6, outer_radius=75e-6, C=200.0, alpha=0.02)
+    assert lim is not None
+    la = np.concatenate([ln.get_xdata() for ln in ax.lines if ln.get_linestyle() == "-"])
+    assert np.isfinite(la).any() and np.nanmax(la) <= float(lim.inner_stretch) * (1 + 1e-9)
