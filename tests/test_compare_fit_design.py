@@ -63,8 +63,9 @@ def test_protocol_validation():
 
 @pytest.mark.slow
 def test_prediction_matches_the_fit_covariance():
-    """A fit to one noisy record set of the same protocol: its Gauss-Newton sd (with the estimated noise)
-    agrees with the predicted sd to the sampling error of the noise estimate (~10 % for 140 points)."""
+    """A fit to one noisy record set of the same protocol: its Gauss-Newton sd (with the estimated noise; the
+    white-noise error model, which the prediction assumes) agrees with the predicted sd to the sampling error of
+    the noise estimate (~10 % for 140 points)."""
     from tissuemech.compare import fit
     from tissuemech.compare.studies import coverage
 
@@ -73,7 +74,7 @@ def test_prediction_matches_the_fit_covariance():
     recs = coverage.add_noise(coverage.reduced_records(truth, prot), PC.noise, np.random.default_rng(3))
     res = fit.relaxation(recs, radius=PC.radius, ramp_time=PC.ramp_time, model_error=0.0)
     pred = design.predict(PC, truth)
-    sd_fit = np.sqrt(np.diag(res.covariance))
+    sd_fit = np.sqrt(np.diag(res.covariances["white"]))  # the Gauss-Newton covariance the Fisher matrix predicts
     for i, n in enumerate(design.NAMES):
         assert sd_fit[i] == pytest.approx(pred.sd[n], rel=0.3), n
 

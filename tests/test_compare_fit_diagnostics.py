@@ -131,3 +131,17 @@ def test_error_model_argument_is_checked():
     res = _fit(recs, errors="white")
     assert res.errors == "white"
     assert np.allclose(res.covariance, res.covariances["white"])
+
+
+def test_a_declared_misfit_bounds_the_discrepancy_from_below():
+    """A misfit the parameters absorb does not show in the residuals: misfit= states it (relative RMS per shape
+    term); the intervals widen accordingly, and a negative value is refused."""
+    rng = np.random.default_rng(5)
+    recs = [(t, y + 0.01 * y.max() * rng.standard_normal(y.size), d) for t, y, d in _clean(DENSE[::10])]
+    r0 = _fit(recs)
+    r1 = _fit(recs, misfit=0.01)
+    assert r1.discrepancy == pytest.approx(max(0.01, r0.discrepancy))
+    w = lambda r, n: math.log(r.intervals[n][1] / r.intervals[n][0])
+    assert w(r1, "C") > 3 * w(r0, "C")
+    with pytest.raises(ValueError, match="misfit"):
+        _fit(recs, misfit=-0.1)

@@ -72,6 +72,13 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         default="auto",
         help="relative 1-sigma model error of the force added to the noise model ('auto': the FE table's estimate)",
     )
+    f.add_argument(
+        "--misfit",
+        type=nonnegative,
+        default=0.0,
+        help="lower bound of the model's smooth misfit (relative RMS, e.g. 0.002) the intervals allow for; the "
+        "residuals show only the part the parameters cannot absorb (default 0: estimated from them alone)",
+    )
     f.add_argument("--out", default="fit-results", help="folder for fit.json and fit.png (default: %(default)s)")
     f.add_argument("--no-figure", action="store_true", help="skip fit.png")
     return f
@@ -101,6 +108,7 @@ def run(args: argparse.Namespace) -> None:
         equilibrium=args.equilibrium,
         model=model,
         model_error=args.model_error,
+        misfit=args.misfit,
     )
     print(res.summary())
     out = Path(args.out)
@@ -115,6 +123,7 @@ def run(args: argparse.Namespace) -> None:
         "equilibrium": args.equilibrium,
         "midplane": midplane,
         "n_points": [int(r[0].size) for r in recs],
+        "misfit_rel": args.misfit,
     }
     (out / "fit.json").write_text(json.dumps(d, indent=1))
     written = [str(out / "fit.json")]

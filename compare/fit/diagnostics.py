@@ -199,6 +199,7 @@ def robust_covariance(
     times: Sequence[np.ndarray],
     ramp_time: float,
     white: np.ndarray | None = None,
+    misfit: float = 0.0,
 ) -> ErrorModelFit:
     """Covariances of the log-parameters under each error model (module doc).
 
@@ -207,7 +208,8 @@ def robust_covariance(
             record, P the number of parameters (the first P components of z), ``model`` the model (Pa, with
             the model-error factors applied) and ``sig`` the noise sd (Pa) of each data point, ``times`` each
             record's times (s); ``white`` the Gauss-Newton covariance of the log-parameters if already
-            computed (else from J).
+            computed (else from J); ``misfit`` a lower bound of the discrepancy's relative size (RMS per shape
+            term), what is known of the model's accuracy beyond what the residuals show.
     """
     Jd, rd = J[:n_data], r[:n_data]
     Jp = J[n_data:]
@@ -254,6 +256,8 @@ def robust_covariance(
     longrun = np.array([(1.0 + r_) / (1.0 - r_) for r_ in rhos]) if R else np.ones(0)
     w = 1.0 / (scale * np.sqrt(longrun))[idx]
     lam, n_est = _reml_discrepancy(rd * w, Jd * w[:, None], D * w[:, None])
+    if misfit > 0 and misfit**2 >= lam:  # the user's lower bound: a known prior, no estimation uncertainty
+        lam, n_est = misfit**2, 10**9
     B_prior = Jp.T @ Jp
     JD = Jd.T @ D
     B_disc = lam * (JD @ JD.T)

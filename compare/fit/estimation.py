@@ -46,6 +46,7 @@ def relaxation(
     model_error: float | str | None = "auto",
     intervals: str = "profile",
     errors: str = "robust",
+    misfit: float = 0.0,
 ) -> FitResult:
     r"""Fit ``(C, alpha, beta_m, tau_m)`` to compression-relaxation records (module doc: the statistics).
 
@@ -63,6 +64,9 @@ def relaxation(
                  (default: a smooth discrepancy of estimated size plus an autocorrelation- and
                  heteroscedasticity-consistent noise covariance) or "white" (white noise, the model exact:
                  the Gauss-Newton covariance); "ess", "hac", "discrepancy" for comparison.
+    misfit       lower bound of the smooth discrepancy's relative size (RMS per shape term, e.g. 0.002), for
+                 "robust" and "discrepancy": a misfit that mimics a change of the parameters cannot show in
+                 the residuals, so what is known of the model's accuracy must be given (default 0: none).
     intervals    "profile" (Wald checked against, and where poor replaced by, the profile likelihood)
                  or "wald" (Gauss-Newton ellipse only; fast, for large studies of well-posed problems).
 
@@ -80,6 +84,10 @@ def relaxation(
         check_ramp(rec.time, rec.nominal_stress, float(ramp_time), f"record {k}")
     if intervals not in ("profile", "wald"):
         raise ValueError(f"intervals must be 'profile' or 'wald'; got {intervals!r}")
+    if not (math.isfinite(misfit) and misfit >= 0):
+        raise ValueError(
+            f"misfit (relative RMS size of the model's smooth misfit, -) must be a finite number >= 0; got {misfit}"
+        )
     if errors not in ERROR_MODELS:
         raise ValueError(f"errors must be one of {', '.join(map(repr, ERROR_MODELS))}; got {errors!r}")
     mc = table_of(equilibrium)
@@ -224,7 +232,17 @@ def relaxation(
         tqs = np.full(P, tq)
     else:
         emf = robust_covariance(
-            Jz, r, prob.idx, N, P, model_z, prob.sig, [rec.time for rec in recs], float(ramp_time), white=cov
+            Jz,
+            r,
+            prob.idx,
+            N,
+            P,
+            model_z,
+            prob.sig,
+            [rec.time for rec in recs],
+            float(ramp_time),
+            white=cov,
+            misfit=misfit,
         )
         for m, c_m in emf.covariances.items():  # Wald intervals under every error model, for comparison studies
             t_m = _quantiles(emf, m, P, dof)
