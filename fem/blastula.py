@@ -30,6 +30,8 @@ __all__ = [
     "inflate",
     "creep",
     "shell_problem",
+    "ThickWallWarning",
+    "warn_thick_wall",
     "ShellProblem",
     "MESHES",
     "SHELL_ORDERING",
@@ -211,6 +213,29 @@ def shell_problem(
     return ShellProblem(m, Material(1.0, float(alpha), float(kappa) / float(C)), formulation, beta, tau)
 
 
+THICK_WALL = 3.0  # B/A beyond which the uniform shell meshes lose accuracy (measured below)
+
+
+class ThickWallWarning(UserWarning):
+    """The wall is thicker than the shell meshes are made for (B/A <= 1.5, accurate to B/A ~ 3)."""
+
+
+def warn_thick_wall(inner_radius: float, outer_radius: float, mesh) -> None:
+    """Warn where B/A > THICK_WALL on the built-in meshes (uniform through the wall, made for the seed's walls):
+    at an inner stretch of 1.5 the error of lambda_a - 1 is 1.1e-5 (default mesh) at B/A = 1.5, 4.9e-5 (fine) at
+    3, 1.4e-2 at 10 and 67 % at 100 (``tissuemech bench acceptance thick-shell``). A mesh object passed in is
+    the caller's choice: no warning."""
+    ratio = float(outer_radius) / float(inner_radius)
+    if ratio > THICK_WALL and not isinstance(mesh, AxiMesh):
+        warnings.warn(
+            f"outer_radius / inner_radius = {ratio:.3g}: the built-in shell meshes are uniform through the wall and "
+            "made for B/A <= 1.5; the inner stretch error grows to ~1e-2 at B/A = 10 and 67 % at 100. Pass a mesh "
+            "graded toward the cavity (mesh=AxiMesh) or use the exact shell, tissuemech.reduced.blastula",
+            ThickWallWarning,
+            stacklevel=3,
+        )
+
+
 def inflate(
     *,
     inner_radius: float,
@@ -285,6 +310,7 @@ def inflate(
             raise ValueError("method='arclength' needs max_inner_stretch > 1 (where to stop the trace)")
     validate_choice("formulation", formulation, ("mixed", "displacement"))
     validate_radii(inner_radius, outer_radius)
+    warn_thick_wall(inner_radius, outer_radius, mesh)
     validate_material(C, alpha, kappa)
     if formulation == "displacement" and float(kappa) / float(C) > LOCKING_RATIO:
         warnings.warn(
@@ -424,6 +450,7 @@ def creep(
     beta = np.array([float(b) for b, _ in br])
     tau = np.array([float(t) for _, t in br])
     prob = shell_problem(inner_radius, outer_radius, C, alpha, kappa, mesh, beta=beta, tau=tau)
+    warn_thick_wall(inner_radius, outer_radius, mesh)
     C, p0, tr = float(C), float(pressure), float(ramp_time)
     schedule = ramp_hold_schedule(
         tr, float(end_time), n_ramp=int(n_ramp), n_hold=int(n_hold), first_hold=first_hold, breakpoints=list(ts)

@@ -267,3 +267,17 @@ def test_one_large_load_step_is_reached():
     far = inflate(**geo, pressures=[6e5])
     exact = float(bl.inner_stretch(6e5, inner_radius=A, outer_radius=B, C=C, alpha=0.2))
     assert float(far.inner_stretch[-1]) == pytest.approx(exact, rel=0.08)  # the coarse mesh at lambda ~ 5.4
+
+
+def test_thick_walls_beyond_the_meshes_design_warn():
+    """B = 20 A on the built-in (uniform) shell mesh: ~9 % off the exact shell (an earlier audit), so a warning
+    names the ratio; the seed's walls (B/A <= 1.5) give none."""
+    import warnings
+
+    from tissuemech.fem.blastula import ThickWallWarning, inflate
+
+    with pytest.warns(ThickWallWarning, match="outer_radius / inner_radius = 20"):
+        inflate(inner_radius=50e-6, outer_radius=1e-3, C=200.0, alpha=0.2, pressures=[20.0], mesh="coarse")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ThickWallWarning)
+        inflate(inner_radius=50e-6, outer_radius=75e-6, C=200.0, alpha=0.2, pressures=[20.0], mesh="coarse")
