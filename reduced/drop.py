@@ -97,7 +97,7 @@ class DropState(NamedTuple):
     profile_z: np.ndarray  # m
 
 
-def _rhs(_t, y, P, L):
+def _rhs(_t: float, y: np.ndarray, P: float, L: float) -> list[float]:
     # t in [0, 1] runs from the contact line (t = 0) down to the equator (t = 1): sigma = L t = L - s
     r, _z, psi, _v = y
     sn, c = math.sin(psi), math.cos(psi)
@@ -183,8 +183,9 @@ def compress(
     (rad, 0 < theta <= pi, measured through the liquid; default pi: non-wetting plates). Returns
     ``DropState`` (SI); ``n_profile`` points of the meniscus. Raises ValueError on an input out of range or
     when no symmetric meniscus exists (see the module for the equations)."""
-    a0 = float(validate_positive("radius (the drop radius a0)", radius, "m"))
-    gamma = float(validate_positive("surface_tension (gamma)", surface_tension, "N/m"))
+    validate_positive("radius (the drop radius a0)", radius, "m")
+    validate_positive("surface_tension (gamma)", surface_tension, "N/m")
+    a0, gamma = float(radius), float(surface_tension)
     d = float(approach)
     if not math.isfinite(d) or d < 0 or d >= 2 * a0:
         raise ValueError(
