@@ -33,6 +33,8 @@ def test_threshold():
     assert T.threshold(pts) == pytest.approx(math.sqrt(10 * 100))
     assert T.threshold(pts[:2]) == math.inf
     assert T.threshold([_pt(1, 1.01)]) == 1.0
+    tab = T.table(pts)
+    assert list(tab["gamma_app/gamma"]) == [1.5, 1.1, 1.0] and "F [N]" in tab
 
 
 def test_an_elastic_aggregate_fools_the_formula_and_a_soft_one_tends_to_the_drop():

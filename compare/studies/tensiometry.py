@@ -28,6 +28,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
+import pandas as pd
 
 from tissuemech.fem import spheroid as fem_spheroid
 from tissuemech.fem.forms import line_shape
@@ -45,6 +46,7 @@ __all__ = [
     "fe_point",
     "sweep",
     "threshold",
+    "table",
     "A0",
     "GAMMA",
     "NUMBERS",
@@ -186,3 +188,19 @@ def threshold(points: list[TensiometryPoint], tol: float = 0.05) -> float:
         return float(n[0])
     t = (e[k - 1] - tol) / (e[k - 1] - e[k])
     return float(np.exp(np.log(n[k - 1]) + t * (np.log(n[k]) - np.log(n[k - 1]))))
+
+
+def table(points: list[TensiometryPoint]) -> pd.DataFrame:
+    """A tidy table of the points (units in the column names)."""
+    return pd.DataFrame(
+        {
+            "gamma/(C a0)": [p.elastocapillary for p in points],
+            "F [N]": [p.force for p in points],
+            "R1 [m]": [p.radii.R1 for p in points],
+            "R2 [m]": [p.radii.R2 for p in points],
+            "R3 [m]": [p.radii.R3 for p in points],
+            "gamma_app [N/m]": [p.apparent_tension for p in points],
+            "gamma_app/gamma": [p.ratio for p in points],
+            "F/F_drop": [p.drop_force_ratio for p in points],
+        }
+    )
