@@ -136,12 +136,12 @@ def _solve(p0, h, theta):
 _H0 = 1.0 - 1e-4  # the continuation's first half gap (scaled), guessed as a sphere cut by the plates
 
 
-def _path(h_end, theta_end, max_cuts=30):
+def _path(h_end: float, theta_end: float, max_cuts: int = 30) -> np.ndarray:
     """Continuation from a just-touching sphere (theta = pi) to (h_end, theta_end): the scaled (R3, P, L)."""
     h0 = max(h_end, _H0)
     lh0, lh1 = math.log(h0), math.log(h_end)
 
-    def point(t):  # the path: h in log, theta linear
+    def point(t: float) -> tuple[float, float]:  # the path: h in log, theta linear
         return math.exp(lh0 + t * (lh1 - lh0)), math.pi + t * (theta_end - math.pi)
 
     sols: list[tuple[float, np.ndarray]] = []
