@@ -17,6 +17,9 @@ Extra stress hook (viscoelasticity): ``internal(x, mat, extra_S=S0, iso_scale=s)
 2nd Piola stress S = S_vol + s S_iso + S0, S0 (n_el, n_qp, 5) fixed during the step, so the
 tangent is s A_iso + d(F S0)/dF + volumetric part. ``iso_S(u, mat)`` returns S_iso at the points.
 
+Surface tension (``fem.surface``): ``Assembler.surface`` (None by default), a ``SurfaceTension`` whose
+gamma dA/du and gamma d2A/du2 ``internal`` adds to the residual and the tangent.
+
 Follower pressure p (scaled by C) on a boundary curve (``follower_pressure(u, p, edges)``): the
 traction -p n on the deformed surface (p > 0 pushes into the material), with n da = (z', -r') 2 pi r dxi
 for edges oriented with the material on their left (as ``fem.mesh`` stores them):
@@ -30,7 +33,7 @@ node: 2 i, 2 i + 1), ``ndof`` (= n_u + 3 n_elements for "mixed"). All methods ta
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
@@ -38,6 +41,9 @@ import scipy.sparse as sp
 from tissuemech.fem import constitutive as cm
 from tissuemech.fem.kinematics import IDENTITY5, b_matrix, dfirst_from_second, dJ, first_from_second, invariants
 from tissuemech.fem.mesh import AxiMesh
+
+if TYPE_CHECKING:
+    from tissuemech.fem.surface import SurfaceTension
 
 __all__ = ["Material", "Assembler", "line_shape"]
 
@@ -162,6 +168,8 @@ class Assembler:
         if formulation == "mixed":
             self._psiT = np.ascontiguousarray(self.psi.transpose(0, 2, 1))
         self._edge_cache: dict = {}
+        # an extra boundary energy (``fem.surface.SurfaceTension``) that ``internal`` adds to r and K; None: none
+        self.surface: SurfaceTension | None = None
         self._f_last: tuple[np.ndarray, np.ndarray] | None = None  # (u, F(u)): see f_at
 
     # ---- kinematics at quadrature points ------------------------------------------------
@@ -249,6 +257,14 @@ class Assembler:
         kw = dict(q=q, kappa=None if q is not None else mat.kappa, iso_scale=iso_scale, extra_S=extra_S, weight=self.w)
         P, A, J = cm.total_stress(f, mat.C, mat.alpha, tangent=tangent, **kw)  # type: ignore[arg-type]
         r = self._residual(u, P, J, mat)
+        surf = self.surface
+        if surf is not None and surf.gamma != 0.0:  # surface tension (fem.surface): gamma dA/du, gamma d2A/du2
+            r += surf.residual(u, self.ndof)
+            if tangent == "lazy":
+                uc = np.array(u, dtype=float)
+                return r, lambda: surf.add_tangent(self._pattern.matrix(self._tangent_values(f, A(), mat)), uc)
+            if tangent:
+                return r, surf.add_tangent(self._pattern.matrix(self._tangent_values(f, A, mat)), u)
         if tangent == "lazy":
             return r, lambda: self._pattern.matrix(self._tangent_values(f, A(), mat))
         if not tangent:

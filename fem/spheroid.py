@@ -41,8 +41,15 @@ from tissuemech.fem.mesh import FITTED_LEVELS, FITTED_SPLIT, AxiMesh, fitted_mes
 from tissuemech.fem.output import SpheroidField, SpheroidResult
 from tissuemech.fem.problem import SPHEROID_MARGIN, SceneProblem, check_mesh, mesh_spec, roundoff_floor, secant
 from tissuemech.fem.stepping import Step, TimedState
+from tissuemech.fem.surface import SurfaceTension
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
-from tissuemech.reduced.material import hertz_plate_f, validate_branches, validate_material, validate_positive
+from tissuemech.reduced.material import (
+    hertz_plate_f,
+    validate_branches,
+    validate_material,
+    validate_nonnegative,
+    validate_positive,
+)
 
 log = logging.getLogger(__name__)
 
@@ -145,8 +152,10 @@ class BallProblem(SceneProblem):
     surface nodes off the midplane, ``equator`` the node at (R, Z) = (a0, 0), ``floor`` the round-off
     floor of the residual (``fem.problem.roundoff_floor``, unit force scale)."""
 
-    def __init__(self, m: AxiMesh, mat: Material, beta, tau, rtol: float):
+    def __init__(self, m: AxiMesh, mat: Material, beta, tau, rtol: float, surface_tension: float = 0.0):
         super().__init__(m, mat, "mixed", beta, tau)
+        if surface_tension:  # scaled gamma / (C a0) on the whole outer surface (see ``compress``)
+            self.asm.surface = SurfaceTension(m.X, m.edges["outer"], surface_tension)
         self.sym = m.nodes["symmetry"]
         cand = np.setdiff1d(m.nodes["outer"], self.sym)
         self.plane = RigidPlane(m.X, cand)
@@ -238,6 +247,7 @@ def compress(
     n_hold: int | None = None,
     n_static: int | None = None,
     rtol: float = 1e-10,
+    surface_tension: float = 0.0,
 ) -> SpheroidResult:
     """Compress the Fung ball between rigid frictionless plates, hold, and let it relax.
 
@@ -293,6 +303,14 @@ def compress(
         n_static: static steps (default: 0.04 in delta / a0 on a level, 0.02 on a mesh object, at least 8;
             failed steps are cut back).
         rtol: Newton's relative residual tolerance.
+        surface_tension: tissue surface tension gamma (N/m, >= 0; 0: none, nothing changes): the energy gamma
+            times the deformed area of the ball's whole outer surface (``fem.surface``), the part pressed on the
+            plates included: a non-wetting plate (contact angle 180 deg) costs gamma per wetted area (Young:
+            gamma_SL - gamma_SV = -gamma cos 180 deg), so the surface keeps its tension where it touches the
+            plate (with no tension there the free surface would pull the contact line outward unopposed, the
+            Young angle of a 90 deg wetting plate). The plate force then includes the Laplace pressure
+            2 gamma / a0 of the undeformed ball acting on the contact disc; the liquid limit (C -> 0) is
+            ``tissuemech.reduced.drop``.
 
     Returns:
         ``SpheroidResult`` with one entry per converged step: ``time`` (s), ``approach`` (m), plate
@@ -314,6 +332,7 @@ def compress(
     """
     validate_positive("radius (the spheroid radius a0)", radius, "m")
     validate_material(C, alpha, kappa)
+    validate_nonnegative("surface_tension (gamma)", surface_tension, "N/m")
     br = validate_branches(branches)
     if static:
         br = ()
@@ -370,9 +389,10 @@ def compress(
             "not a mesh object (use contact='nodal' for a fixed mesh)"
         )
     mat = Material(1.0, float(alpha), float(kappa) / C)
+    gam = float(surface_tension) / (C * a0)  # the elastocapillary number gamma / (C a0)
     fit = None
     if isinstance(treat, FittedEdge) and level is not None:
-        fit = EdgeSearch(a0, level, lambda m: BallProblem(m, mat, beta, tau, rtol), rtol, tol=treat.tol)
+        fit = EdgeSearch(a0, level, lambda m: BallProblem(m, mat, beta, tau, rtol, gam), rtol, tol=treat.tol)
     if static:
         assert d_max is not None  # static=True rejects a callable displacement above
         # fitted levels: every state is solved on its own mesh, states 0.02 apart in x suffice
@@ -415,7 +435,7 @@ def compress(
             )
     else:
         m0 = make_mesh(mesh, a0)
-        prob = BallProblem(m0, mat, beta, tau, rtol)
+        prob = BallProblem(m0, mat, beta, tau, rtol, gam)
         n0 = prob.asm.ndof
         pole = np.argmin(np.hypot(prob.plane.R, prob.plane.Z - 1.0))
         active0 = np.zeros(prob.plane.nodes.size, bool)
@@ -503,6 +523,7 @@ def compress(
             ramp_time=None if static else float(ramp_time),
             end_time=None if static else float(end_time),
             contact=modes,
+            **({"surface_tension": float(surface_tension)} if surface_tension else {}),
         ),
     )
 

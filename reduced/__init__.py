@@ -10,6 +10,8 @@ validation input checks with messages naming the quantity and unit (re-exported 
 blastula   exact thick incompressible shell: p(lambda_a), inverse, limit point, profiles
 viscoshell the shell with generalized-Maxwell branches: inflation history under p(t)
 spheroid   lumped generalized-Maxwell plate force of a compressed ball
+indentation the same for a spherical probe on a ball resting on a plate (AFM)
+drop       the Young-Laplace liquid drop between plates (scipy, not JAX: one small solve per approach)
 """
 
 import jax

@@ -1,0 +1,125 @@
+r"""Surface tension: the energy gamma * (deformed area) of a boundary of the axisymmetric body, and its tangent.
+
+A tissue (a cell aggregate) has a surface tension gamma (N/m): its free surface stores the energy
+Pi_s = gamma A(u), A the current area of the surface of revolution swept by a boundary curve of the
+section. On an edge with nodes x_a = X_a + u_a (quadratic: 3 nodes, parameter xi in [-1, 1]), with
+r = N_a r_a, r' = N_a' r_a, z' = N_a' z_a and l = sqrt(r'^2 + z'^2):
+
+    A = sum_edges int 2 pi r l dxi   (Gauss, 4 points per edge),
+
+    dA/dr_a = 2 pi int (N_a l + r r' N_a' / l),     dA/dz_a = 2 pi int r z' N_a' / l,
+
+and the consistent tangent (symmetric; l^2 - r'^2 = z'^2):
+
+    d2A/dr_a dr_b = 2 pi int ((N_a N_b' + N_a' N_b) r' / l + r N_a' N_b' z'^2 / l^3)
+    d2A/dr_a dz_b = 2 pi int (N_a N_b' z' / l - r N_a' N_b' r' z' / l^3)
+    d2A/dz_a dz_b = 2 pi int r N_a' N_b' r'^2 / l^3.
+
+The residual gets gamma dA/du, the tangent gamma d2A/du2 (a tensile membrane: it pulls every surface node
+along the surface's mean curvature normal; on a sphere of radius a the nodal forces are those of the
+Laplace pressure 2 gamma / a). In the scaled engine (lengths by L, stresses by C) gamma enters as the
+elastocapillary number gamma / (C L).
+
+Which part of the boundary carries gamma is the scene's choice (``fem.spheroid``: the whole outer surface,
+the wetted disc included, see there why that is the 180 degree contact angle).
+
+API: :class:`SurfaceTension` (``.area``, ``.residual``, ``.add_tangent``), attached to an assembler as
+``Assembler.surface`` (``fem.forms``): ``internal`` then includes it in the residual and the tangent.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from tissuemech.fem.forms import line_shape
+
+__all__ = ["SurfaceTension", "N_GAUSS"]
+
+N_GAUSS = 4  # Gauss points per edge (the integrand r l is not polynomial; 4 points as the follower load)
+
+
+class SurfaceTension:
+    """The surface energy gamma A(u) of the boundary curve ``edges`` (n_edges, 2 or 3 nodes) of the section
+    with reference coordinates ``X`` (2, n_nodes) (scaled), tension ``gamma`` (scaled: gamma / (C L))."""
+
+    def __init__(self, X: np.ndarray, edges: np.ndarray, gamma: float):
+        edges = np.asarray(edges, dtype=int)
+        if edges.ndim != 2 or edges.shape[1] not in (2, 3) or edges.shape[0] == 0:
+            raise ValueError("surface tension needs a non-empty (n_edges, 2 or 3) array of boundary edges")
+        if not (np.isfinite(gamma) and gamma >= 0):
+            raise ValueError(f"surface tension must be finite and >= 0 (scaled gamma / (C L)), got {gamma!r}")
+        self.X, self.edges, self.gamma = np.asarray(X, float), edges, float(gamma)
+        xi, self.wq = np.polynomial.legendre.leggauss(N_GAUSS)
+        self.N, self.dN = line_shape(edges.shape[1], xi)  # (nn, nq)
+        self.dofs = np.stack([2 * edges, 2 * edges + 1], -1)  # (ned, nn, 2)
+        self._pos: dict = {}
+
+    def _geometry(self, u: np.ndarray):
+        x = self.X[:, self.edges] + u[self.dofs].transpose(2, 0, 1)  # (2, ned, nn)
+        r, rp, zp = x[0] @ self.N, x[0] @ self.dN, x[1] @ self.dN  # (ned, nq)
+        return r, rp, zp, np.hypot(rp, zp)
+
+    def area(self, u: np.ndarray) -> float:
+        """Deformed area (scaled by L^2) of the surface swept by the edges (u: displacement or full vector)."""
+        r, _, _, l = self._geometry(u)
+        return float(2 * np.pi * np.sum(r * l * self.wq))
+
+    def residual(self, u: np.ndarray, ndof: int) -> np.ndarray:
+        """gamma dA/du as a vector of length ``ndof`` (zeros off the edge dofs)."""
+        r, rp, zp, l = self._geometry(u)
+        c = 2 * np.pi * self.gamma * self.wq
+        fe = np.empty(self.edges.shape + (2,))
+        fe[..., 0] = np.einsum("eq,aq->ea", c * l, self.N) + np.einsum("eq,aq->ea", c * r * rp / l, self.dN)
+        fe[..., 1] = np.einsum("eq,aq->ea", c * r * zp / l, self.dN)
+        return np.bincount(self.dofs.ravel(), weights=fe.ravel(), minlength=ndof)
+
+    def blocks(self, u: np.ndarray) -> np.ndarray:
+        """gamma d2A/du2 per edge, (ned, nn, 2, nn, 2) (node, component) x (node, component)."""
+        r, rp, zp, l = self._geometry(u)
+        c = 2 * np.pi * self.gamma * self.wq
+        N, dN = self.N, self.dN
+        NdN = np.einsum("aq,bq->abq", N, dN)
+        dNdN = np.einsum("aq,bq->abq", dN, dN)
+        l3 = l**3
+        K = np.empty(self.edges.shape + (2,) + self.edges.shape[1:] + (2,))
+        K[:, :, 0, :, 0] = np.einsum("abq,eq->eab", NdN + NdN.transpose(1, 0, 2), c * rp / l) + np.einsum(
+            "abq,eq->eab", dNdN, c * r * zp**2 / l3
+        )
+        Krz = np.einsum("abq,eq->eab", NdN, c * zp / l) - np.einsum("abq,eq->eab", dNdN, c * r * rp * zp / l3)
+        K[:, :, 0, :, 1] = Krz
+        K[:, :, 1, :, 0] = Krz.transpose(0, 2, 1)
+        K[:, :, 1, :, 1] = np.einsum("abq,eq->eab", dNdN, c * r * rp**2 / l3)
+        return K
+
+    def _positions(self, K: sp.csr_matrix) -> np.ndarray:
+        """Positions in K.data of the edge entries (cached per sparsity pattern); ValueError if one is missing."""
+        key = (K.shape, hash(K.indptr.tobytes()), hash(K.indices.tobytes()))
+        if key not in self._pos:
+            d = self.dofs.reshape(self.edges.shape[0], -1)
+            rows = np.repeat(d[:, :, None], d.shape[1], 2).ravel().astype(np.int64)
+            cols = np.repeat(d[:, None, :], d.shape[1], 1).ravel().astype(np.int64)
+            n = K.shape[1]
+            if not K.has_sorted_indices:
+                K.sort_indices()
+            krow = np.repeat(np.arange(K.shape[0], dtype=np.int64), np.diff(K.indptr))
+            keys = krow * n + K.indices
+            want = rows * n + cols
+            pos = np.searchsorted(keys, want)
+            if pos.max() >= keys.size or not np.array_equal(keys[pos], want):
+                raise ValueError("the surface edges' entries are outside the tangent's sparsity pattern")
+            self._pos[key] = pos
+        return self._pos[key]
+
+    def add_tangent(self, K: sp.csr_matrix, u: np.ndarray) -> sp.csr_matrix:
+        """K with gamma d2A/du2 added IN PLACE on its own sparsity pattern (the edge entries must be in it)."""
+        pos = self._positions(K)
+        K.data += np.bincount(pos, weights=self.blocks(u).ravel(), minlength=K.nnz)
+        return K
+
+    def tangent(self, u: np.ndarray, ndof: int) -> sp.csr_matrix:
+        """gamma d2A/du2 as a (ndof, ndof) CSR matrix (for checks)."""
+        d = self.dofs.reshape(self.edges.shape[0], -1)
+        rows = np.repeat(d[:, :, None], d.shape[1], 2).ravel()
+        cols = np.repeat(d[:, None, :], d.shape[1], 1).ravel()
+        return sp.csr_matrix((self.blocks(u).ravel(), (rows, cols)), shape=(ndof, ndof))

@@ -1,0 +1,105 @@
+"""Surface tension in the FE (tissuemech.fem.surface and compress(surface_tension=...))."""
+
+import numpy as np
+import pytest
+
+from tissuemech.fem import spheroid as sph
+from tissuemech.fem.forms import Material
+from tissuemech.fem.newton import newton
+from tissuemech.fem.surface import SurfaceTension
+
+A0 = 175e-6  # m, S180 aggregate
+C = 170.0  # Pa
+GAMMA = 6e-3  # N/m
+KAPPA = 2.2e9  # Pa
+
+
+@pytest.fixture(scope="module")
+def ball():
+    return sph.make_mesh(1, 1.0)
+
+
+def test_area_of_the_hemisphere(ball):
+    st = SurfaceTension(ball.X, ball.edges["outer"], 1.0)
+    n = 2 * ball.X.shape[1]
+    assert st.area(np.zeros(n)) == pytest.approx(2 * np.pi, rel=1e-6)
+    # a uniform stretch lambda scales the area by lambda^2
+    u = np.zeros(n)
+    u[0::2], u[1::2] = 0.1 * ball.X[0], 0.1 * ball.X[1]
+    assert st.area(u) == pytest.approx(1.21 * st.area(np.zeros(n)), rel=1e-12)
+
+
+def test_residual_and_tangent_against_finite_differences(ball):
+    gamma = 0.3
+    st = SurfaceTension(ball.X, ball.edges["outer"], gamma)
+    n = 2 * ball.X.shape[1]
+    rng = np.random.default_rng(1)
+    u = 1e-3 * rng.standard_normal(n)
+    du = rng.standard_normal(n)
+    errs_r, errs_k = [], []
+    for e in (1e-5, 1e-6):
+        fd = gamma * (st.area(u + e * du) - st.area(u - e * du)) / (2 * e)
+        g = st.residual(u, n) @ du
+        errs_r.append(abs(fd - g) / abs(g))
+        fdr = (st.residual(u + e * du, n) - st.residual(u - e * du, n)) / (2 * e)
+        Kd = st.tangent(u, n) @ du
+        errs_k.append(np.abs(fdr - Kd).max() / np.abs(Kd).max())
+    # central differences: the error falls as e^2 (100x per decade) to a small value: the derivatives are exact
+    assert errs_r[1] < 1e-7 and errs_r[1] < errs_r[0] / 30
+    assert errs_k[1] < 1e-6 and errs_k[1] < errs_k[0] / 30
+    K = st.tangent(u, n)
+    assert abs(K - K.T).max() < 1e-12 * abs(K).max()
+
+
+def test_bad_input(ball):
+    with pytest.raises(ValueError, match="surface tension"):
+        SurfaceTension(ball.X, ball.edges["outer"], -1.0)
+    with pytest.raises(ValueError, match="edges"):
+        SurfaceTension(ball.X, np.zeros((0, 3), int), 1.0)
+    with pytest.raises(ValueError, match="surface_tension"):
+        sph.compress(radius=A0, C=C, alpha=0.2, displacement=0.1 * A0, ramp_time=1, end_time=1, static=True,
+                     surface_tension=-1e-3)  # fmt: skip
+
+
+def test_free_ball_carries_the_laplace_pressure():
+    """No load: the tension is balanced by the pressure 2 gamma / a0, with no deformation."""
+    m = sph.make_mesh(1, A0)
+    gam = GAMMA / (C * A0)  # elastocapillary number (0.2)
+    prob = sph.BallProblem(m, Material(1.0, 0.2, KAPPA / C), (), (), 1e-10, gam)
+    fun = lambda x: prob.asm.internal(x, prob.mat, tangent="lazy")
+    res = newton(fun, np.zeros(prob.asm.ndof), free=prob.free, ref_norm=gam, rtol=1e-12, atol=prob.floor,
+                 admissible=prob.admissible)  # fmt: skip
+    _, vm, q = prob.point_stresses(res.x)
+    vm_el, p_el = prob.element_fields(vm, q, C)
+    # the hydrostatic pressure is the Laplace pressure (to the quadratic edges' approximation of the sphere)
+    np.testing.assert_allclose(p_el, 2 * GAMMA / A0, rtol=5e-5)
+    # no deviatoric stress and no displacement beyond the volumetric strain p / kappa
+    assert vm_el.max() < 1e-3 * 2 * GAMMA / A0
+    u = prob.displacement(res.x)
+    assert np.abs(u).max() < 20 * (2 * GAMMA / A0) / (3 * KAPPA) * A0
+
+
+def _static(level, gamma, **kw):
+    return sph.compress(radius=A0, C=C, alpha=0.2, displacement=0.4 * A0, ramp_time=1, end_time=1, static=True,
+                        mesh=level, surface_tension=gamma, **kw)  # fmt: skip
+
+
+def test_zero_tension_changes_nothing():
+    a = sph.compress(radius=A0, C=C, alpha=0.2, displacement=0.2 * A0, ramp_time=1, end_time=1, static=True, mesh=0)
+    b = sph.compress(radius=A0, C=C, alpha=0.2, displacement=0.2 * A0, ramp_time=1, end_time=1, static=True, mesh=0,
+                     surface_tension=0.0)  # fmt: skip
+    np.testing.assert_array_equal(a.force, b.force)
+    assert "surface_tension" not in b.parameters
+
+
+def test_tension_stiffens_the_ball_and_converges():
+    r0 = _static(0, 0.0)
+    f = [_static(lev, GAMMA) for lev in (0, 1)]
+    F0, F1 = f[0].force[-1], f[1].force[-1]
+    assert F1 > 1.1 * r0.force[-1]
+    assert abs(F1 - F0) < 2e-3 * F1
+    # the tension keeps the ball rounder: a smaller contact disc
+    assert f[1].contact_radius[-1] < r0.contact_radius[-1]
+    assert f[1].parameters["surface_tension"] == GAMMA
+    # the plate force and the midplane reaction agree (the tension is self-equilibrated)
+    np.testing.assert_allclose(f[1].force, f[1].reaction_force, rtol=1e-6)
