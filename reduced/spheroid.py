@@ -1039,6 +1039,7 @@ def _ramp_hold(t, f, X, tr, betas, taus, o: ODE, solver: Any):
 
 def _history(t, f, x_of_t, betas, taus, jumps, o: ODE, solver: Any):
     """Dimensionless force for a general approach history x(t) (t sorted ascending inside)."""
+    t = jnp.where(jnp.isfinite(t) & (t >= 0), t, 0.0)  # refused times (traced) are reported on the result
     n = betas.shape[0]
     feq = f(x_of_t(t))
     if n == 0:
@@ -1815,6 +1816,7 @@ def _creep(t, radius, C, alpha, force, ramp_time, betas, taus, static):
         dphi = (dF + jnp.sum(q / taus)) / (1.0 + beta_sum)
         return dphi, -q / taus + betas * dphi
 
+    t = jnp.where(jnp.isfinite(t) & (t >= 0), t, 0.0)  # refused times are reported on the result (traced_checks)
     order = jnp.argsort(t)
     ts = t[order]
     T = jnp.maximum(jnp.max(t), 1e-300 * ramp_time)

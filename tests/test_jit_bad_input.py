@@ -91,6 +91,12 @@ def _jitted(name):
         return jax.jit(lambda d, radius, alpha: sp.midplane_radius(d, radius=radius, alpha=alpha))
     if name == "hertz_force":
         return jax.jit(lambda d, radius, C: sp.hertz_force(d, radius=radius, C=C))
+    if name == "approach":
+        return jax.jit(
+            lambda t, force, tau: sp.approach(
+                t, radius=500e-6, C=150.0, alpha=0.2, branches=[(0.4, tau)], force=force, ramp_time=0.2
+            )
+        )
     if name == "inflate":
 
         @jax.jit
@@ -155,6 +161,9 @@ def _args(name, over):
         return tuple(a[k] for k in keys)
     if name == "inflate history":
         return (over.get("p0", 50.0),)
+    if name == "approach":
+        a = {"t": T, "force": 1e-5, "tau": 200.0, **over}
+        return (a["t"], a["force"], a["tau"])
     raise KeyError(name)
 
 
@@ -263,6 +272,10 @@ CASES = [
     ("history past table", "history", dict(d=4e-4, shape=ramp, equilibrium="fem"), r"beyond the calibrated table"),
     ("history nan", "history", dict(d=50e-6, shape=nan_shape), r"displacement history .*must be finite"),
     ("history negative", "history", dict(d=-1e-6, shape=ramp), r"displacement history .*must not be negative"),
+    ("approach force negative", "approach", dict(force=-1e-5), r"force \(the held plate force\) must be positive"),
+    ("approach past table", "approach", dict(force=1.0), r"relaxed approach out of the equilibrium law"),
+    ("approach tau zero", "approach", dict(tau=0.0), r"tau \(relaxation time of branch 0\) must be positive"),
+    ("approach t negative", "approach", dict(t=np.array([-1.0, 0.0, 0.1, 0.2])), r"t \(output times"),
     # ---- equilibrium_force / midplane_radius / hertz_force
     ("F_eq nan", "equilibrium_force", dict(d=np.nan), r"displacement \(the total approach.*finite"),
     ("F_eq negative", "equilibrium_force", dict(d=-5e-5), r"displacement \(the total approach.*must not be negative"),

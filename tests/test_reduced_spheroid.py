@@ -658,7 +658,7 @@ def test_approach_creep_of_a_linear_law_against_the_closed_form():
     q = np.where(T <= TR, q_ramp, q_ramp * np.exp(-(T - TR) / taur))
     ref = (F0 * np.minimum(T / TR, 1.0) - q) / K
     assert np.max(np.abs(d - ref)) < 1e-8 * ref.max()
-    assert d[-1] == pytest.approx(F0 / K, rel=1e-3)  # relaxed: F_eq^{-1}(F0)
+    assert d[-1] == pytest.approx(F0 / K, rel=2e-3)  # nearly relaxed (t = 5.4 tau_r): F_eq^{-1}(F0)
     with pytest.raises(ValueError, match=r"^force \(the held plate force\) must be positive \(in N\)"):
         sp.approach(T, radius=A0, C=150.0, alpha=0.2, force=-1.0, ramp_time=TR, equilibrium="hertz")
     with pytest.raises(ValueError, match=r"relaxed approach out of the equilibrium law"):
