@@ -359,7 +359,25 @@ def master_curve(path: str | None = None) -> MasterCurve:
 # user's arrays are cached by content (``_cached_table``): passing equal arrays again gives an equal law.
 
 
-class EquilibriumLaw(eqx.Module):
+class _LawChecks(eqx.Module):
+    """What every equilibrium and midplane law answers besides its curve: its range checks (eager and jit-safe)
+    and the table behind it. The defaults suit a closed form valid for every x the public functions accept."""
+
+    def check(self, x_max: Any, alpha: Any) -> None:
+        """Raise ValueError (eager values only) where x up to ``x_max`` or ``alpha`` is outside the law."""
+
+    def traced_checks(self, x_max: Any, alpha: Any) -> list[tuple[Any, str]]:
+        """The jit-safe twin of :meth:`check`: ``(bad, message)`` pairs, raised at run time by
+        :func:`~tissuemech.reduced.validation.traced_checks` (``equinox.error_if``)."""
+        return []
+
+    @property
+    def table(self) -> MasterCurve | None:
+        """The master-curve table behind the law (None for closed forms and callables)."""
+        return None
+
+
+class EquilibriumLaw(_LawChecks):
     """An equilibrium law: the dimensionless master curve f(x) = F_eq / (C a0^2) at x = delta / (2 a0).
 
     Subclasses implement :meth:`curve`; :meth:`check` raises in eager calls outside the law's x range
@@ -378,19 +396,6 @@ class EquilibriumLaw(eqx.Module):
 
     def knots(self, displacement: Any, radius: Any) -> Any:
         """x-values (dimensionless) of the law's kinks in smoothness over [0, X] (None: smooth)."""
-        return None
-
-    def check(self, x_max: Any, alpha: Any) -> None:
-        """Raise ValueError (eager values only) where x up to ``x_max`` or ``alpha`` is outside the law."""
-
-    def traced_checks(self, x_max: Any, alpha: Any) -> list[tuple[Any, str]]:
-        """The jit-safe twin of :meth:`check`: ``(bad, message)`` pairs, raised at run time by
-        :func:`~tissuemech.reduced.validation.traced_checks` (``equinox.error_if``)."""
-        return []
-
-    @property
-    def table(self) -> MasterCurve | None:
-        """The master-curve table behind the law (None for closed forms and callables)."""
         return None
 
 
@@ -474,7 +479,7 @@ class UserLaw(EquilibriumLaw):
         return np.linspace(0.0, 1.0, 17)[1:-1] * displacement / (2.0 * radius)
 
 
-class MidplaneLaw(eqx.Module):
+class MidplaneLaw(_LawChecks):
     """A midplane law: the deformed equator radius g(x) = r_mid / a0 at x = delta / (2 a0).
 
     Subclasses implement :meth:`curve`; :meth:`check` raises in eager calls outside the law's x range."""
@@ -486,19 +491,6 @@ class MidplaneLaw(eqx.Module):
     def __call__(self, x: Any, *, alpha: Any = 0.0, radius: Any = 1.0) -> jnp.ndarray:
         """g(x) = r_mid / a0 at x = delta / (2 a0) (dimensionless), for ``alpha`` and ``radius`` (m)."""
         return self.curve(alpha=alpha, radius=radius)(jnp.asarray(x, dtype=jnp.float64))
-
-    def check(self, x_max: Any, alpha: Any) -> None:
-        """Raise ValueError (eager values only) where x up to ``x_max`` or ``alpha`` is outside the law."""
-
-    def traced_checks(self, x_max: Any, alpha: Any) -> list[tuple[Any, str]]:
-        """The jit-safe twin of :meth:`check`: ``(bad, message)`` pairs, raised at run time by
-        :func:`~tissuemech.reduced.validation.traced_checks` (``equinox.error_if``)."""
-        return []
-
-    @property
-    def table(self) -> MasterCurve | None:
-        """The master-curve table behind the law (None otherwise)."""
-        return None
 
 
 class Incompressible(MidplaneLaw):
