@@ -215,12 +215,12 @@ class FittedEdge:
     surface node n_contact sits on the contact edge, found by a secant iteration on the Signorini condition
     there (its multiplier N_edge = 0 to ``tol`` of the force). ``history`` (time runs with Maxwell branches,
     :func:`timed_fitted`): "replay" (default) rebuilds it at every new mesh's Gauss points by running the Maxwell
-    recursion from t = 0 on the stored deformation of every past step (no interpolated history, so no
-    accumulated error: the force converges at 2nd order in the step); "transfer" (release 0.1) interpolates it
-    onto every step's new mesh (the error accumulates with the number of ramp steps); "chain" does the same with the continuous interpolant for
-    Q_m and S_iso^n evaluated from the old solution (10x less drift); "points" keeps it on fixed material points
-    while the mesh moves, moved onto the step's mesh only when the edge has moved by the factor ``remesh`` (no
-    drift, but a step-to-step scatter of ~1e-4 of the force). Measured: ``python -m
+    recursion from t = 0 on the stress of every past step's own solution (no interpolated history, so nothing
+    accumulates from mesh to mesh); "transfer" (release 0.1) interpolates it onto every step's new mesh (the
+    error accumulates with the number of ramp steps); "chain" does the same with the continuous interpolant
+    for Q_m and S_iso^n evaluated from the old solution (10x less drift); "points" keeps it on fixed material
+    points while the mesh moves, moved onto the step's mesh only when the edge has moved by the factor
+    ``remesh`` (no drift, but a step-to-step scatter of ~1e-4 of the force). Measured: ``python -m
     tissuemech.compare.bench.fem_time``."""
 
     tol: float = EDGE_TOL
