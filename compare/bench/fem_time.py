@@ -44,6 +44,7 @@ CASE = dict(
     end_time=200.0,
 )
 TIMES = (0.05, 0.1, 0.15, 0.2, 1.0, 10.0)
+QUICK_TIMES = (0.1, 0.2, 1.0)
 REFERENCE_STEPS = (24, 48, 96)
 
 
@@ -61,29 +62,31 @@ def observed_order(F1: np.ndarray, F2: np.ndarray, F4: np.ndarray) -> np.ndarray
         return np.log2(np.abs(F2 - F1) / np.abs(F4 - F2))
 
 
-def reference(level: int = 2, steps: Sequence[int] = REFERENCE_STEPS) -> tuple[np.ndarray, np.ndarray, dict]:
+def reference(
+    level: int = 2, steps: Sequence[int] = REFERENCE_STEPS, times: Sequence[float] = TIMES
+) -> tuple[np.ndarray, np.ndarray, dict]:
     """(F_ref, observed order p, {n: F}): the nodal fixed-mesh runs Richardson-extrapolated in the step,
     F_ref = F_4n + (F_4n - F_2n) / (2^p - 1) with p the observed order of the three runs (clipped to [1, 3])."""
-    runs = {n: forces(level, n, "nodal")[0] for n in steps}
+    runs = {n: forces(level, n, "nodal", times)[0] for n in steps}
     F1, F2, F4 = (runs[n] for n in steps[-3:])
     p = observed_order(F1, F2, F4)
     q = np.clip(np.nan_to_num(p, nan=2.0), 1.0, 3.0)
     return F4 + (F4 - F2) / (2.0**q - 1.0), p, runs
 
 
-def table(level: int, steps: Sequence[int], history: str, F_ref: np.ndarray) -> dict:
-    """Errors F / F_ref - 1 (rows n_ramp, columns TIMES), the fitted runs' observed order and wall times."""
+def table(level: int, steps: Sequence[int], history: str, F_ref: np.ndarray, times: Sequence[float] = TIMES) -> dict:
+    """Errors F / F_ref - 1 (rows n_ramp, columns ``times``), the fitted runs' observed order and wall times."""
     F, wall = {}, {}
     for n in steps:
-        F[n], wall[n] = forces(level, n, FittedEdge(history=history))
+        F[n], wall[n] = forces(level, n, FittedEdge(history=history), times)
     err = {n: F[n] / F_ref - 1.0 for n in steps}
-    p = observed_order(*(F[n] for n in steps[-3:])) if len(steps) >= 3 else np.full(len(TIMES), np.nan)
-    return dict(F=F, error=err, order=p, wall=wall)
+    p = observed_order(*(F[n] for n in steps[-3:])) if len(steps) >= 3 else np.full(len(times), np.nan)
+    return dict(F=F, error=err, order=p, wall=wall, times=tuple(times))
 
 
 def _print_table(title: str, res: dict) -> None:
     print(f"\n{title}")
-    print("n_ramp | " + " | ".join(f"t = {t:g} s" for t in TIMES) + " | wall [s]")
+    print("n_ramp | " + " | ".join(f"t = {t:g} s" for t in res["times"]) + " | wall [s]")
     for n, e in res["error"].items():
         print(f"{n:6d} | " + " | ".join(f"{v:+.2e}" for v in e) + f" | {res['wall'][n]:.1f}")
     print("order  | " + " | ".join(f"{v:.2f}" for v in res["order"]) + " |   (observed, three finest n_ramp)")
@@ -94,14 +97,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--level", type=int, default=1, help="the fitted level (default 1)")
     ap.add_argument("--ref-level", type=int, default=2, help="the nodal reference's mesh level (default 2)")
     ap.add_argument("--n", default="6,12,24,48,96", help="ramp step counts (comma-separated)")
-    ap.add_argument("--history", default="points,transfer,chain", help="history treatments to measure")
-    ap.add_argument("--quick", action="store_true", help="level 0 against a level-1 reference, n = 6..48")
+    ap.add_argument("--history", default="replay,points,transfer,chain", help="history treatments to measure")
+    ap.add_argument("--quick", action="store_true", help="n = 6, 12, 24, 48 only, F at t = 0.1, 0.2, 1 s")
     a = ap.parse_args(argv)
     level, ref_level, steps = a.level, a.ref_level, [int(v) for v in a.n.split(",")]
+    times = TIMES
     if a.quick:
-        level, ref_level, steps = 0, 1, [6, 12, 24, 48]
+        steps, times = [6, 12, 24, 48], QUICK_TIMES
     t0 = time.perf_counter()
-    F_ref, p_ref, runs = reference(ref_level)
+    F_ref, p_ref, runs = reference(ref_level, times=times)
     print(
         f"# FE time convergence, fast two-branch case {CASE['branches']}, {CASE['displacement'] * 1e6:g} um in "
         f"{CASE['ramp_time']} s (fitted level {level}; reference: nodal contact on level {ref_level}, n_ramp = "
@@ -112,7 +116,7 @@ def main(argv: list[str] | None = None) -> int:
     last = REFERENCE_STEPS[-1]
     print(f"ref n={last} err | " + " | ".join(f"{v:+.1e}" for v in runs[last] / F_ref - 1.0))
     for history in a.history.split(","):
-        res = table(level, steps, history, F_ref)
+        res = table(level, steps, history, F_ref, times)
         _print_table(f"history = {history!r}: F / F_ref - 1 on level {level}", res)
     return 0
 
