@@ -1,7 +1,7 @@
 """Time convergence of the FE spheroid with fast Maxwell branches (issue 35).
 
 ``python -m tissuemech.compare.bench.fem_time [--level 1] [--ref-level 2] [--n 6,12,24,48,96] [--history
-points,transfer,chain] [--quick]`` prints, for the fast two-branch case (a0 = 500 um, C = 150 Pa, alpha = 0.2,
+replay,points,transfer,chain] [--quick]`` prints, for the fast two-branch case (a0 = 500 um, C = 150 Pa, alpha = 0.2,
 branches (beta, tau) = (0.8, 0.05 s), (0.3, 20 s), a 100 um approach ramped in 0.2 s and held to 200 s), the
 plate force F at t = 0.05, 0.1, 0.15, 0.2, 1, 10 s of ``fem.spheroid.compress`` on a contact-edge-fitted level
 for n_ramp ramp steps, against a time-converged reference: node-by-node contact on the fixed mesh of
@@ -11,9 +11,22 @@ the relative error F / F_ref - 1 per output time and n_ramp, the observed order 
 (log2 of the ratio of successive differences, from the three finest), and the wall time per run. The nodal
 reference differs from the fitted level by its own spatial error (the edge quantisation of the fixed mesh: on
 level 1 about 1.2e-3 of F, on level 2 about 2e-4 against level 1's fitted static force at 100 um).
-``--quick``: level 0 against a level-1 nodal reference, n_ramp = 6, 12, 24, 48.
+``--quick``: n_ramp = 6, 12, 24, 48 and t = 0.1, 0.2, 1 s only.
 
-Measured (2026-12-03, shared 2-core box, 14 min; F / F_ref - 1 on level 1 for n_ramp = 6, 12, 24, 48, 96):
+Measured, "replay" (the default since issue 35; 2026-12-03, level 1, F / F_ref - 1 at t = 0.1, 0.2, 1 s;
+wall times on the loaded shared 2-core box): against the level-2 nodal reference (Richardson of 24/48/96 steps,
+orders 2.1, 1.4, 1.6): n = 6 -5.49e-3, -1.93e-3, -2.35e-4 (11 s); 12 -2.03e-3, -8.04e-4, -2.29e-4 (25 s); 24
+-1.18e-3, -5.26e-4, -2.27e-4 (74 s); 48 -9.70e-4, -4.50e-4, -2.27e-4 (126 s): monotone, observed orders
+2.03 / 1.97 (t = 0.1 s), 2.02 / 1.86 (0.2 s), 1.97 / 1.93 (1 s) from 6-12-24 / 12-24-48. Against the fitted
+level 1's own Richardson extrapolation: n = 24 -2.9e-4, -1.0e-4, -5e-7; 48 -7.2e-5, -2.6e-5, -1.4e-7. What is
+left against the level-2 reference is spatial: fitted level 2 ("replay", 24 steps) is itself -1.04e-3,
+-2.9e-4, -1.4e-4 off it (the nodal reference's edge quantisation, largest at 0.1 s where the contact zone
+holds fewest nodes), and level 1 is 1.5e-4, 1.9e-4, 0.9e-4 below level 2 at the same step. A level-1 nodal
+reference is no better (its edge quantisation: the fitted level 1 is 1.2e-3 below it at 1 s). The replays
+cost O(n_ramp^2) stress transfers: 1.5 s of a 5.6 s run at 6 steps, 21 s of 28 s at 24. The Fig. 10 and
+Figs 8-9 cases (tau = 200 s, default 6 steps) move by <= 4e-8 of F against "transfer".
+
+Measured before issue 35 (14 min; F / F_ref - 1 on level 1 for n_ramp = 6, 12, 24, 48, 96):
 t = 0.2 s: "transfer" -1.53e-3, -7.6e-4, -5.1e-4, +3.1e-4, +4.7e-3 (drifts as the ramp is refined);
 "points" -1.56e-3, -8.7e-4, -6.5e-4, -6.9e-4, -5.8e-4 (no drift, scatter ~1e-4); "chain" (6, 24, 96 only)
 -1.37e-3, -3.5e-4, +2.0e-4. t = 1 s: transfer -2.3e-4 ... -2.0e-4; points -2.3e-4 ... -3.1e-4 (scatter
