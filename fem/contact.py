@@ -30,9 +30,9 @@ the contact edge on a node of a contact-edge-fitted mesh (``fem.mesh.fitted_mesh
 per state, the mesh whose edge node's multiplier vanishes (a safeguarded secant on phi(edge) = N_edge / F), so
 the force is a smooth function of the approach and of the mesh. Paths of a body under the plate (one
 ``fem.stepping.Step`` per state, its state a :class:`PlateStep`): :func:`static_fitted` (static states, each
-on its own fitted mesh), :func:`timed_fitted` (time steps with Maxwell branches; the history is carried to a
-new mesh by ``fem.transfer.gauss_transfer``), :func:`nodal_step` (node by node, a fixed mesh or beyond the
-fitted range).
+on its own fitted mesh), :func:`timed_fitted` (time steps with Maxwell branches; the history at a new mesh's
+Gauss points is rebuilt from every past step's solution, :func:`replayed_history`), :func:`nodal_step` (node
+by node, a fixed mesh or beyond the fitted range).
 """
 
 from __future__ import annotations
