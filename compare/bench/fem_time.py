@@ -22,7 +22,14 @@ level 1's own Richardson extrapolation: n = 24 -2.9e-4, -1.0e-4, -5e-7; 48 -7.2e
 left against the level-2 reference is spatial: fitted level 2 ("replay", 24 steps) is itself -1.04e-3,
 -2.9e-4, -1.4e-4 off it (the nodal reference's edge quantisation, largest at 0.1 s where the contact zone
 holds fewest nodes), and level 1 is 1.5e-4, 1.9e-4, 0.9e-4 below level 2 at the same step. A level-1 nodal
-reference is no better (its edge quantisation: the fitted level 1 is 1.2e-3 below it at 1 s). The replays
+reference is no better (its edge quantisation: the fitted level 1 is 1.2e-3 below it at 1 s). All six times
+(t = 0.05, 0.1, 0.15, 0.2, 1, 10 s) against the level-2 nodal reference: n = 12 -4.19e-3, -2.03e-3, -1.86e-3,
+-8.04e-4, -2.29e-4, -2.28e-4; 24 -1.85e-3, -1.18e-3, -1.43e-3, -5.26e-4, -2.27e-4, -2.27e-4; 48 -1.24e-3,
+-9.70e-4, -1.32e-3, -4.50e-4, -2.27e-4, -2.26e-4 (orders 1.95, 1.97, 1.98, 1.86, 1.93, 1.93); the fitted
+level 2 (24 steps) is -1.78e-3, -1.04e-3, -1.26e-3, -3.4e-4, -1.35e-4, -1.35e-4 off that reference and level 1
+only -7e-5, -1.5e-4, -1.7e-4, -1.9e-4, -9e-5, -9e-5 off level 2: the -1e-3 left at 0.05-0.15 s is the nodal
+reference's spatial error, not level 1's. Against level 1's own time-converged force, 48 steps are within
+2e-4 at every time (0.05 s: -8.1e-4 at 24 steps, -2.0e-4 at 48). The replays
 cost O(n_ramp^2) stress transfers: 1.5 s of a 5.6 s run at 6 steps, 21 s of 28 s at 24. The Fig. 10 and
 Figs 8-9 cases (tau = 200 s, default 6 steps) move by <= 4e-8 of F against "transfer".
 
