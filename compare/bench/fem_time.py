@@ -29,7 +29,7 @@ reference is no better (its edge quantisation: the fitted level 1 is 1.2e-3 belo
 level 2 (24 steps) is -1.78e-3, -1.04e-3, -1.26e-3, -3.4e-4, -1.35e-4, -1.35e-4 off that reference and level 1
 only -7e-5, -1.5e-4, -1.7e-4, -1.9e-4, -9e-5, -9e-5 off level 2: the -1e-3 left at 0.05-0.15 s is the nodal
 reference's spatial error, not level 1's. Against level 1's own time-converged force, 48 steps are within
-2e-4 at every time (0.05 s: -8.1e-4 at 24 steps, -2.0e-4 at 48). The replays
+2.1e-4 at every time (0.05 s: -8.2e-4 at 24 steps, -2.1e-4 at 48; 0.1 s: -2.9e-4, -7.3e-5). The replays
 cost O(n_ramp^2) stress transfers: 1.5 s of a 5.6 s run at 6 steps, 21 s of 28 s at 24. The Fig. 10 and
 Figs 8-9 cases (tau = 200 s, default 6 steps) move by <= 4e-8 of F against "transfer".
 
