@@ -30,9 +30,9 @@ the contact edge on a node of a contact-edge-fitted mesh (``fem.mesh.fitted_mesh
 per state, the mesh whose edge node's multiplier vanishes (a safeguarded secant on phi(edge) = N_edge / F), so
 the force is a smooth function of the approach and of the mesh. Paths of a body under the plate (one
 ``fem.stepping.Step`` per state, its state a :class:`PlateStep`): :func:`static_fitted` (static states, each
-on its own fitted mesh), :func:`timed_fitted` (time steps with Maxwell branches; the history is carried to a
-new mesh by ``fem.transfer.gauss_transfer``), :func:`nodal_step` (node by node, a fixed mesh or beyond the
-fitted range).
+on its own fitted mesh), :func:`timed_fitted` (time steps with Maxwell branches; the history at a new mesh's
+Gauss points is rebuilt from every past step's solution, :func:`replayed_history`), :func:`nodal_step` (node
+by node, a fixed mesh or beyond the fitted range).
 """
 
 from __future__ import annotations
@@ -64,6 +64,7 @@ __all__ = [
     "nodal_step",
     "static_fitted",
     "timed_fitted",
+    "replayed_history",
     "ContactSolution",
     "ContactError",
     "FittedEdge",
@@ -204,7 +205,7 @@ EDGE_MIN = 1e-4  # smallest edge position tried (an approach delta/(2 a0) of ~4e
 EDGE_MAX = FITTED_EDGE_MAX
 
 
-HISTORIES = ("points", "transfer", "chain")
+HISTORIES = ("replay", "points", "transfer", "chain")
 REMESH = 1.25  # the history moves onto the step's mesh when the contact edge has moved by this factor
 
 
@@ -213,15 +214,17 @@ class FittedEdge:
     """Contact treatment: every state on its own contact-edge-fitted mesh (``fem.mesh.fitted_mesh``), whose
     surface node n_contact sits on the contact edge, found by a secant iteration on the Signorini condition
     there (its multiplier N_edge = 0 to ``tol`` of the force). ``history`` (time runs with Maxwell branches,
-    :func:`timed_fitted`): "transfer" (default, release 0.1) interpolates it onto every step's new mesh (the
-    error accumulates with the number of ramp steps); "chain" does the same with the continuous interpolant for
-    Q_m and S_iso^n evaluated from the old solution (10x less drift); "points" keeps it on fixed material points
-    while the mesh moves, moved onto the step's mesh only when the edge has moved by the factor ``remesh`` (no
-    drift, but a step-to-step scatter of ~1e-4 of the force). Measured: ``python -m
+    :func:`timed_fitted`): "replay" (default) rebuilds it at every new mesh's Gauss points by running the Maxwell
+    recursion from t = 0 on the stress of every past step's own solution (no interpolated history, so nothing
+    accumulates from mesh to mesh); "transfer" (release 0.1) interpolates it onto every step's new mesh (the
+    error accumulates with the number of ramp steps); "chain" does the same with the continuous interpolant
+    for Q_m and S_iso^n evaluated from the old solution (10x less drift); "points" keeps it on fixed material
+    points while the mesh moves, moved onto the step's mesh only when the edge has moved by the factor
+    ``remesh`` (no drift, but a step-to-step scatter of ~1e-4 of the force). Measured: ``python -m
     tissuemech.compare.bench.fem_time``."""
 
     tol: float = EDGE_TOL
-    history: str = "transfer"
+    history: str = "replay"
     remesh: float = REMESH
 
     def __post_init__(self) -> None:
@@ -482,6 +485,42 @@ class PlateStep(NamedTuple, Generic[P]):
     edge: float  # the edge node's position on its fitted mesh (fraction of the pole block's arc), NaN: nodal
     history_mesh: AxiMesh | None = None  # where state.visco lives (its Gauss points); None: problem.m
     history_edge: float = float("nan")  # the contact edge of history_mesh
+    path: tuple = ()  # history="replay": (mesh, x, S_iso, dt) of every converged step so far (dt in s, x the full vector)
+
+
+def replayed_history(
+    path, m: AxiMesh, mat: Material, beta: np.ndarray, tau: np.ndarray, smooth: bool = True
+) -> ve.MaxwellState:
+    """The Maxwell history at the Gauss points of ``m`` after the steps ``path`` ((mesh, x, S_iso, dt) per
+    converged step from t = 0, the reference state; S_iso at that mesh's Gauss points): each step's S_iso^{n+1}
+    is taken from that step's own FE solution at m's points and the recursion ``fem.viscoelastic.update`` is run
+    from the undisturbed state. No history is ever interpolated, so nothing accumulates from mesh to mesh; on
+    ``smooth`` (what ``timed_fitted`` uses) takes every step's S_iso field by the continuous interpolant
+    (``gauss_transfer(..., continuous=True)``, its own mesh included): continuous in m's points, so the edge
+    search over trial meshes sees no jumps (a spatial error of the order of one continuous transfer, the same
+    for every step, which does not accumulate). ``smooth=False``: a step on m itself takes its S_iso as it is
+    (on one mesh: the plain step-by-step update), one on another mesh S_iso of its deformation gradient
+    evaluated at m's points (``fem.transfer.deformation_at``: the FE field itself, but discontinuous across
+    that mesh's element boundaries, which stalls the edge search). Consecutive steps on one mesh share the
+    point search."""
+    shape = m.quadrature_points.shape[1:] + (5,)
+    state = ve.initial_state(np.asarray(beta).size, shape)
+    k = 0
+    while k < len(path):
+        j = k + 1
+        while j < len(path) and path[j][0] is path[k][0]:
+            j += 1
+        mk = path[k][0]
+        if smooth:
+            S = gauss_transfer(mk, m, continuous=True)(np.stack([p[2] for p in path[k:j]]))
+        elif mk is m:
+            S = np.stack([p[2] for p in path[k:j]])
+        else:
+            f = deformation_at(mk, np.stack([p[1] for p in path[k:j]]), m)
+            S = cm.iso_second_piola(f.reshape((-1,) + shape), mat.C, mat.alpha).reshape(f.shape)
+        state = ve.replay(state, beta, tau, zip([p[3] for p in path[k:j]], S))
+        k = j
+    return state
 
 
 def first_state(search: EdgeSearch[P], n_branches: int) -> PlateStep[P]:
@@ -550,7 +589,7 @@ def timed_fitted(
     times,
     load_of_t,
     too_large=None,
-    history: str = "transfer",
+    history: str = "replay",
     remesh: float = REMESH,
 ) -> list[Step[PlateStep[P]]]:
     """Time steps on fitted meshes (one per step).
@@ -568,7 +607,14 @@ def timed_fitted(
       points: the recursion is exact on fixed points. The history moves (once) onto the step's own mesh only
       when the contact edge has moved by the factor ``remesh`` since the history's mesh, and when the plate
       stops (a step with the same approach): the number of moves is set by the motion, not by the step.
-    * "transfer" (default, release 0.1): they are interpolated onto each step's new mesh; the interpolation
+    * "replay" (default): every converged step's (mesh, solution, dt) is kept (``PlateStep.path``); on a new
+      mesh the history at its Gauss points is rebuilt by :func:`replayed_history` (each past step's S_iso
+      evaluated from its own FE solution there, the recursion run from t = 0). The only error is that of the FE
+      solutions themselves. While the plate stands still (the hold) the edge moves by ~1e-6 of itself per step
+      and the history is carried as by "transfer" (element-wise, between nearly coinciding meshes: nearly the
+      identity), node-by-node steps run the plain update: the replays cost O(n^2) stress transfers over the n
+      steps that move the plate (the ramp).
+    * "transfer" (release 0.1): they are interpolated onto each step's new mesh; the interpolation
       error accumulates with the number of ramp steps (a chain of element-wise Gauss-point fits is not
       stable): with a fast branch refining the ramp makes the force worse (``compare.bench.fem_time``).
     * "chain": as "transfer", with Q_m carried by the continuous interpolant (stable when chained) and S_iso^n
@@ -605,13 +651,18 @@ def timed_fitted(
         H = old.history_mesh if old.history_mesh is not None else old.problem.m  # where s_old.visco lives
         H_edge = old.history_edge if old.history_mesh is not None else old.edge
         quiet = beta.size == 0 or not np.any(s_old.visco.S_iso)  # no history yet: it lives anywhere
+        holding = d1 == s_old.delta  # the plate stands still: the edge hardly moves (replay: as "transfer")
         cache: dict = {}
 
         def on(prob: P) -> ve.MaxwellState:
             """The Maxwell history of the old step at the Gauss points of prob's mesh (interpolated)."""
             key = id(prob)
             if key not in cache:
-                if prob.m is H or quiet:
+                if quiet:
+                    cache[key] = s_old.visco
+                elif history == "replay" and not holding:  # every trial mesh alike (H included: no jump there)
+                    cache[key] = replayed_history(old.path, prob.m, prob.mat, beta, tau)
+                elif prob.m is H:
                     cache[key] = s_old.visco
                 elif history == "chain":  # Q_m by the continuous interpolant, S_iso^n evaluated on prob's mesh
                     f_old = deformation_at(H, s_old.x, prob.m)
@@ -624,7 +675,7 @@ def timed_fitted(
 
         def visc(prob: P):
             """The step's algorithmic terms (iso_scale, extra_S) at the Gauss points of prob's mesh."""
-            if history in ("transfer", "chain"):
+            if history in ("replay", "transfer", "chain"):
                 return ve.algorithmic(on(prob), beta, tau, dt)
             key = ("extra", id(prob))
             if key not in cache:
@@ -641,7 +692,7 @@ def timed_fitted(
         def updated(prob: P, x: np.ndarray, e_new: float, held: bool) -> tuple[ve.MaxwellState, AxiMesh | None, float]:
             """(history after the step, the mesh it lives on (None: prob's), that mesh's edge) for the solution x on
             prob's mesh with contact edge e_new."""
-            if history in ("transfer", "chain"):
+            if history in ("replay", "transfer", "chain"):
                 return ve.update(on(prob), beta, tau, dt, prob.asm.iso_S(x, prob.mat)), None, float("nan")
             mat = prob.mat
 
@@ -662,19 +713,23 @@ def timed_fitted(
                 visco = ve.MaxwellState(gauss_transfer(H, target)(visco.Q), S_at(target))
             return visco, (None if target is prob.m else target), (float("nan") if target is prob.m else H_edge)
 
+        def walked(prob: P, x: np.ndarray, S: np.ndarray) -> tuple:
+            """The path after this step (history="replay"; empty otherwise)."""
+            return (*old.path, (prob.m, x, S, dt)) if history == "replay" else ()
+
         def nodal() -> tuple[PlateStep[P], int]:
             """Node-by-node contact on the previous step's mesh (beyond the fitted range)."""
             prob = old.problem
             if not np.isnan(old.edge):
                 _warn_nodal(load_of_t(t1))
-            visco0 = on(prob)
+            visco0 = s_old.visco if history == "replay" else on(prob)  # replay: it lives on this mesh
             if visco0 is not s_old.visco:  # anchored elsewhere: S_iso^n evaluated on this mesh, Q_m interpolated
                 visco0 = visco0._replace(S_iso=prob.asm.iso_S(s_old.x, prob.mat))
             iso_scale, extra = ve.algorithmic(visco0, beta, tau, dt)
             sol = prob.solve(s_old, d1, iso_scale, extra, guess, load_of_t(t1))
             visco = ve.update(visco0, beta, tau, dt, prob.asm.iso_S(sol.x, prob.mat))
             st = PlateState(sol.x, sol.active, visco, d1, sol.residual, iso_scale, extra, sol.sets)
-            return PlateStep(st, prob, float("nan")), sol.iterations
+            return PlateStep(st, prob, float("nan"), path=walked(prob, sol.x, visco.S_iso)), sol.iterations
 
         if np.isnan(old.edge) or (old.edge > 0.0 and e0 > EDGE_MAX):
             return nodal()
@@ -687,6 +742,6 @@ def timed_fitted(
         prob, es_ = sol.problem, sol.state
         visco, where, where_edge = updated(prob, es_.x, sol.edge, held=d1 == s_old.delta)
         st = PlateState(es_.x, es_.active, visco, d1, es_.residual, es_.iso_scale, es_.extra_S, sol.solves)
-        return PlateStep(st, prob, sol.edge, where, where_edge), sol.iterations
+        return PlateStep(st, prob, sol.edge, where, where_edge, walked(prob, es_.x, visco.S_iso)), sol.iterations
 
     return march(step, first_state(fit, beta.size), times, too_large=too_large)

@@ -276,12 +276,14 @@ def compress(
             stationary in the edge position): the plate force is a smooth function of delta and converges
             smoothly under refinement (levels 1..4 are self-similar, h ~ 1/n_core). Time runs do the same
             at every step (the step's algorithmic viscoelastic stress in the edge condition); the Maxwell
-            history (Q_m, S_iso per Gauss point) is interpolated onto each new mesh's Gauss points in the
-            reference configuration (``FittedEdge(history="transfer")``, the default: its error accumulates with
-            the number of ramp steps, so with a branch as fast as the ramp refining the ramp makes the force
-            worse; ``FittedEdge(history="points")`` keeps it on fixed material points instead; measured by
-            ``python -m tissuemech.compare.bench.fem_time``); while the plate is held the edge and the mesh
-            stay put. Beyond the fitted range (edge past 50.6 deg from the pole, about delta/(2 a0) = 0.49)
+            history (Q_m, S_iso per Gauss point) at each new mesh's Gauss points is rebuilt from the stored
+            solution of every past step by running the Maxwell recursion from t = 0 (``FittedEdge(history=
+            "replay")``, the default: nothing interpolated from an interpolated history, so the force converges
+            at 2nd order in the step; ``"transfer"``, release 0.1's, interpolates it onto each new mesh: its
+            error accumulates with the number of ramp steps, so with a branch as fast as the ramp refining the
+            ramp makes the force worse; measured by ``python -m tissuemech.compare.bench.fem_time``); while the
+            plate is held the edge moves by ~1e-6 of itself per step and the history is carried as by
+            "transfer". Beyond the fitted range (edge past 50.6 deg from the pole, about delta/(2 a0) = 0.49)
             the remaining states / steps use node-by-node contact on the last fitted mesh (a logged warning;
             ``parameters["contact"]`` says "fitted" or "nodal" per step).
             Or an ``AxiMesh`` from ``fem.mesh.ball_section`` built with length_scale = radius: a fixed

@@ -170,7 +170,8 @@ def deformation_at(mesh: AxiMesh, x: np.ndarray, points: AxiMesh) -> np.ndarray:
     displacement ``x`` (interleaved (u_r, u_z) dofs of the Q2 ``mesh``, or the full unknown vector) at the Gauss
     points of ``points`` (another mesh of the same body: material points in the reference configuration). The
     FE field itself is evaluated there (no interpolation of point values): on ``points is mesh`` it is the
-    assembler's f to round-off."""
+    assembler's f to round-off. ``x`` (k, n): k displacements of the mesh at once (one search), f (k, n_el,
+    n_qp, 5)."""
     xq = points.quadrature_points
     ne, nq = xq.shape[1:]
     pts = xq.reshape(2, -1)
@@ -182,14 +183,18 @@ def deformation_at(mesh: AxiMesh, x: np.ndarray, points: AxiMesh) -> np.ndarray:
     N, Na, Nb = v0[ia] * v1[ib], d0[ia] * v1[ib], v0[ia] * d1[ib]  # (9, n) and the derivatives in xi, eta
     ed = b.element_dofs[:, elem]  # (9, n)
     xe = b.doflocs[:, ed]  # (2, 9, n)
-    ue = np.stack([x[2 * ed], x[2 * ed + 1]])  # (2, 9, n)
+    xs = np.asarray(x, float)
+    many = xs.ndim == 2
+    xs = xs if many else xs[None]
+    ue = np.stack([xs[:, 2 * ed], xs[:, 2 * ed + 1]], axis=1)  # (k, 2, 9, n)
     Ja, Jb = np.einsum("ikn,kn->in", xe, Na), np.einsum("ikn,kn->in", xe, Nb)  # dX/dxi, dX/deta (2, n)
     det = Ja[0] * Jb[1] - Jb[0] * Ja[1]
-    ua, ub = np.einsum("ikn,kn->in", ue, Na), np.einsum("ikn,kn->in", ue, Nb)
+    ua, ub = np.einsum("sikn,kn->sin", ue, Na), np.einsum("sikn,kn->sin", ue, Nb)
     # du/dX = [du/dxi du/deta] J^-1, J = [[dR/dxi, dR/deta], [dZ/dxi, dZ/deta]]
     dR = (ua * Jb[1] - ub * Ja[1]) / det
     dZ = (-ua * Jb[0] + ub * Ja[0]) / det
     R = np.einsum("kn,kn->n", xe[0], N)
-    ur = np.einsum("kn,kn->n", ue[0], N)
-    f = np.stack([1.0 + dR[0], dZ[0], dR[1], 1.0 + dZ[1], 1.0 + ur / R], axis=-1)
-    return f.reshape(ne, nq, 5)
+    ur = np.einsum("skn,kn->sn", ue[:, 0], N)
+    f = np.stack([1.0 + dR[:, 0], dZ[:, 0], dR[:, 1], 1.0 + dZ[:, 1], 1.0 + ur / R], axis=-1)
+    f = f.reshape(xs.shape[0], ne, nq, 5)
+    return f if many else f[0]

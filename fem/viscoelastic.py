@@ -20,7 +20,8 @@ Stresses are in the solver's units (scaled by C); Q_m, S_iso are (n_el, n_qp, 5)
 
 API: ``MaxwellState(Q, S_iso)`` (immutable), ``initial_state(n_branches, shape)``,
 ``coefficients(beta, tau, dt) -> (decay, g)``, ``algorithmic(state, beta, tau, dt) -> (iso_scale, extra_S)``,
-``update(state, beta, tau, dt, S_iso_new) -> MaxwellState``, ``branch_stress(state)`` (sum_m Q_m).
+``update(state, beta, tau, dt, S_iso_new) -> MaxwellState``, ``replay(state, beta, tau, steps)`` (the update
+run over a sequence of steps), ``branch_stress(state)`` (sum_m Q_m).
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["MaxwellState", "initial_state", "coefficients", "algorithmic", "update", "branch_stress"]
+__all__ = ["MaxwellState", "initial_state", "coefficients", "algorithmic", "update", "replay", "branch_stress"]
 
 
 class MaxwellState(NamedTuple):
@@ -74,6 +75,15 @@ def update(state: MaxwellState, beta: np.ndarray, tau: np.ndarray, dt: float, S_
     dS = S_iso_new - state.S_iso
     Q = decay[:, None, None, None] * state.Q + (beta * g)[:, None, None, None] * dS[None]
     return MaxwellState(Q, S_iso_new)
+
+
+def replay(state: MaxwellState, beta: np.ndarray, tau: np.ndarray, steps) -> MaxwellState:
+    """The history after the steps ``steps`` (an iterable of (dt [s], S_iso^{n+1})) from ``state``: :func:`update`
+    step by step. The history at a material point is a function of the stress history there only, so it can be
+    rebuilt at any points from the deformation of every past step (``fem.contact.replayed_history``)."""
+    for dt, S_new in steps:
+        state = update(state, beta, tau, dt, S_new)
+    return state
 
 
 def branch_stress(state: MaxwellState) -> np.ndarray:
