@@ -74,7 +74,7 @@ def test_contact_treatment_by_name_or_object():
 
 def test_history_on_material_points_agrees_with_the_transferred_one():
     """FittedEdge(history="points") (Maxwell history kept on fixed material points while the fitted mesh moves)
-    and the default "transfer" (interpolated onto every step's mesh) give the same relaxation on the coarse level
+    and the default "replay" (rebuilt at every step's mesh from the stored solutions) give the same relaxation on the coarse level
     to 2e-3 of the force with the default 6 ramp steps (measured 1.2e-3), 5e-4 at 20 s (measured 3.2e-4)."""
     kw = dict(radius=A0, C=150.0, alpha=0.2, branches=[(0.8, 0.05), (0.3, 20.0)], displacement=100e-6)
     kw.update(ramp_time=0.2, end_time=20.0, n_hold=6, mesh=0)

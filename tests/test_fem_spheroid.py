@@ -297,47 +297,5 @@ def test_fig8_9_case_and_default_mesh_fig10():
 
 
 # ---- issue 35: time convergence with a branch as fast as the ramp --------------------------------------
-FAST = dict(
-    radius=A0,
-    C=150.0,
-    alpha=0.2,
-    branches=[(0.8, 0.05), (0.3, 20.0)],
-    displacement=100e-6,
-    ramp_time=0.2,
-    end_time=10.0,
-    n_hold=12,
-)
-FAST_TIMES = (0.05, 0.1, 0.15, 0.2, 1.0, 10.0)
-
-
-def _fast(n_ramp: int, history: str) -> np.ndarray:
-    from tissuemech.fem.contact import FittedEdge
-
-    r = compress(**FAST, mesh=1, n_ramp=n_ramp, contact=FittedEdge(history=history), field_times=list(FAST_TIMES))
-    return np.array([r.force[np.argmin(np.abs(r.time - t))] for t in FAST_TIMES])
-
-
-@pytest.mark.slow
-def test_fast_branch_history_on_material_points_does_not_drift_with_the_step():
-    """Issue 35 (tau = 0.05 s on a 0.2 s ramp, default level): interpolating the Maxwell history onto every ramp
-    step's fitted mesh ("transfer", the default) drifts as the ramp is refined (at t = 0.2 s F moves by +5.2e-3
-    from 24 to 96 steps, away from the time-converged nodal reference, python -m
-    tissuemech.compare.bench.fem_time); keeping it on material points ("points") does not (7e-5)."""
-    i = FAST_TIMES.index(0.2)
-    points = {n: _fast(n, "points")[i] for n in (24, 96)}
-    transfer = {n: _fast(n, "transfer")[i] for n in (24, 96)}
-    assert abs(points[96] / points[24] - 1) < 3e-4
-    assert transfer[96] / transfer[24] - 1 > 3e-3
-
-
-@pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="issue 35 open: the history treatments do not converge at 2nd order yet")
-def test_fast_branch_force_converges_at_second_order_in_the_step():
-    """The acceptance of issue 35: on the default level, successive refinements of the ramp (12, 24, 48 steps)
-    change F less and less at every output time, at an observed order near 2 (the nodal fixed-mesh reference
-    shows 1.4-2.1). Measured with history="points": orders 2.3 (t = 0.2 s) but 0.8 (0.1 s) and 0.65 (1 s), the
-    changes being a step-to-step scatter of ~1e-4 of F, not a time error."""
-    F = [_fast(n, "points") for n in (12, 24, 48)]
-    d1, d2 = np.abs(F[1] - F[0]), np.abs(F[2] - F[1])
-    assert np.all(d2 < d1)
-    assert np.all(np.abs(np.log2(d1 / d2) - 2.0) < 0.6)
+# the fast-branch time convergence (issue 35) is tests/test_fem_time.py; the history treatments compared by
+# python -m tissuemech.compare.bench fem-time
