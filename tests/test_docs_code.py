@@ -26,7 +26,7 @@ def _api_block() -> str:
 
 @pytest.mark.slow
 def test_readme_api_example_runs_and_its_comments_hold(tmp_path, monkeypatch, capsys):
-    monkeypatch.chdir(tmp_path)  # it writes blastula.pvd
+    monkeypatch.chdir(tmp_path)
     block = _api_block()
     ns: dict = {}
     exec(compile(block, str(README), "exec"), ns)
@@ -46,8 +46,7 @@ def test_readme_api_example_runs_and_its_comments_hold(tmp_path, monkeypatch, ca
     for name, digits in (("C", 4), ("alpha", 3), ("tau", 4)):
         lo, hi = fitres.intervals[name]
         assert f"{lo:.{digits}g}..{hi:.{digits}g}" in comment.replace(" Pa", "").replace(" s", ""), (name, lo, hi)
-    assert np.isfinite(ns["grid"]).all() and ns["grid"].shape == (100, 100, 301)
-    assert (tmp_path / "blastula.pvd").exists()
+    assert np.all(np.isfinite(ns["p"])) and np.all(np.isfinite(ns["s"]))
 
 
 @pytest.mark.slow
