@@ -119,6 +119,11 @@ def test_parity_points_are_fe_reduced_pairs(spheroid_lhs, blastula_grid):
     )
     with pytest.raises(ValueError, match="no FE spot-checks"):
         sp.parity_plot(df.drop(columns="deviation [-]"))
+    # the colour scale covers the smallest deviation (it was clipped at 0.01 %, hiding 1e-5-level checks)
+    tiny = blastula_grid.copy()
+    tiny["deviation [-]"] = tiny["deviation [-]"] * 1e-4
+    norm = sp.parity_plot(tiny).axes[0].collections[0].norm
+    assert norm.vmin <= 100 * float(np.nanmin(np.abs(tiny["deviation [-]"]))) * (1 + 1e-9)
 
 
 @pytest.mark.slow

@@ -477,15 +477,17 @@ def parity_plot(table: pd.DataFrame, *, ax: Any = None):
     )
     import matplotlib as mpl
 
-    # one fixed log scale, 0.01 % (pale) to 10 % (black), so parity plots of different scans compare
-    norm = mpl.colors.LogNorm(1e-2, max(10.0, float(np.nanmax(dev))))
+    # a log scale from 0.01 % (pale) to 10 % (black), so parity plots of different scans compare, widened to
+    # the true extrema of this scan (a deviation below 0.01 % is shown as it is, not clipped to the pale end)
+    floor = min(1e-2, max(float(np.nanmin(dev)), 1e-8)) if np.isfinite(dev).any() else 1e-2
+    norm = mpl.colors.LogNorm(floor, max(10.0, float(np.nanmax(dev))))
     lo, hi = np.inf, -np.inf
     sc = None
     for red_name, fe_name, marker, label in pairs:
         r = table.loc[sel, scan.column(red_name)].to_numpy(float)
         f = table.loc[sel, scan.column(fe_name)].to_numpy(float)
         sc = ax.scatter(
-            f, r, c=np.maximum(dev, 1e-3), cmap="magma_r", norm=norm, marker=marker, s=60, edgecolor="k", label=label
+            f, r, c=np.maximum(dev, floor), cmap="magma_r", norm=norm, marker=marker, s=60, edgecolor="k", label=label
         )
         fin = np.isfinite(f) & np.isfinite(r)
         if fin.any():
