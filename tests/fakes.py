@@ -5,6 +5,9 @@
 F_eq = C a0^2 (32/3) x^1.5 exp(4 alpha x), x = delta/(2 a0), A_mid = pi a0^2 (1 + x) [SI in, Pa out].
 The ramp is integrated by the exact-for-linear-S recursion on 400 substeps; during the hold q decays
 exactly as exp(-(t - t_r)/tau).
+
+``static_compression``: the static FE compression of the 500 um ball (C = 200 Pa) to x = delta / (2 a0), shared
+by the FE contact and spheroid tests.
 """
 
 from __future__ import annotations
@@ -40,3 +43,13 @@ def fake_nominal_stress(t, *, radius, C, alpha, branches, displacement, ramp_tim
         q_hold = qn[-1] * jnp.exp(-(jnp.maximum(t, ramp_time) - ramp_time) / tau)
         force = force + jnp.where(t <= ramp_time, q_ramp, q_hold)
     return force / (jnp.pi * radius**2 * (1.0 + x_end * xt))
+
+
+def static_compression(x, mesh, n=None, alpha=0.2, **kw):
+    """``fem.spheroid.compress`` statically to x = delta / (2 a0) (a0 = 500 um, C = 200 Pa, no branches) on ``mesh``
+    in ``n`` steps (None: the default)."""
+    from tissuemech.fem.spheroid import compress
+
+    a0 = 500e-6
+    return compress(radius=a0, C=200.0, alpha=alpha, branches=(), displacement=2 * a0 * x, ramp_time=1.0,
+                    end_time=1.0, mesh=mesh, static=True, n_static=n, **kw)  # fmt: skip

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from fakes import static_compression
 
 from tissuemech.fem import contact
 from tissuemech.fem.contact import (
@@ -23,20 +24,7 @@ _STATIC_10 = dict(
 )
 
 
-def _static(x, mesh, n=None, alpha=0.2, **kw):
-    return compress(
-        radius=A0,
-        C=200.0,
-        alpha=alpha,
-        branches=(),
-        displacement=2 * A0 * x,
-        ramp_time=1.0,
-        end_time=1.0,
-        mesh=mesh,
-        static=True,
-        n_static=n,
-        **kw,
-    )
+_static = static_compression  # tests/fakes.py
 
 
 def test_rigid_plane_gap_impose_and_contact_radius():

@@ -5,6 +5,7 @@ from __future__ import annotations
 import meshio
 import numpy as np
 import pytest
+from fakes import static_compression
 from scipy.optimize import curve_fit
 
 from tissuemech.fem.mesh import ball_section
@@ -208,19 +209,7 @@ def test_bad_input_messages(kw, msg):
 
 
 # ---- contact-edge-fitted levels: smooth in delta and in h ------------------------------------------
-def _static(x, mesh, n=None, alpha=0.2):
-    return compress(
-        radius=A0,
-        C=200.0,
-        alpha=alpha,
-        branches=(),
-        displacement=2 * A0 * x,
-        ramp_time=1.0,
-        end_time=1.0,
-        mesh=mesh,
-        static=True,
-        n_static=n,
-    )
+_static = static_compression  # tests/fakes.py
 
 
 def test_fitted_static_curve_is_smooth_and_signorini():
