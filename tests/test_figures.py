@@ -122,7 +122,7 @@ def test_fig3_colour_scale_covers_the_exact_extrema(fig3_case):
     exact = np.asarray(prof.von_mises)
     lo, hi = fig.axes[0].collections[0].get_clim()
     assert hi >= exact.max() and lo <= exact.min(), (lo, hi, exact.min(), exact.max())
-    assert exact.max() > 70e3  # the inner-wall value (75.2 kPa), which element means miss by ~40 % here
+    assert exact.max() > 70e3  # the value at the cavity surface (75.2 kPa), which element means miss by ~40 % here
     # the FE field drawn reaches the wall value: within 5 % of the exact peak on this coarse mesh
     drawn = np.asarray(fig.axes[0].collections[0].get_array())
     assert drawn.max() == pytest.approx(exact.max(), rel=0.05)
