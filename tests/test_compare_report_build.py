@@ -26,6 +26,7 @@ def test_every_promised_file_exists_and_is_not_empty(quick_report):
     names = list(report.FIGURES) + list(report.TABLES) + ["report.md", "summary.json"]
     if summary["spheroid_available"]:
         assert "spheroid_error" not in summary, summary.get("spheroid_error")
+        assert "tension_error" not in summary, summary.get("tension_error")
         names += list(report.SPHEROID_FIGURES) + list(report.SPHEROID_TABLES)
     for n in names:
         p = out / n

@@ -52,6 +52,7 @@ SPHEROID_FIGURES = (
     "fig9_mean_von_mises.png",
     "fig10_nominal_stress.png",
     "accuracy_spheroid.png",
+    "tensiometry.png",
 )
 TABLES = (
     "blastula_sets.csv",
@@ -63,18 +64,26 @@ TABLES = (
     "stability_stiff_solvers.csv",
     "seed_comparison.csv",
 )
-SPHEROID_TABLES = ("accuracy_spheroid.csv", "stability_compression.csv", "spheroid_seed.csv")
+SPHEROID_TABLES = (
+    "accuracy_spheroid.csv",
+    "stability_compression.csv",
+    "spheroid_seed.csv",
+    "tensiometry_static.csv",
+    "tensiometry_hold.csv",
+)
 
 
-def _guarded(key: str, fn: Callable[[], Section], *, quick: bool) -> Section:
-    """Run an optional section (the spheroid); a failure is reported in the report, not fatal."""
+def _guarded(
+    key: str, fn: Callable[[], Section], *, quick: bool, title: str = "3. Spheroid figures (Figs 8-10)"
+) -> Section:
+    """Run an optional section (the spheroid, surface tension); a failure is reported in the report, not fatal."""
     try:
         return fn()
     except Exception as exc:
         msg = f"{type(exc).__name__}: {exc}"
-        sec = Section(key, quick, summary={"spheroid_error": msg})
+        sec = Section(key, quick, summary={f"{key}_error": msg})
         sec.md += [
-            f"## 3. Spheroid figures (Figs 8-10): FAILED in this run ({msg[:300]})",
+            f"## {title}: FAILED in this run ({msg[:300]})",
             "",
             "```",
             traceback.format_exc()[-2000:],
@@ -106,7 +115,7 @@ def build(out_dir: str | Path = "tissuemech-report", *, quick: bool = False, pro
     from tqdm.auto import tqdm
 
     import tissuemech.reduced  # noqa: F401  (float64 JAX)
-    from tissuemech.compare.report import accuracy, blastula, seed_comparison, spheroid, stability
+    from tissuemech.compare.report import accuracy, blastula, seed_comparison, spheroid, stability, tension
     from tissuemech.compare.studies import stability as stability_study
     from tissuemech.compare.studies.accuracy import spheroid_available
 
@@ -115,7 +124,7 @@ def build(out_dir: str | Path = "tissuemech-report", *, quick: bool = False, pro
     t_start = time.perf_counter()
     reason = spheroid_available()
     done: dict[str, Section] = {}
-    bar = tqdm(total=11 if reason is None else 7, desc="tissuemech report", disable=not progress, unit="step")
+    bar = tqdm(total=12 if reason is None else 7, desc="tissuemech report", disable=not progress, unit="step")
 
     def step(label: str) -> None:  # one tick per milestone inside the sections, so long stages show progress
         bar.set_postfix_str(label)
@@ -133,6 +142,9 @@ def build(out_dir: str | Path = "tissuemech-report", *, quick: bool = False, pro
         done["spheroid figures + accuracy"] = _guarded(
             "spheroid", lambda: spheroid.section(quick=quick, progress=step), quick=quick
         )
+        done["surface tension"] = _guarded(
+            "tension", lambda: tension.section(quick=quick, progress=step), quick=quick, title="5. Surface tension"
+        )
     for sec in done.values():
         summary.update(sec.summary)
     step("seed comparison, writing")
@@ -146,6 +158,7 @@ def build(out_dir: str | Path = "tissuemech-report", *, quick: bool = False, pro
             md=[f"## 3. Spheroid figures (Figs 8-10) and spheroid accuracy: not available ({reason})", ""],
         )
     order = ["seed comparison", "blastula figures", "blastula accuracy", "spheroid figures + accuracy", "stability map"]
+    order += ["surface tension"] * ("surface tension" in done)
     md: list[str] = []
     for key in order:
         _write(out, done[key], written)

@@ -47,7 +47,13 @@ __all__ = [
     "sweep",
     "threshold",
     "table",
+    "hold_series",
     "A0",
+    "E0",
+    "ETA",
+    "TAU",
+    "HOLD_NUMBERS",
+    "HOLD_TIMES",
     "GAMMA",
     "NUMBERS",
 ]
@@ -84,8 +90,9 @@ def fit_meridional_radius(r: np.ndarray, z: np.ndarray, half_gap: float, span: f
     return float(-1.0 / (2.0 * c[1])), float(c[0])
 
 
-def profile_radii(result: SpheroidResult, n_per_edge: int = 9) -> ProfileRadii:
-    """R1, R2, R3 (m) of the last stored state of an FE spheroid run.
+def profile_radii(result: SpheroidResult, n_per_edge: int = 9, field: int = -1) -> ProfileRadii:
+    """R1, R2, R3 (m) of a stored state of an FE spheroid run (``field`` indexes ``result.fields``; default the
+    last).
 
     R2: the midplane radius; R1: the deformed outer surface sampled on its quadratic edges (``n_per_edge``
     points each) fitted by :func:`fit_meridional_radius`; R3: where the profile leaves the plate, between
@@ -96,15 +103,16 @@ def profile_radii(result: SpheroidResult, n_per_edge: int = 9) -> ProfileRadii:
     experimenter's side view)."""
     if not result.fields:
         raise ValueError("the result stores no field (the deformed profile is needed)")
-    f, m = result.fields[-1], result.mesh
+    f, m = result.fields[field], result.mesh
     assert isinstance(m, AxiMesh) and result.parameters is not None  # a compress result carries both
+    step = int(np.argmin(np.abs(np.asarray(result.time) - f.time)))  # the step the field was stored at
     edges = m.edges["outer"]
     N, _ = line_shape(edges.shape[1], np.linspace(-1.0, 1.0, n_per_edge))
     xd = f.deformed_nodes[edges]  # (n_edges, nn, 2)
     pts = np.einsum("aq,ean->eqn", N, xd).reshape(-1, 2)
-    h = result.parameters["radius"] - result.approach[-1] / 2
+    h = result.parameters["radius"] - result.approach[step] / 2
     R1, _ = fit_meridional_radius(pts[:, 0], pts[:, 1], h)
-    R3 = float(result.contact_radius[-1])
+    R3 = float(result.contact_radius[step])
     cand = f.contact_nodes if f.contact_nodes is not None else np.array([], int)
     if cand.size:
         x = f.deformed_nodes[cand]
@@ -118,7 +126,7 @@ def profile_radii(result: SpheroidResult, n_per_edge: int = 9) -> ProfileRadii:
             if g2 > g1 > 0 and r2 > r1 > rk:
                 rho = math.sqrt(g1 / g2)
                 R3 = float(np.clip((r1 - rho * r2) / (1.0 - rho), rk, r1))
-    return ProfileRadii(R1, float(result.midplane_radius[-1]), R3)
+    return ProfileRadii(R1, float(result.midplane_radius[step]), R3)
 
 
 class TensiometryPoint(NamedTuple):
@@ -188,6 +196,60 @@ def threshold(points: list[TensiometryPoint], tol: float = 0.05) -> float:
         return float(n[0])
     t = (e[k - 1] - tol) / (e[k - 1] - e[k])
     return float(np.exp(np.log(n[k - 1]) + t * (np.log(n[k]) - np.log(n[k - 1]))))
+
+
+E0 = 1.0e3  # Pa, instantaneous Young's modulus of an S180 aggregate
+ETA = 5.0e5  # Pa s, its flow viscosity
+TAU = 3.0 * ETA / E0  # s, the Maxwell time eta / G of an incompressible branch (G = E / 3): 1500 s
+HOLD_NUMBERS = (2.0, 5.0, 20.0)  # long-time elastocapillary numbers gamma / (C_inf a0) of the hold study
+HOLD_TIMES = (1.0, 10.0, 30.0, 100.0, 300.0, 1000.0, 3000.0, 1e4, 3e4)  # s after the start of the compression
+
+
+def hold_series(
+    number: float,
+    compression: float = 0.1,
+    radius: float = A0,
+    surface_tension: float = GAMMA,
+    E0: float = E0,
+    tau: float = TAU,
+    ramp_time: float = 1.0,
+    times: tuple[float, ...] = HOLD_TIMES,
+    alpha: float = 0.2,
+    mesh: int = 1,
+) -> pd.DataFrame:
+    """The formula read at ``times`` (s) while an aggregate relaxes under held plates.
+
+    The aggregate: instantaneous Young's modulus ``E0`` (Pa; C(1 + beta) = E0 / 6), one Maxwell branch of
+    time ``tau`` (s; default 3 eta / E0 for the S180 flow viscosity eta = 5e5 Pa s: 1500 s) that relaxes it
+    to the long-time modulus C_inf = gamma / (``number`` a0); compressed by delta = 2 a0 ``compression`` in
+    ``ramp_time`` (s) and held; radii from the FE profile at each time (:func:`profile_radii`, node-by-node
+    contact). Returns a table: ``time [s]``, ``gamma_app/gamma``, ``F/F_drop``, ``F [N]`` and the radii, with
+    ``gamma/(C_inf a0)`` the number. A pure liquid (C_inf = 0) is the limit number -> inf; this solid with a
+    small C_inf is how the FE models it today (the drop, ``reduced.drop``, is that limit's exact answer)."""
+    C_inf = surface_tension / (number * radius)
+    beta = E0 / 6.0 / C_inf - 1.0
+    if beta < 0:
+        raise ValueError(
+            f"the long-time modulus C_inf = {C_inf:.4g} Pa (gamma / (number a0)) exceeds the instantaneous E0 / 6 = "
+            f"{E0 / 6:.4g} Pa: raise the elastocapillary number or E0"
+        )
+    d = 2 * radius * compression
+    ts = tuple(float(t) for t in times if t >= ramp_time)
+    r = fem_spheroid.compress(radius=radius, C=C_inf, alpha=alpha, branches=[(beta, tau)], displacement=d,
+                              ramp_time=ramp_time, end_time=max(ts), mesh=mesh, contact="nodal",
+                              surface_tension=surface_tension, field_times=ts)  # fmt: skip
+    Fd = drop.compress(d, radius=radius, surface_tension=surface_tension).force
+    rows = []
+    for k, f in enumerate(r.fields):
+        radii = profile_radii(r, field=k)
+        step = int(np.argmin(np.abs(r.time - f.time)))
+        F = float(r.force[step])
+        g = float(apparent_tension(F, *radii))
+        rows.append((float(number), f.time, F, *radii, g / surface_tension, F / Fd))
+    return pd.DataFrame(
+        rows,
+        columns=["gamma/(C_inf a0)", "time [s]", "F [N]", "R1 [m]", "R2 [m]", "R3 [m]", "gamma_app/gamma", "F/F_drop"],
+    )
 
 
 def table(points: list[TensiometryPoint]) -> pd.DataFrame:
