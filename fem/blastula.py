@@ -14,6 +14,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from tissuemech.fem import sensitivity as sens
 from tissuemech.fem import viscoelastic as ve
 from tissuemech.fem.continuation import LimitPointError, arc_length, load_control
 from tissuemech.fem.forms import Material
@@ -136,6 +137,27 @@ class ShellProblem(SceneProblem):
             return None
         return t if np.all(np.isfinite(t)) else None
 
+    def residual_at(self, uf, lam: float, mat: Material) -> np.ndarray:
+        """The scaled residual r(u, lam) on the free dofs with the material ``mat`` (no tangent)."""
+        ri, fp, _ = self.asm.internal_follower(self.full(uf), mat, lam, self.inner, free=self.free, tangent=False)
+        return (ri - lam * fp)[self.free]
+
+    def sensitivities(self, uf, lam: float, C: float) -> dict[str, float]:
+        """d inner_stretch / d C (1/Pa) and / d alpha of the converged state ``uf`` at the fixed pressure
+        p = lam C (``fem.sensitivity``: one factorisation of the converged tangent; lam = p / C and the scaled
+        bulk modulus k = kappa / C both move with C)."""
+        mat = self.mat
+        kept = self.linear.kept
+        factored = None  # the factorisation Newton holds (of this state or a nearby one: refined against K)
+        if kept is not None and kept.solve is not None and kept.n == uf.size:
+            factored = getattr(kept.solve, "unrefined", kept.solve)
+        _, K, dr_dlam = self.rk(uf, lam, tangent=True)
+        dr_dk = sens.residual_derivative(lambda k: self.residual_at(uf, lam, mat._replace(kappa=k)), mat.kappa)
+        dr_da = sens.residual_derivative(lambda a: self.residual_at(uf, lam, mat._replace(alpha=a)), mat.alpha)
+        rhs = {"C": (dr_dlam * (-lam) + dr_dk * (-mat.kappa)) / C, "alpha": dr_da}
+        dx = sens.solve_all(K, rhs, f"p = {lam * C:.6g} Pa", factored)
+        return {name: sens.directional(self.inner_stretch, uf, v) for name, v in dx.items()}
+
     def admissible(self, uf):
         """:meth:`SceneProblem.admissible` of the free dofs ``uf`` (J > 0 and hoop stretch > 0)."""
         return super().admissible(self.full(uf))
@@ -250,6 +272,7 @@ def inflate(
     rtol: float = 1e-10,
     formulation: str = "mixed",
     store_fields: bool = False,
+    gradient: bool = False,
 ) -> BlastulaResult:
     """Inflate the hollow sphere by a cavity pressure p acting on its deformed inner surface.
 
@@ -276,6 +299,10 @@ def inflate(
         formulation: "mixed" (default) or "displacement" (locks for kappa/C >> 100: a warning says so).
         store_fields: keep the fields of every converged step in ``result.fields`` (``BlastulaField``, for
             ``result.to_pvd``); by default only the final fields are kept.
+        gradient: also return the exact sensitivities of the inner stretch at each step's pressure,
+            ``result.gradient = {"C": d lambda_a / d C (1/Pa), "alpha": d lambda_a / d alpha}`` (arrays over the
+            steps; ``fem.sensitivity``: one extra solve with each converged tangent, the pressure held fixed).
+            Undefined at a limit point (the tangent is singular there: RuntimeError naming the pressure).
 
     Returns:
         ``BlastulaResult`` (SI): per converged step ``pressure`` (Pa), ``inner_stretch``,
@@ -324,8 +351,13 @@ def inflate(
     u0 = np.zeros(prob.free.size)
     ref, floor = prob.ref, prob.floor
 
+    sensitivity: dict[float, dict[str, float]] = {}  # per converged pressure (scaled), while its factor is kept
+
     def solve(lam, guess):
-        return prob.solve(lam, guess, rtol, load=f"p = {lam * C:.6g} Pa")
+        sol = prob.solve(lam, guess, rtol, load=f"p = {lam * C:.6g} Pa")
+        if gradient:
+            sensitivity[float(lam)] = prob.sensitivities(sol.x, float(lam), float(C))
+        return sol
 
     if method == "load":
         steps = load_control(
@@ -361,7 +393,16 @@ def inflate(
         xs = [u0] + [s.x for s in steps]
         its = np.array([0] + [s.newton_iterations for s in steps])
         wall = np.array([0.0] + [s.wall_time for s in steps])
-    return prob.result(lam, xs, its, wall, C, method, all_fields=[_ELASTIC] * len(xs) if store_fields else None)
+    grad = None
+    if gradient:
+        per_step = [
+            sensitivity[float(lk)] if float(lk) in sensitivity else prob.sensitivities(x, float(lk), float(C))
+            for x, lk in zip(xs, lam)
+        ]
+        grad = {name: np.array([g[name] for g in per_step]) for name in ("C", "alpha")}
+    res = prob.result(lam, xs, its, wall, C, method, all_fields=[_ELASTIC] * len(xs) if store_fields else None)
+    res.gradient = grad
+    return res
 
 
 class _CreepState(NamedTuple):

@@ -78,6 +78,7 @@ class BlastulaResult:
     time: np.ndarray | None = None
     parameters: dict | None = None
     fields: list | None = None
+    gradient: dict | None = None  # inflate(gradient=True): {"C": d inner_stretch/dC (1/Pa), "alpha": ...} per step
 
     def _stored_fields(self) -> list[BlastulaField]:
         """``fields``, or the final state's field when only that was kept."""

@@ -13,6 +13,7 @@ SUITES = {
     "fem-perf": "tissuemech.compare.bench.fem_perf",
     "felupe": "tissuemech.compare.bench.felupe_side",
     "fem-time": "tissuemech.compare.bench.fem_time",
+    "fem-gradient": "tissuemech.compare.bench.fem_gradient",
     # checks run one by one (not part of "all")
     "acceptance": "tissuemech.compare.bench.acceptance",
     "stiff-kernel": "tissuemech.compare.bench.stiff_kernel",

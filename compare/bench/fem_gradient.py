@@ -1,0 +1,88 @@
+"""Exact FE parameter sensitivities (issue 38): accuracy and cost.
+
+``python -m tissuemech.compare.bench.fem_gradient`` (or ``tissuemech bench fem-gradient``) prints, for the
+blastula (A = 100 um, B = 130 um, C = 100 Pa, alpha = 0.5, pressures 20, 60, 100 Pa):
+
+* the largest relative difference of ``inflate(..., gradient=True).gradient[name]`` (d inner stretch / d C,
+  / d alpha) from a central difference of two whole runs at rtol 1e-13 (step 1e-4 of the parameter);
+* its difference from ``jax.grad`` of the exact incompressible shell (``reduced.blastula.inner_stretch``) on the
+  coarse, default and fine meshes, with the observed order;
+* the cost: the fastest of 5 runs with and without gradients (10 pressures), and their ratio.
+
+Measured 2026-12-03 (shared 2-core box, load average 6-8 from other jobs): against the whole-run differences
+1.4e-8 (C) and 9.5e-9 (alpha); against the exact shell 3.76e-4 / 2.06e-5 / 1.15e-6 (C, coarse / default / fine)
+and 5.27e-4 / 3.40e-5 / 2.07e-6 (alpha): observed order 4.2 / 4.0; cost ratio 1.61 on the fine mesh (the
+default mesh's 0.1 s runs gave 0.75-1.9 across runs under that load: too short to time there). The extra
+cost per step: one tangent assembly, four residual assemblies (the central differences in kappa / C and
+alpha) and solves with Newton's kept factorisation refined against the exact tangent.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+A, B, C, ALPHA = 100e-6, 130e-6, 100.0, 0.5
+P = np.array([20.0, 60.0, 100.0])
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="tissuemech bench fem-gradient", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--repeats", type=int, default=5, help="timing repeats (the fastest is kept)")
+    args = ap.parse_args(argv)
+    import jax
+
+    from tissuemech.fem import blastula as fb
+    from tissuemech.reduced import blastula as rb
+
+    base = {"C": C, "alpha": ALPHA}
+
+    def run(mesh="default", rtol=1e-10, gradient=False, pressures=P, **kw):
+        return fb.inflate(inner_radius=A, outer_radius=B, pressures=pressures, mesh=mesh, rtol=rtol,
+                          gradient=gradient, **{**base, **kw})  # fmt: skip
+
+    print("blastula: d inner_stretch / d theta against central differences of whole runs (rtol 1e-13)")
+    g = run(gradient=True).gradient
+    for name, v in base.items():
+        h = 1e-4 * v
+        fd = (run(rtol=1e-13, **{name: v + h}).inner_stretch - run(rtol=1e-13, **{name: v - h}).inner_stretch) / (2 * h)
+        print(f"  {name:6s} max |grad / FD - 1| = {np.max(np.abs(g[name] / fd - 1)):.2e}")
+    print("blastula: against jax.grad of the exact shell")
+    for name, v in base.items():
+        ex = np.array(
+            [
+                float(
+                    jax.grad(lambda x, p=p: rb.inner_stretch(p, inner_radius=A, outer_radius=B, **{**base, name: x}))(v)
+                )
+                for p in P
+            ]
+        )
+        errs = [
+            float(np.max(np.abs(run(mesh=m, gradient=True).gradient[name] / ex - 1)))
+            for m in ("coarse", "default", "fine")
+        ]
+        order = np.log2(errs[1] / errs[2])
+        print(
+            f"  {name:6s} coarse {errs[0]:.2e}  default {errs[1]:.2e}  fine {errs[2]:.2e}  observed order {order:.2f}"
+        )
+    print("cost (10 pressures, fastest of repeats)")
+    many = np.linspace(10.0, 100.0, 10)
+    for mesh in ("default", "fine"):
+        best = {}
+        for grad in (False, True):
+            ts = []
+            for _ in range(args.repeats):
+                t0 = time.perf_counter()
+                run(mesh=mesh, gradient=grad, pressures=many)
+                ts.append(time.perf_counter() - t0)
+            best[grad] = min(ts)
+        print(
+            f"  {mesh:8s} plain {best[False]:.3f} s  with 2 gradients {best[True]:.3f} s  ratio {best[True] / best[False]:.2f}"
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
