@@ -377,6 +377,7 @@ class SpheroidResult:
     fields: list
     static: bool = False
     parameters: dict | None = None
+    gradient: dict | None = None  # compress(gradient=True): {"C": {"force": dF/dC [N/Pa], ...}, "alpha": ..., ...}
 
     def field_at(self, time: float | None = None) -> SpheroidField:
         """The stored field closest to ``time`` (s; None: the last)."""
