@@ -588,11 +588,12 @@ def compress(
     if gradient:
         per_state = []
         for st in steps:
-            e, h = float(st.state.edge), 1e-4
-            moved = (
-                (fit.problem(e * (1 - h)), fit.problem(e * (1 + h)), h) if fit is not None and np.isfinite(e) else None
-            )
-            per_state.append(st.state.problem.sensitivities(st.state.state, moved))
+            e = float(st.state.edge)
+            done = fit.sensed.get((st.state.state.delta, e)) if isinstance(fit, _SensingSearch) else None
+            if done is None:
+                moved = _moved(fit, e) if fit is not None and np.isfinite(e) else None
+                done = st.state.problem.sensitivities(st.state.state, moved)
+            per_state.append(done)
         grad = _gradients(per_state, col, a0, C, float(kappa), float(surface_tension))
     return SpheroidResult(
         **col,
