@@ -374,10 +374,13 @@ def compress(
             ``tissuemech.reduced.drop``.
         gradient: also return the exact sensitivities of the observables at every state,
             ``result.gradient = {"C": {"force": dF/dC (N/Pa), "midplane_radius": (m/Pa), "nominal_stress":
-            (1/1)}, "alpha": {...per unit alpha}, "surface_tension": {...per N/m}}`` (arrays over the steps;
-            ``fem.sensitivity``: one solve per parameter with the converged tangent, the plate held; on fitted
-            meshes the contact edge's motion with the parameters is included, from the residual on the meshes
-            either side of the edge). Static runs only for now (the Maxwell history's sensitivity is not carried yet: ValueError otherwise).
+            (1/1)}, "alpha": {...per unit alpha}, "surface_tension": {...per N/m}, "beta" / "tau" (one branch;
+            per unit beta, per s) or "beta_1", "tau_1", ...}`` (arrays over the steps; ``fem.sensitivity``: one
+            solve per parameter with the converged tangent, the plate held; on fitted meshes the contact edge's
+            motion with the parameters is included, from the residual on the meshes either side of the edge;
+            time runs carry the Maxwell history's sensitivity step by step). Time runs need contact="nodal"
+            for now (across the fitted meshes of a time run the history's sensitivity is not carried yet:
+            ValueError).
 
     Returns:
         ``SpheroidResult`` with one entry per converged step: ``time`` (s), ``approach`` (m), plate
@@ -403,11 +406,6 @@ def compress(
     br = validate_branches(branches)
     if static:
         br = ()
-    if gradient and not static:
-        raise ValueError(
-            "gradient=True needs static=True for now: the sensitivity of the Maxwell history through the time "
-            "steps is not carried yet (use central differences of compress runs for time runs)"
-        )
     beta = np.array([float(b) for b, _ in br])
     tau = np.array([float(t) for _, t in br])
     a0, C = float(radius), float(C)
@@ -455,6 +453,11 @@ def compress(
 
     level = _level(mesh)
     treat = contact_treatment(contact if contact is not None else ("fitted" if level is not None else "nodal"))
+    if gradient and not static and isinstance(treat, FittedEdge):
+        raise ValueError(
+            "gradient=True in a time run needs contact='nodal' (one fixed mesh): the sensitivity of the Maxwell "
+            "history across the contact-edge-fitted meshes is not carried yet (static=True runs take either)"
+        )
     if isinstance(treat, FittedEdge) and level is None:
         raise ValueError(
             "contact='fitted' moves the mesh's nodes with the contact edge: give a mesh level (0..4 or a name), "
@@ -585,7 +588,9 @@ def compress(
     col = {name: np.array(values) for name, values in zip(_Row._fields, zip(*rows))}
     area = np.pi * col["midplane_radius"] ** 2
     grad = None
-    if gradient:
+    if gradient and not static:
+        per_state = _time_sensitivities([st.state for st in steps], list(col["time"]), beta, tau)
+    elif gradient:
         per_state = []
         for st in steps:
             e = float(st.state.edge)
@@ -594,7 +599,8 @@ def compress(
                 moved = _moved(fit, e) if fit is not None and np.isfinite(e) else None
                 done = st.state.problem.sensitivities(st.state.state, moved)
             per_state.append(done)
-        grad = _gradients(per_state, col, a0, C, float(kappa), float(surface_tension))
+    if gradient:
+        grad = _gradients(per_state, col, a0, C, float(kappa), float(surface_tension), beta.size)
     return SpheroidResult(
         **col,
         midplane_area=area,
@@ -646,25 +652,124 @@ class _SensingSearch(EdgeSearch):
         return sol
 
 
-def _gradients(per_state: list[dict], col: dict, a0: float, C: float, kappa: float, gamma: float) -> dict:
+def branch_names(n_branches: int) -> list[tuple[str, str, int]]:
+    """(name of beta_m, name of tau_m, m) as ``compare.fit`` spells them: "beta", "tau" for one branch, else
+    "beta_1", "tau_1", ..."""
+    if n_branches == 1:
+        return [("beta", "tau", 0)]
+    return [(f"beta_{m + 1}", f"tau_{m + 1}", m) for m in range(n_branches)]
+
+
+def _time_sensitivities(states: list, times: list[float], beta: np.ndarray, tau: np.ndarray) -> list[dict]:
+    """Forward sensitivities through the time steps of a node-by-node run on one fixed mesh (scaled: plate force,
+    midplane radius) to alpha, k = kappa / C, g = gamma / (C a0) and each branch's beta_m and tau_m (s).
+
+    Per step, with the step's active set held: K dx/dtheta = -(dr/dtheta), where r depends on theta explicitly
+    (alpha, k, g) and through the step's algorithmic stress S = S_vol + iso_scale S_iso + extra_S (affine in
+    both: their derivatives enter as one exact residual difference), with iso_scale = 1 + sum_m b_m and extra_S =
+    sum_m (decay_m Q_m^n - b_m S_iso^n): the branch history (Q_m, S_iso) is carried with its own sensitivity,
+    dQ_m^{n+1} = d(decay_m) Q_m^n + decay_m dQ_m^n + d(b_m) (S^{n+1} - S^n) + b_m (dS^{n+1} - dS^n)."""
+    prob: BallProblem = states[0].problem
+    mat, asm = prob.mat, prob.asm
+    names = ["alpha", "kappa"] + ["surface_tension"] * bool(prob.asm.surface is not None)
+    names += [n for b, t, _ in branch_names(beta.size) for n in (b, t)]
+    which = {b: ("beta", m) for b, _, m in branch_names(beta.size)} | {
+        t: ("tau", m) for _, t, m in branch_names(beta.size)
+    }
+    tension = SurfaceTension(prob.m.X, prob.m.edges["outer"], 1.0)
+    visco0 = prob.maxwell_initial()
+    dQ = {n: np.zeros_like(visco0.Q) for n in names}
+    dS = {n: np.zeros_like(visco0.S_iso) for n in names}
+    prev, t_prev, out = visco0, 0.0, []
+    kept = sens.KeptLU()  # one factorisation while the active set stays (the hold's tangents change little)
+    for st, t in zip(states, times):
+        s = st.state
+        x, dt = s.x, float(t) - t_prev
+        fixed = prob.plane.dofs[np.flatnonzero(s.active)]
+        U = np.setdiff1d(prob.free, fixed)
+        iso, extra = s.iso_scale, s.extra_S
+
+        def res(m: Material = mat, iso: float = iso, extra=extra) -> np.ndarray:
+            return asm.internal(x, m, extra_S=extra, iso_scale=iso, tangent=False)[0]
+
+        _, K = asm.internal(x, mat, extra_S=extra, iso_scale=iso, tangent=True)
+        K = sp.csr_matrix(K)
+        coef = sens.maxwell_coefficients(beta, tau, dt) if beta.size else None
+        r0 = res()
+        rhs = {}
+        for n in names:
+            r = np.zeros(asm.ndof)
+            if n == "alpha":
+                r += sens.residual_derivative(lambda a: res(mat._replace(alpha=a)), mat.alpha)
+            elif n == "kappa":
+                r += sens.residual_derivative(lambda k: res(mat._replace(kappa=k)), mat.kappa)
+            elif n == "surface_tension":
+                r += tension.residual(x, asm.ndof)
+            if coef is not None:
+                decay, b, ddecay, db_dbeta, db_dtau = coef
+                d_iso = 0.0
+                d_extra = np.einsum("m,m...->...", decay, dQ[n]) - b.sum() * dS[n]
+                if n in which:
+                    kind, m = which[n]
+                    if kind == "beta":
+                        d_iso += db_dbeta[m]
+                        d_extra = d_extra - db_dbeta[m] * prev.S_iso
+                    else:
+                        d_iso += db_dtau[m]
+                        d_extra = d_extra + ddecay[m] * prev.Q[m] - db_dtau[m] * prev.S_iso
+                r += res(mat, iso + d_iso, extra + d_extra) - r0  # exact: r is affine in (iso_scale, extra_S)
+            rhs[n] = r
+        KUU = K[U][:, U]
+        dxU = sens.solve_all(KUU, {n: v[U] for n, v in rhs.items()}, f"t = {t:.6g} s", kept.solver(KUU, U))
+        KfU = K[fixed][:, U]
+        step_out, S_new = {}, s.visco.S_iso
+        for n in names:
+            dx = np.zeros_like(x)
+            dx[U] = dxU[n]
+            step_out[n] = (-float(np.sum(rhs[n][fixed] + KfU @ dxU[n])), float(dx[2 * prob.equator]))
+            dS_new = sens.directional_field(lambda y: asm.iso_S(y, mat), x, dx)
+            if n == "alpha":
+                dS_new = dS_new + sens.residual_derivative(lambda a: asm.iso_S(x, mat._replace(alpha=a)), mat.alpha)
+            if coef is not None:
+                decay, b, ddecay, db_dbeta, db_dtau = coef
+                q = decay[:, None, None, None] * dQ[n] + b[:, None, None, None] * (dS_new - dS[n])[None]
+                if n in which:
+                    kind, m = which[n]
+                    jump = S_new - prev.S_iso
+                    q[m] += db_dbeta[m] * jump if kind == "beta" else ddecay[m] * prev.Q[m] + db_dtau[m] * jump
+                dQ[n] = q
+            dS[n] = dS_new
+        out.append(step_out)
+        prev, t_prev = s.visco, float(t)
+    return out
+
+
+def _gradients(
+    per_state: list[dict], col: dict, a0: float, C: float, kappa: float, gamma: float, n_branches: int = 0
+) -> dict:
     """SI sensitivities from the scaled ones of ``BallProblem.sensitivities`` (F = C a0^2 F~(alpha, k, g),
     r_mid = a0 r~, k = kappa / C, g = gamma / (C a0): d/dC = F / C - (k dF~/dk + g dF~/dg) a0^2, ...)."""
     k, g = kappa / C, gamma / (C * a0)
     F, rm = col["force"], col["midplane_radius"]
 
-    def scaled(name: str, which: int) -> np.ndarray:
-        return np.array([d[name][which] for d in per_state])
+    def scaled(name: str, which: int) -> np.ndarray:  # zeros for a parameter not sensed (no tension in a time run)
+        return np.array([d[name][which] if name in d else 0.0 for d in per_state])
 
     dF = {
         "C": F / C - a0**2 * (k * scaled("kappa", 0) + g * scaled("surface_tension", 0)),
         "alpha": C * a0**2 * scaled("alpha", 0),
-        "surface_tension": a0 * scaled("surface_tension", 0),
     }
+    if "surface_tension" in per_state[0]:
+        dF["surface_tension"] = a0 * scaled("surface_tension", 0)
     dr = {
         "C": -a0 * (k * scaled("kappa", 1) + g * scaled("surface_tension", 1)) / C,
         "alpha": a0 * scaled("alpha", 1),
-        "surface_tension": scaled("surface_tension", 1) / C,
     }
+    if "surface_tension" in per_state[0]:
+        dr["surface_tension"] = scaled("surface_tension", 1) / C
+    for b, t, _ in branch_names(n_branches) if n_branches else []:
+        for n in (b, t):
+            dF[n], dr[n] = C * a0**2 * scaled(n, 0), a0 * scaled(n, 1)
     area = np.pi * rm**2
     return {
         n: {"force": dF[n], "midplane_radius": dr[n], "nominal_stress": dF[n] / area - 2 * F / area / rm * dr[n]}
