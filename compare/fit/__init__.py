@@ -4,7 +4,8 @@ Where things are: :mod:`.records` (Record, the CSV reader, the checks a record m
 (parameters, the JAX residual and its Jacobian, bounds, the model-error term of a law), :mod:`.problem`
 (weighted residuals, the bounded solver), :mod:`.intervals` (Wald / profile intervals, identifiability),
 :mod:`.diagnostics` (residual diagnostics, the error model of the intervals), :mod:`.result` (FitResult),
-:mod:`.estimation` (:func:`relaxation`), :mod:`.design` (experiment design: predicted interval widths).
+:mod:`.estimation` (:func:`relaxation`), :mod:`.design` (experiment design: predicted interval widths),
+:mod:`.fe` (:func:`fe_relaxation`: the FE in the loop, exact FE Jacobians, beyond the reduced model's table).
 The names below are re-exported here: ``from tissuemech.compare.fit import relaxation, read_csv, FitResult,
 Record``.
 
@@ -63,6 +64,7 @@ depends on alpha; the small-strain Hertz law does not).
 from __future__ import annotations
 
 from tissuemech.compare.fit.estimation import NOISE_FREE_REL, relaxation
+from tissuemech.compare.fit.fe import FEFitResult, fe_relaxation, step_times
 from tissuemech.compare.fit.intervals import LOG_SPAN, POOR_SD, WALD_TOL, Z95, Identifiability
 from tissuemech.compare.fit.model import (
     ALPHA_BOUNDS,
@@ -89,6 +91,9 @@ from tissuemech.compare.fit.records import (
 from tissuemech.compare.fit.result import FitResult
 
 __all__ = [
+    "fe_relaxation",
+    "FEFitResult",
+    "step_times",
     "Record",
     "FitResult",
     "Identifiability",

@@ -1,0 +1,184 @@
+r"""Fits with the FE in the loop: (C, alpha, beta_m, tau_m) from compression-relaxation records where the reduced
+model's calibrated table does not reach (alpha beyond 1.5, deep compression) or as a check of a reduced fit.
+
+The model of record j is ``fem.spheroid.compress`` (node-by-node contact on one fixed mesh) at the record's
+approach, its nominal stress sampled at the record's times (piecewise linear between the FE steps: give
+records sampled at the FE's own step times, ``step_times``, for none of that interpolation), and the Jacobian
+is the FE's exact one (``compress(gradient=True)``: the Maxwell history's sensitivity carried through the
+steps), so each Gauss-Newton iteration costs one FE run with gradients per record, never 2P + 1 runs.
+
+Statistics: weighted least squares in log-parameters theta = log p (Levenberg-Marquardt / trust region,
+``scipy.optimize.least_squares``): an unweighted pass (residuals relative to each record's largest stress),
+the per-record white-noise estimate s_j^2 = RSS_j / (n_j - P n_j / N), a weighted pass; 95 % Wald intervals
+exp(theta_i +- t_{0.975, N - P} sd_i) from the Gauss-Newton covariance s^2 (J^T W J)^-1. The robust error
+model of :func:`tissuemech.compare.fit.relaxation` (a smooth discrepancy, correlated noise) is not applied
+here: the FE is taken as exact and the noise as white; the residual diagnostics say when that is wrong.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import scipy.optimize as so
+import scipy.stats as st
+
+from tissuemech.compare.fit.diagnostics import RecordDiagnostics, residual_diagnostics
+from tissuemech.compare.fit.model import parameter_names
+from tissuemech.compare.fit.records import Record, as_records
+from tissuemech.reduced.material import validate_positive
+
+__all__ = ["fe_relaxation", "FEFitResult", "step_times"]
+
+
+@dataclass
+class FEFitResult:
+    """Outcome of :func:`fe_relaxation` (SI: C [Pa], alpha [-], beta(_m) [-], tau(_m) [s]).
+
+    params, intervals (95 % Wald, (lo, hi)), covariance (of the log-parameters), residual (RMS of the weighted
+    residuals times the pooled noise, Pa), noise (per record, Pa), diagnostics (per record: lag-1 and runs test),
+    nfev (FE runs with gradients), wall_time (s), success, message."""
+
+    params: dict[str, float]
+    intervals: dict[str, tuple[float, float]]
+    covariance: np.ndarray
+    residual: float
+    noise: list[float]
+    diagnostics: list[RecordDiagnostics] = field(default_factory=list)
+    nfev: int = 0
+    wall_time: float = 0.0
+    success: bool = False
+    message: str = ""
+
+
+def step_times(*, ramp_time: float, end_time: float, n_ramp: int = 6, n_hold: int = 20) -> np.ndarray:
+    """The FE's step times (s) of a ramp-hold run (``fem.timestepping.ramp_hold_schedule``): records sampled there
+    are compared with the FE without interpolation."""
+    from tissuemech.fem.timestepping import ramp_hold_schedule
+
+    return np.asarray(ramp_hold_schedule(float(ramp_time), float(end_time), n_ramp=n_ramp, n_hold=n_hold), float)
+
+
+def fe_relaxation(
+    records: Sequence[Any],
+    *,
+    radius: float,
+    ramp_time: float,
+    initial: dict[str, float],
+    n_branches: int = 1,
+    mesh: Any = "default",
+    n_ramp: int = 6,
+    n_hold: int = 20,
+    max_nfev: int = 40,
+    progress: bool = False,
+) -> FEFitResult:
+    """Fit (C, alpha, beta_m, tau_m) with the FE as the model (module doc: the statistics).
+
+    records   ``(time [s], nominal_stress [Pa], displacement [m])`` per compression level (ramp over
+              ``ramp_time`` to the displacement, then held); radius a0 (m).
+    initial   starting values by name (:func:`tissuemech.compare.fit.parameter_names`), e.g. from a reduced fit
+              or a coarse guess: every name needed (C, alpha > 0, beta, tau in SI).
+    mesh      the FE mesh level ("coarse", "default", ...): node-by-node contact on it (``contact="nodal"``).
+    n_ramp, n_hold  the FE's steps (:func:`step_times`).
+    progress  print one line per FE evaluation.
+
+    Raises ValueError for a missing or non-positive initial value or malformed records."""
+    from tissuemech.fem import spheroid as fem_spheroid
+
+    t_start = _time.perf_counter()
+    recs: list[Record] = as_records(records)
+    validate_positive("radius (of the spheroid)", radius, "m")
+    validate_positive("ramp_time (duration of the loading ramp)", ramp_time, "s")
+    names = parameter_names(n_branches)
+    missing = [n for n in names if n not in initial]
+    if missing or set(initial) - set(names):
+        raise ValueError(f"initial must give exactly {', '.join(names)}; missing {missing}, unknown "
+                         f"{sorted(set(initial) - set(names))}")  # fmt: skip
+    for n in names:
+        if not (np.isfinite(initial[n]) and initial[n] > 0):
+            raise ValueError(f"initial[{n!r}] must be finite and > 0; got {initial[n]!r}")
+    P = len(names)
+    betas = [n for n in names if n.startswith("beta")]
+    taus = [n for n in names if n.startswith("tau")]
+    cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+    calls = [0]
+
+    def model(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Stacked model (Pa) and its Jacobian in log-parameters (Pa) over all records."""
+        key = np.asarray(z).tobytes()
+        if key in cache:
+            return cache[key]
+        p = dict(zip(names, np.exp(z)))
+        ys, Js = [], []
+        for r in recs:
+            res = fem_spheroid.compress(radius=radius, C=p["C"], alpha=p["alpha"],
+                                        branches=[(p[b], p[t]) for b, t in zip(betas, taus)],
+                                        displacement=r.displacement, ramp_time=ramp_time,
+                                        end_time=float(np.max(r.time)), mesh=mesh, contact="nodal",
+                                        n_ramp=n_ramp, n_hold=n_hold, gradient=True)  # fmt: skip
+            tt = np.concatenate([[0.0], res.time])
+            ys.append(np.interp(r.time, tt, np.concatenate([[0.0], res.nominal_stress])))
+            grad = res.gradient or {}
+            cols = [
+                np.interp(r.time, tt, np.concatenate([[0.0], grad[n]["nominal_stress"]])) * p[n]  # d/d log p
+                for n in names
+            ]
+            Js.append(np.stack(cols, axis=1))
+        calls[0] += 1
+        out = (np.concatenate(ys), np.concatenate(Js))
+        cache.clear()
+        cache[key] = out
+        if progress:
+            print(f"FE evaluation {calls[0]}: " + ", ".join(f"{n} = {v:.5g}" for n, v in p.items()), flush=True)
+        return out
+
+    data = np.concatenate([r.nominal_stress for r in recs])
+    sizes = [r.time.size for r in recs]
+    split = np.cumsum(sizes)[:-1]
+    scale = np.concatenate([np.full(n, np.max(np.abs(r.nominal_stress))) for n, r in zip(sizes, recs)])
+
+    def fit(z0: np.ndarray, w: np.ndarray) -> so.OptimizeResult:
+        return so.least_squares(
+            lambda z: (model(z)[0] - data) * w,
+            z0,
+            jac=lambda z: model(z)[1] * w[:, None],
+            method="trf",
+            x_scale="jac",
+            max_nfev=max_nfev,
+        )
+
+    z0 = np.log([float(initial[n]) for n in names])
+    first = fit(z0, 1.0 / scale)
+    r1 = model(first.x)[0] - data
+    N = data.size
+    noise = [float(np.sqrt(np.sum(part**2) / max(n - P * n / N, 1.0))) for part, n in zip(np.split(r1, split), sizes)]
+    w = np.concatenate([np.full(n, 1.0 / max(s, 1e-300)) for n, s in zip(sizes, noise)])
+    second = fit(first.x, w)
+    y, J = model(second.x)
+    rw = (y - data) * w
+    s2 = float(np.sum(rw**2) / max(N - P, 1))
+    Jw = J * w[:, None]
+    cov = s2 * np.linalg.pinv(Jw.T @ Jw)
+    sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    tq = float(st.t.ppf(0.975, max(N - P, 1)))
+    est = np.exp(second.x)
+    intervals = {n: (float(np.exp(second.x[i] - tq * sd[i])), float(np.exp(second.x[i] + tq * sd[i])))
+                 for i, n in enumerate(names)}  # fmt: skip
+    resid = y - data
+    diags = [residual_diagnostics(part) for part in np.split(resid, split)]
+    ok = bool(second.success) and bool(np.all(np.isfinite(sd)))
+    return FEFitResult(
+        params={n: float(v) for n, v in zip(names, est)},
+        intervals=intervals,
+        covariance=cov,
+        residual=float(np.sqrt(np.mean(resid**2))),
+        noise=noise,
+        diagnostics=diags,
+        nfev=calls[0],
+        wall_time=_time.perf_counter() - t_start,
+        success=ok,
+        message=str(second.message),
+    )
