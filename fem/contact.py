@@ -777,7 +777,7 @@ class RigidSphere:
             z = np.full_like(r, height)
             return z, np.zeros_like(r), np.zeros_like(r)
         rho = self.radius
-        root = np.sqrt(np.maximum(rho**2 - r**2, 1e-300))
+        root = np.sqrt(np.maximum(rho**2 - r**2, 1e-12 * rho**2))  # only the facing cap (r < rho) is meant
         sgn = -1.0 if self.above else 1.0
         return height + sgn * root, -sgn * r / root, -sgn * rho**2 / root**3
 
@@ -801,11 +801,12 @@ class RigidSphere:
         return x
 
     def normals(self, x: np.ndarray, height: float) -> np.ndarray:
-        """(2, n) unit normals of the surface into the body at the candidates' radii."""
-        r, _ = self.positions(x)
-        _, s, _ = self.surface(r, height)
-        sgn = -1.0 if self.above else 1.0
-        n = sgn * np.stack([-s, np.ones_like(s)])
+        """(2, n) unit normals into the body: from the sphere's centre to the candidates (for the active nodes, on
+        the sphere, the surface normal); a plane's is -e_z above the body, +e_z below."""
+        r, z = self.positions(x)
+        if not np.isfinite(self.radius):
+            return np.stack([np.zeros_like(r), np.full_like(r, -1.0 if self.above else 1.0)])
+        n = np.stack([r, z - height])
         return n / np.hypot(n[0], n[1])
 
     def normal_force(self, x: np.ndarray, r: np.ndarray, height: float) -> np.ndarray:
@@ -978,7 +979,7 @@ def solve_obstacles(
                 b[release] = False
             elif release.any():
                 b[np.flatnonzero(release)[np.argmin(N[release])]] = False
-            changed = changed or release.any() or enter.any()
+            changed = changed or bool(release.any() or enter.any())
             new.append(b)
         if not changed:
             return ObstacleSolution(x, tuple(active), its, k, r)
