@@ -38,7 +38,7 @@ from tissuemech.fem.mesh import AxiMesh, full_ball_section, surface_layers, zone
 from tissuemech.fem.problem import SPHEROID_MARGIN, SceneProblem, mesh_spec, roundoff_floor, secant
 from tissuemech.fem.stepping import TimedState
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
-from tissuemech.reduced.material import validate_branches, validate_material, validate_positive
+from tissuemech.reduced.material import probe_share, validate_branches, validate_material, validate_positive
 
 log = logging.getLogger(__name__)
 
@@ -67,11 +67,10 @@ X_MAX = 0.25  # largest approach / (2 a0)
 def hertz_split(delta: float, probe_radius: float) -> tuple[float, float, float, float]:
     """(d_1, d_2, a_1, a_2): the small-strain two-Hertz-contacts split of the scaled approach ``delta`` (lengths /
     a0) of a probe of scaled radius ``probe_radius`` on the unit ball resting on a plate: the probe-ball depth d_1
-    (effective radius R_1 = R_p / (1 + R_p)) and the ball-plate depth d_2 (radius 1) in proportion R_i^(-1/3),
-    and the contact radii a_i = sqrt(R_i d_i) (``tissuemech.reduced.indentation`` derives the law)."""
+    (effective radius R_1 = R_p / (1 + R_p)) and the ball-plate depth d_2 (radius 1) in proportion R_i^(-1/3)
+    (``reduced.material.probe_share``), and the contact radii a_i = sqrt(R_i d_i)."""
     r1 = probe_radius / (1.0 + probe_radius)
-    w1, w2 = r1 ** (-1.0 / 3.0), 1.0
-    d1 = delta * w1 / (w1 + w2)
+    d1 = delta * float(probe_share(1.0, probe_radius))
     d2 = delta - d1
     return d1, d2, float(np.sqrt(r1 * d1)), float(np.sqrt(d2))
 
