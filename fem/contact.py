@@ -901,6 +901,7 @@ def solve_obstacles(
     residual: Callable | None = None,
     admissible: Callable | None = None,
     release_all: bool = True,
+    fixed: bool = False,
     **newton_kw,
 ) -> ObstacleSolution:
     """Equilibrium with exact contact on several rigid obstacles (``(RigidSphere, height)`` pairs).
@@ -911,9 +912,12 @@ def solve_obstacles(
     dPhi/dy (u_z,i += z_s'(r_i) u_r,i) and the exact tangent T^T K T + diag(r_z,i z_s''(r_i)). Active-set
     updates: penetrating candidates (gap < -gap_tol) enter, tensile active nodes (N < -force_tol of their
     obstacle's total) leave (``release_all``: all of them at once; else the most tensile one, as ``RigidPlane``);
-    a repeated set raises ``ContactError``."""
+    a repeated set raises ``ContactError``. ``fixed``: one solve with the active sets as given, no updates (the
+    contact edge on a node of a fitted mesh, ``fem.indentation``)."""
     n = x0.size
-    active = [np.asarray(a, bool) | (ob.gap(x0, h) < -gap_tol) for a, (ob, h) in zip(active0, obstacles)]
+    active = [np.asarray(a, bool).copy() for a in active0]
+    if not fixed:  # every candidate that penetrates in x0 starts active
+        active = [a | (ob.gap(x0, h) < -gap_tol) for a, (ob, h) in zip(active, obstacles)]
 
     def phi(x):
         for (ob, h), a in zip(obstacles, active):
@@ -962,11 +966,13 @@ def solve_obstacles(
             )
         seen.add(key)
         x = phi(x)
-        fixed = np.concatenate([ob.dofs[a] for (ob, _), a in zip(obstacles, active)])
-        fr = np.setdiff1d(free, fixed)
+        pinned = np.concatenate([ob.dofs[a] for (ob, _), a in zip(obstacles, active)])
+        fr = np.setdiff1d(free, pinned)
         res = newton(transformed, x, free=fr, load=load, admissible=adm, **newton_kw)
         x, its = phi(res.x), its + res.iterations
         r = residual(x) if residual is not None else fun(x)[0]
+        if fixed:
+            return ObstacleSolution(x, tuple(active), its, k, r)
         new, changed = [], False
         for (ob, h), a in zip(obstacles, active):
             N, g = ob.normal_force(x, r, h), ob.gap(x, h)

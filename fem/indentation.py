@@ -24,6 +24,7 @@ Inside, lengths are scaled by a0, stresses by C, forces by C a0^2 (``fem.problem
 from __future__ import annotations
 
 import logging
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import NamedTuple
@@ -31,9 +32,10 @@ from typing import NamedTuple
 import numpy as np
 
 from tissuemech.fem import viscoelastic as ve
-from tissuemech.fem.contact import ObstacleSolution, RigidSphere, solve_obstacles
+from tissuemech.fem.contact import ContactError, ObstacleSolution, RigidSphere, solve_obstacles
 from tissuemech.fem.forms import Material
 from tissuemech.fem.linalg import Symmetric
+from tissuemech.fem.newton import NewtonError
 from tissuemech.fem.mesh import AxiMesh, full_ball_section, surface_layers, zone_points
 from tissuemech.fem.problem import SPHEROID_MARGIN, SceneProblem, mesh_spec, roundoff_floor, secant
 from tissuemech.fem.stepping import TimedState
@@ -82,10 +84,15 @@ def make_mesh(mesh, radius: float, probe_radius: float, approach: float) -> AxiM
     level = mesh_spec(mesh, MESHES, "or a level 0..4")
     if isinstance(level, (bool, np.bool_)) or not isinstance(level, (int, np.integer)) or int(level) not in LEVELS:
         raise ValueError(f"mesh level must be an integer 0..4 (0 coarse, 1 default, 2 fine), got {mesh!r}")
-    nz, no, nr, neq = LEVELS[int(level)]
     _, _, a1, a2 = hertz_split(approach / radius, probe_radius / radius)
-    z_top = min(ZONE * a1 / SPLIT, 0.8)
-    z_bot = min(ZONE * a2 / SPLIT, 0.8)
+    return zone_mesh(radius, int(level), min(ZONE * a1 / SPLIT, 0.8), min(ZONE * a2 / SPLIT, 0.8))
+
+
+def zone_mesh(radius: float, level: int, z_top: float, z_bot: float) -> AxiMesh:
+    """The level's full-section mesh (``LEVELS``) with its top / bottom pole block refined uniformly over the
+    fractions ``z_top`` / ``z_bot`` of its arc (``fem.mesh.zone_points``); every zone gives the same topology
+    and numbering."""
+    nz, no, nr, neq = LEVELS[level]
     thick = 1.0 - 0.55 * np.sqrt(2) * np.cos(SPLIT)  # the pole blocks' thickness at the axis
     depth = DEPTH * SPLIT * min(z_top, z_bot) / nz
     return full_ball_section(
@@ -143,7 +150,7 @@ class IndentProblem(SceneProblem):
         a_p[0] = a_b[0] = True  # candidates are ordered from their pole outward
         return IndentState(np.zeros(n), (a_p, a_b), self.maxwell_initial(), 0.0, np.zeros(n), 0)
 
-    def solve(self, s0: IndentState, d1: float, iso_scale, extra, guess, load) -> ObstacleSolution:
+    def solve(self, s0: IndentState, d1: float, iso_scale, extra, guess, load, fixed: bool = False) -> ObstacleSolution:
         """Equilibrium with exact contact at the scaled approach d1 from ``guess`` with the step's branch stresses."""
         hp, hb = self.heights(d1)
         fun = lambda x: self.asm.internal(x, self.mat, extra_S=extra, iso_scale=iso_scale, tangent="lazy")
@@ -164,6 +171,7 @@ class IndentProblem(SceneProblem):
             atol=self.floor,
             max_iter=25,
             linear=Symmetric(),
+            fixed=fixed,
         )
 
     def step(self, s0: IndentState, d1: float, dt: float | None, prev: IndentState | None, load: str):
@@ -193,6 +201,116 @@ class IndentProblem(SceneProblem):
             centre_drop=-float(s.x[2 * self.centre + 1]),
             min_gap=float(min(self.probe.gap(s.x, hp).min(), self.plate.gap(s.x, hb).min())),
         )
+
+
+EDGE_TOL = 1e-6  # |N_edge| / F at a fitted contact edge (as the plates, fem.contact.EDGE_TOL)
+
+
+class FittedEdges:
+    """Static states whose two contact edges sit on surface nodes (one mesh per state, ``zone_mesh``).
+
+    On level L the edge node of each pole is the end of element k = round(n_zone / ZONE) of its zone; with the
+    surface nodes up to it on their obstacle and the rest free (a fixed active set), the edge node's multiplier
+    N_e falls through zero as the edge (its reference arc fraction e) moves out. A safeguarded secant per pole on
+    phi(e) = N_e / F (the poles couple weakly; both are updated from each joint solve) finds the state where the
+    Signorini conditions hold at both edges (N_e = 0 to ``tol``, the next gaps > 0): the force is then stationary
+    in the edge positions, a smooth function of the approach and of the mesh (no node-to-node jitter), as the
+    plates' ``fem.contact.EdgeSearch``."""
+
+    def __init__(self, radius: float, probe_radius: float, level: int, make: Callable[[AxiMesh], IndentProblem],
+                 tol: float = EDGE_TOL):  # fmt: skip
+        self.a0, self.level, self.make, self.tol = radius, level, make, tol
+        self.nz = LEVELS[level][0]
+        self.k = max(1, int(round(self.nz / ZONE)))
+        self.rp = probe_radius / radius
+        self.cache: dict[tuple[float, float], IndentProblem] = {}
+
+    def problem(self, e: tuple[float, float]) -> IndentProblem:
+        if e not in self.cache:
+            if len(self.cache) > 4:
+                self.cache.pop(next(iter(self.cache)))
+            zt, zb = (min(v * self.nz / self.k, 0.95) for v in e)
+            self.cache[e] = self.make(zone_mesh(self.a0, self.level, zt, zb))
+        return self.cache[e]
+
+    def state(self, prob: IndentProblem, d: float, guess: np.ndarray | None, load: str):
+        """(state, Newton iterations, (phi_top, phi_bot)) with the edge nodes as the last active ones."""
+        n_act = 2 * self.k + 1
+        acts = []
+        for ob in (prob.probe, prob.plate):
+            a = np.zeros(ob.nodes.size, bool)
+            a[:n_act] = True
+            acts.append(a)
+        s0 = prob.initial()._replace(active=tuple(acts))
+        X, n_u = prob.m.X, prob.asm.n_u
+        squeeze = np.zeros_like(s0.x)  # a uniform squeeze: admissible whatever the mesh
+        squeeze[0:n_u:2], squeeze[1:n_u:2] = 0.25 * d * X[0], -0.5 * d * (1.0 + X[1])
+        err: NewtonError | None = None
+        for x0 in (guess, squeeze):
+            if x0 is None or x0.shape != s0.x.shape:
+                continue
+            xi = x0
+            for ob, h, a in zip((prob.probe, prob.plate), prob.heights(d), acts):
+                xi = ob.impose(xi, h, a)
+            if prob.admissible(xi) is not None:
+                continue
+            try:
+                sol = prob.solve(s0, d, 1.0, None, x0, load, fixed=True)
+                break
+            except NewtonError as e:
+                err = e
+        else:
+            raise err if err is not None else NewtonError("no admissible initial guess", load=load)
+        phis = []
+        for ob, h, a in zip((prob.probe, prob.plate), prob.heights(d), sol.active):
+            N = ob.normal_force(sol.x, sol.residual, h)
+            F = max(float(N[a].sum()), 1e-300)
+            phi = float(N[n_act - 1]) / F
+            inner = float(np.min(N[max(n_act - 3, 0) : n_act - 1])) / F
+            if inner < 0:  # the last contact element lifts off in its middle: the zone is too large
+                phi = min(phi, inner)
+            g = ob.gap(sol.x, h)[n_act : n_act + 6]
+            if g.size and g.min() < -1e-9 * d:  # a free node beyond the edge penetrates: too small
+                phi = max(phi, -float(g.min()) / d)
+            phis.append(phi)
+        st = IndentState(sol.x, sol.active, prob.maxwell_initial(), d, sol.residual, 1)
+        return st, sol.iterations, phis
+
+    def solve(self, d: float, e0: tuple[float, float] | None, x0: np.ndarray | None, load: str):
+        """(problem, state, edges, Newton iterations, solves) at the scaled approach d."""
+        if e0 is None:
+            _, _, a1, a2 = hertz_split(d, self.rp)
+            e0 = (a1 / SPLIT, a2 / SPLIT)
+        e = [float(v) for v in e0]
+        lo, hi = [1e-5, 1e-5], [0.9, 0.9]
+        last: list[tuple[float, float] | None] = [None, None]
+        its, x = 0, x0
+        for n in range(1, 31):
+            prob = self.problem((e[0], e[1]))
+            st, it, phi = self.state(prob, d, x, load)
+            its, x = its + it, st.x
+            if max(abs(p) for p in phi) < self.tol:
+                return prob, st, (e[0], e[1]), its, n
+            new = []
+            for i in range(2):
+                if phi[i] > 0:
+                    lo[i] = max(lo[i], e[i])
+                else:
+                    hi[i] = min(hi[i], e[i])
+                prev = last[i]
+                if abs(phi[i]) < self.tol:
+                    cand = e[i]
+                elif prev is None or prev[1] == phi[i] or prev[0] == e[i]:
+                    cand = e[i] * (1.0 + 0.03 * np.sign(phi[i]))
+                else:  # secant in ln(e)
+                    le, lp = np.log(e[i]), np.log(prev[0])
+                    cand = float(np.exp(le - phi[i] * (le - lp) / (phi[i] - prev[1])))
+                if not lo[i] < cand < hi[i] and abs(phi[i]) >= self.tol:
+                    cand = float(np.sqrt(lo[i] * hi[i]))
+                last[i] = (e[i], phi[i])
+                new.append(cand)
+            e = new
+        raise ContactError("the fitted contact edges did not settle in 30 solves", load=load, hint="use contact='nodal'")
 
 
 @dataclass
@@ -237,6 +355,7 @@ def indent(
     end_time: float | None = None,
     kappa: float = 2.2e9,
     mesh: str | int = "default",
+    contact: str = "nodal",
     static: bool = False,
     n_ramp: int | None = None,
     n_hold: int | None = None,
@@ -262,6 +381,9 @@ def indent(
         kappa: bulk modulus (Pa).
         mesh: "coarse", "default", "fine" or a level 0..4 (``LEVELS``): one fixed mesh sized for the run's
             largest approach (``make_mesh``), node-by-node contact.
+        contact: "nodal" (default: one mesh, node-by-node contact, the force carries the edge quantisation) or
+            "fitted" (``static=True`` only: every state on its own mesh whose two contact edges sit on nodes,
+            ``FittedEdges``; the force is then a smooth function of the approach and of the mesh).
         static: equilibrium states from 0 to ``displacement`` (F_eq(delta); branches and times ignored);
             ``time`` then holds the load fraction.
         n_ramp, n_hold, n_static: ramp steps (default 6), geometric hold steps (default 20), static states
@@ -317,6 +439,10 @@ def indent(
             f"displacement {d_max:g} m pushes the probe (radius {rp:g} m) about {d1_max:g} m into the ball, more than "
             "half its effective radius R_p a0 / (R_p + a0): beyond the contacts this scene resolves"
         )
+    if contact not in ("nodal", "fitted"):
+        raise ValueError(f"contact must be 'nodal' or 'fitted', got {contact!r}")
+    if contact == "fitted" and not static:
+        raise ValueError("contact='fitted' (a mesh per state, its edges on nodes) needs static=True")
     m = make_mesh(mesh, a0, rp, d_max)
     mat = Material(1.0, float(alpha), float(kappa) / C)
     prob = IndentProblem(m, mat, rp / a0, beta, tau, rtol)
@@ -346,23 +472,38 @@ def indent(
         p = prev.state if prev is not None else None
         return prob.step(old, dscaled(t1), None if static else t1 - t0, p, load_of(t1))
 
-    steps = march(step, prob.initial(), times, too_large=too_large)
+    runs: list[tuple[float, IndentProblem, IndentState, int, float]] = []  # (time, problem, state, its, wall)
+    if contact == "fitted":
+        fit = FittedEdges(a0, rp, int(mesh_spec(mesh, MESHES, "or a level 0..4")), lambda mm: IndentProblem(
+            mm, mat, rp / a0, beta, tau, rtol))  # fmt: skip
+        e_prev, d_prev, x_prev = None, 0.0, None
+        for t in times:
+            w0 = time.perf_counter()
+            d = dscaled(t)
+            e0 = None if e_prev is None else (e_prev[0] * np.sqrt(d / d_prev), e_prev[1] * np.sqrt(d / d_prev))
+            pb, st_f, e_prev, its, _ = fit.solve(d, e0, x_prev, load_of(t))
+            d_prev, x_prev = d, st_f.x
+            runs.append((float(t), pb, st_f, its, time.perf_counter() - w0))
+        m = runs[-1][1].m
+    else:
+        for st in march(step, prob.initial(), times, too_large=too_large):
+            runs.append((st.time, prob, st.state, st.newton_iterations, st.wall_time))
     L2 = C * a0**2
     cols: dict[str, list] = {}
-    for st in steps:
-        ob = prob.observe(st.state)
+    for t_k, pb, state, its, wall in runs:
+        ob = pb.observe(state)
         F, Fb = ob["force"], ob["plate_force"]
-        if F > 0 and abs(F - Fb) > FORCE_CHECK * abs(F) + 1e3 * prob.floor:
+        if F > 0 and abs(F - Fb) > FORCE_CHECK * abs(F) + 1e3 * pb.floor:
             raise RuntimeError(
                 f"probe force {F * L2:.6g} N and plate force {Fb * L2:.6g} N differ by {abs(F - Fb) / F:.2e} "
-                f"(relative) at t = {st.time:.6g} s: equilibrium not reached. Hint: tighten rtol"
+                f"(relative) at t = {t_k:.6g} s: equilibrium not reached. Hint: tighten rtol"
             )
         row = dict(
-            time=st.time,
-            approach=st.state.delta * a0,
-            newton_iterations=st.newton_iterations,
-            contact_passes=st.state.passes,
-            wall_time=st.wall_time,
+            time=t_k,
+            approach=state.delta * a0,
+            newton_iterations=its,
+            contact_passes=state.passes,
+            wall_time=wall,
         )
         for k, v in ob.items():
             row[k] = v * (L2 if k.endswith("force") else a0)
@@ -383,6 +524,6 @@ def indent(
             ramp_time=None if static else float(ramp_time),  # type: ignore[arg-type]
             end_time=None if static else float(end_time),  # type: ignore[arg-type]
             mesh=mesh,
-            contact="nodal",
+            contact=contact,
         ),
     )

@@ -6,6 +6,7 @@ fem-indentation``) prints, for a probe on a Fung ball resting on a plate (a0 = 1
 * refinement at x = approach / (2 a0) = 0.005, R_p = a0, alpha = 0: F / F_Hertz (the two Hertz contacts in series,
   ``reduced.indentation.equilibrium_force``) per mesh level, the change between levels, the observed order
   (h ~ 1 / n_zone) and the Richardson estimate;
+* the edge quantisation of the node-by-node contact (F / F_Hertz of the states of one run less a smooth trend);
 * the Hertz limit: F / F_Hertz - 1 at x = 0.0005 ... 0.005 and (F / F_Hertz - 1) / sqrt(x): the finite-strain
   deviation grows like sqrt(x) (as the plates' does, ``reduced.spheroid``'s table: 2.25 % at x = 0.005), so the
   FE tends to the series law as x -> 0;
@@ -81,6 +82,19 @@ def refinement(levels) -> None:
             print(f"observed order: not monotone (edge quantisation); spread of the last three {np.ptp(vals[-3:]):.1e}")
 
 
+def quantisation(level: int, n: int = 16) -> None:
+    """The edge quantisation of node-by-node contact: F / F_Hertz over the states x = 0.0025 ... 0.005 of one
+    static run (one mesh, sized for x = 0.005) less its smooth trend (a + b sqrt(x) + c x, least squares)."""
+    _, r, _ = static_ratio(0.005, A0, level, n_static=n)
+    x = r.approach / (2 * A0)
+    q = r.force / np.asarray(ri.equilibrium_force(r.approach, radius=A0, probe_radius=A0, C=C))
+    keep = x >= 0.0025 - 1e-12
+    B = np.stack([np.ones(keep.sum()), np.sqrt(x[keep]), x[keep]], 1)
+    resid = q[keep] - B @ np.linalg.lstsq(B, q[keep], rcond=None)[0]
+    print(f"\n## Edge quantisation, level {level}: F / F_Hertz at {keep.sum()} states x = 0.0025 ... 0.005 of one mesh")
+    print(f"residual about a smooth trend: max {np.abs(resid).max():.1e}, rms {np.sqrt(np.mean(resid**2)):.1e}")
+
+
 def hertz_limit(level: int) -> None:
     print(f"\n## Hertz limit, R_p = a0, alpha = 0, level {level}: the deviation grows like sqrt(x)")
     print("x       | F / F_Hertz - 1 | (F / F_Hertz - 1) / sqrt(x) | contact radius probe / plate [a0]")
@@ -139,6 +153,7 @@ def main(argv: list[str] | None = None) -> int:
     refinement((1, 2, 3) if a.quick else (1, 2, 3, 4))
     lev = 1 if a.quick else 2
     hertz_limit(lev)
+    quantisation(lev)
     plate_limit(lev)
     half_space(lev)
     stiffening(lev)
