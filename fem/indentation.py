@@ -35,8 +35,8 @@ from tissuemech.fem import viscoelastic as ve
 from tissuemech.fem.contact import ContactError, ObstacleSolution, RigidSphere, solve_obstacles
 from tissuemech.fem.forms import Material
 from tissuemech.fem.linalg import Symmetric
-from tissuemech.fem.newton import NewtonError
 from tissuemech.fem.mesh import AxiMesh, full_ball_section, surface_layers, zone_points
+from tissuemech.fem.newton import NewtonError
 from tissuemech.fem.problem import SPHEROID_MARGIN, SceneProblem, mesh_spec, roundoff_floor, secant
 from tissuemech.fem.stepping import TimedState
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
@@ -476,11 +476,14 @@ def indent(
     if contact == "fitted":
         fit = FittedEdges(a0, rp, int(mesh_spec(mesh, MESHES, "or a level 0..4")), lambda mm: IndentProblem(
             mm, mat, rp / a0, beta, tau, rtol))  # fmt: skip
-        e_prev, d_prev, x_prev = None, 0.0, None
+        e_prev: tuple[float, float] | None = None
+        d_prev, x_prev = 0.0, None
         for t in times:
             w0 = time.perf_counter()
             d = dscaled(t)
-            e0 = None if e_prev is None else (e_prev[0] * np.sqrt(d / d_prev), e_prev[1] * np.sqrt(d / d_prev))
+            e0: tuple[float, float] | None = None
+            if e_prev is not None:  # the edges grow like sqrt(delta)
+                e0 = (e_prev[0] * np.sqrt(d / d_prev), e_prev[1] * np.sqrt(d / d_prev))
             pb, st_f, e_prev, its, _ = fit.solve(d, e0, x_prev, load_of(t))
             d_prev, x_prev = d, st_f.x
             runs.append((float(t), pb, st_f, its, time.perf_counter() - w0))
