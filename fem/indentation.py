@@ -310,7 +310,9 @@ class FittedEdges:
                 last[i] = (e[i], phi[i])
                 new.append(cand)
             e = new
-        raise ContactError("the fitted contact edges did not settle in 30 solves", load=load, hint="use contact='nodal'")
+        raise ContactError(
+            "the fitted contact edges did not settle in 30 solves", load=load, hint="use contact='nodal'"
+        )
 
 
 @dataclass

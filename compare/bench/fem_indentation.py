@@ -80,7 +80,9 @@ def refinement(levels) -> None:
         vals.append(q)
         hs.append(1.0 / LEVELS[lev][0])
         ch = f"{q - vals[-2]:+.2e}" if len(vals) > 1 else "         "
-        print(f"{lev:5d} | {LEVELS[lev][0]:6d} | {r.mesh.n_nodes:5d} | {q:.6f}                  | {ch} | {w:8.0f} | {qn:.6f}")
+        print(
+            f"{lev:5d} | {LEVELS[lev][0]:6d} | {r.mesh.n_nodes:5d} | {q:.6f}                  | {ch} | {w:8.0f} | {qn:.6f}"
+        )
     if len(vals) >= 3:
         p = observed_order(vals, hs)
         if np.isfinite(p):
