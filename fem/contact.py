@@ -33,6 +33,11 @@ the force is a smooth function of the approach and of the mesh. Paths of a body 
 on its own fitted mesh), :func:`timed_fitted` (time steps with Maxwell branches; the history at a new mesh's
 Gauss points is rebuilt from every past step's solution, :func:`replayed_history`), :func:`nodal_step` (node
 by node, a fixed mesh or beyond the fitted range).
+
+Curved obstacles (``fem.indentation``): :class:`RigidSphere` (a sphere, or a plane with ``radius=inf``, above or
+below the body) and :func:`solve_obstacles` (exact contact on several of them at once: an active node slides on
+its obstacle, its u_z following its u_r; the tangent transformed by :func:`congruence`, which keeps the FE
+pattern). The plane code above is unchanged.
 """
 
 from __future__ import annotations

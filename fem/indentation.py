@@ -12,11 +12,14 @@ branches on S_iso (``fem.viscoelastic``), quasi-static time stepping (``fem.time
 Contact is exact on both obstacles (no penalty): ``fem.contact.RigidSphere`` for the probe (its lower cap)
 and for the plate (a sphere of infinite radius below the body), solved together by
 ``fem.contact.solve_obstacles`` (an active node lies on its obstacle, u_z following u_r along the surface;
-Signorini: gap >= 0, contact force >= 0, their product 0). The contact is node by node on one fixed mesh per
-run, so the force carries the edge quantisation of that mesh (a sawtooth in the approach, its amplitude set
-by the node spacing over the contact radius); the mesh is sized from the largest approach of the run (its
-two Hertz contact radii) so that every level puts the same number of elements across each contact.
-Measured (``python -m tissuemech.compare.bench.fem_indentation``): see ``docs/afm.md``, "FE indentation".
+Signorini: gap >= 0, contact force >= 0, their product 0). ``contact="nodal"`` (default; time runs): node by
+node on one fixed mesh per run, sized from the largest approach of the run (its two Hertz contact radii) so that
+every level puts the same number of elements across each contact; the force carries the edge quantisation (a
+sawtooth in the approach: 3.3e-3 of F on level 1, 1.0e-3 on level 2). ``contact="fitted"`` (static states):
+every state on its own mesh whose two contact edges sit on nodes (:class:`FittedEdges`): smooth to 1e-6, observed
+order 3.5 under refinement (F at approach / (2 a0) = 0.005, R_p = a0: level 2 within 7e-5 of the Richardson
+limit, level 4 within 7e-6). Measured by ``python -m tissuemech.compare.bench.fem_indentation`` (``docs/afm.md``,
+"FE indentation").
 
 Inside, lengths are scaled by a0, stresses by C, forces by C a0^2 (``fem.problem.SceneProblem``).
 """
@@ -44,7 +47,20 @@ from tissuemech.reduced.material import probe_share, validate_branches, validate
 
 log = logging.getLogger(__name__)
 
-__all__ = ["indent", "IndentationResult", "IndentProblem", "make_mesh", "LEVELS", "MESHES", "X_MIN", "X_MAX"]
+__all__ = [
+    "indent",
+    "IndentationResult",
+    "IndentProblem",
+    "FittedEdges",
+    "make_mesh",
+    "zone_mesh",
+    "hertz_split",
+    "LEVELS",
+    "MESHES",
+    "X_MIN",
+    "X_MAX",
+    "EDGE_TOL",
+]
 
 # level -> (n_zone, n_out, n_radial, n_equator): n_zone equal elements over each pole's contact zone (ZONE times
 # its Hertz contact radius at the largest approach), n_out growing ones to the end of the pole block (SPLIT),
