@@ -275,20 +275,7 @@ def ball_section(
     if key in _BALL_TOPOLOGY:  # the same divisions: only the node positions change (fitted meshes, issue 14)
         return _moved_ball(_BALL_TOPOLOGY[key], P, radius)
     Q = np.concatenate(quads)
-    # merge the blocks' shared points: each point maps to the first point within 1e-10 of it (a distance,
-    # not a rounding of the coordinates: two copies 1e-16 apart that straddle a rounding boundary stayed
-    # apart before and left a seam of unconnected nodes at some pole_points); numbered in order of first
-    # appearance (not sorted by coordinates), so meshes with the same divisions share one node numbering
-    # whatever their point positions (pole_points ...)
-    near = cKDTree(P).query_ball_point(P, r=1e-10)
-    rep = np.fromiter((min(nb) for nb in near), dtype=np.int64, count=P.shape[0])
-    first, inv = np.unique(rep, return_inverse=True)  # first: sorted = order of first appearance
-    P, Q = P[first], inv.ravel()[Q]
-    # counterclockwise orientation
-    x, y = P[Q, 0], P[Q, 1]
-    area = 0.5 * np.sum(x * np.roll(y, -1, 1) - np.roll(x, -1, 1) * y, axis=1)
-    Q[area < 0] = Q[area < 0][:, ::-1]
-    m1 = skfem.MeshQuad(P.T.copy(), Q.T.copy())
+    m1, first = _merged(P, Q)  # the blocks' shared points merged (one numbering per divisions), counterclockwise
 
     mapper: Callable[..., np.ndarray]
     if order == 2:
@@ -308,6 +295,22 @@ def ball_section(
         while len(_BALL_TOPOLOGY) > 8:
             _BALL_TOPOLOGY.pop(next(iter(_BALL_TOPOLOGY)))
     return out
+
+
+def _merged(P: np.ndarray, Q: np.ndarray) -> tuple[skfem.MeshQuad, np.ndarray]:
+    """(Q1 mesh, first): the blocks' points P (n, 2) and quads Q merged where they coincide, each point mapped to the
+    first point within 1e-10 of it (a distance, not a rounding of the coordinates: two copies 1e-16 apart that
+    straddle a rounding boundary stayed apart before and left a seam of unconnected nodes at some pole_points),
+    numbered in order of first appearance (not sorted by coordinates, so meshes with the same divisions share one
+    node numbering whatever their point positions), quads counterclockwise; ``first`` the kept points."""
+    near = cKDTree(P).query_ball_point(P, r=1e-10)
+    rep = np.fromiter((min(nb) for nb in near), dtype=np.int64, count=P.shape[0])
+    first, inv = np.unique(rep, return_inverse=True)  # first: sorted = order of first appearance
+    P, Q = P[first], inv.ravel()[Q]
+    x, y = P[Q, 0], P[Q, 1]
+    area = 0.5 * np.sum(x * np.roll(y, -1, 1) - np.roll(x, -1, 1) * y, axis=1)
+    Q[area < 0] = Q[area < 0][:, ::-1]
+    return skfem.MeshQuad(P.T.copy(), Q.T.copy()), first
 
 
 def _on_arc(m1: skfem.MeshQuad) -> tuple[Callable[..., np.ndarray], np.ndarray]:
@@ -380,15 +383,7 @@ def full_ball_section(
         inner = np.stack([cr * u, np.full_like(u, sg * cz)], -1)
         outer = np.stack([np.sin(split_angle * u), sg * np.cos(split_angle * u)], -1)
         block((1 - v)[None, :, None] * inner[:, None] + v[None, :, None] * outer[:, None])
-    P, Q = np.concatenate(pts), np.concatenate(quads)
-    near = cKDTree(P).query_ball_point(P, r=1e-10)
-    rep = np.fromiter((min(nb) for nb in near), dtype=np.int64, count=P.shape[0])
-    first, inv = np.unique(rep, return_inverse=True)
-    P, Q = P[first], inv.ravel()[Q]
-    x, y = P[Q, 0], P[Q, 1]
-    area = 0.5 * np.sum(x * np.roll(y, -1, 1) - np.roll(x, -1, 1) * y, axis=1)
-    Q[area < 0] = Q[area < 0][:, ::-1]
-    m1 = skfem.MeshQuad(P.T.copy(), Q.T.copy())
+    m1, _ = _merged(np.concatenate(pts), np.concatenate(quads))
     mapper, _ = _on_arc(m1)
     tol = 1e-9
     tags = {
