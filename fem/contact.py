@@ -33,6 +33,11 @@ the force is a smooth function of the approach and of the mesh. Paths of a body 
 on its own fitted mesh), :func:`timed_fitted` (time steps with Maxwell branches; the history at a new mesh's
 Gauss points is rebuilt from every past step's solution, :func:`replayed_history`), :func:`nodal_step` (node
 by node, a fixed mesh or beyond the fitted range).
+
+Curved obstacles (``fem.indentation``): :class:`RigidSphere` (a sphere, or a plane with ``radius=inf``, above or
+below the body) and :func:`solve_obstacles` (exact contact on several of them at once: an active node slides on
+its obstacle, its u_z following its u_r; the tangent transformed by :func:`congruence`, which keeps the FE
+pattern). The plane code above is unchanged.
 """
 
 from __future__ import annotations
@@ -43,6 +48,7 @@ from dataclasses import dataclass
 from typing import Generic, NamedTuple, Protocol, TypeVar
 
 import numpy as np
+import scipy.sparse as sp
 
 from tissuemech.fem import constitutive as cm
 from tissuemech.fem import viscoelastic as ve
@@ -78,6 +84,11 @@ __all__ = [
     "EDGE_TOL",
     "EDGE_MIN",
     "AFFINE_MAX_ITER",
+    "RigidSphere",
+    "ObstacleSolution",
+    "solve_obstacles",
+    "edge_estimate",
+    "congruence",
 ]
 
 
@@ -132,16 +143,7 @@ class RigidPlane:
             return 0.0, 0.0
         r = self.R + x[2 * self.nodes]
         k = int(np.max(np.flatnonzero(active)))  # candidates are ordered from the pole outward
-        rk = float(r[k])
-        if k + 2 >= r.size:
-            return rk, rk
-        g = self.gap(x, h)
-        g1, g2, r1, r2 = g[k + 1], g[k + 2], r[k + 1], r[k + 2]
-        if not (g2 > g1 > 0 and r2 > r1 > rk):
-            return rk, rk
-        rho = (g1 / g2) ** (2.0 / 3.0)
-        a = (r1 - rho * r2) / (1.0 - rho)
-        return float(np.clip(a, rk, r1)), rk
+        return edge_estimate(r, self.gap(x, h), k)
 
     def solve(
         self,
@@ -748,3 +750,254 @@ def timed_fitted(
         return PlateStep(st, prob, sol.edge, where, where_edge, walked(prob, es_.x, visco.S_iso)), sol.iterations
 
     return march(step, first_state(fit, beta.size), times, too_large=too_large)
+
+
+# ---- a rigid sphere (or plane) above or below the body: exact contact on a curved obstacle (fem.indentation) --
+class RigidSphere:
+    """Frictionless rigid sphere of radius ``radius`` (scaled; ``np.inf``: a plane) centred on the axis, acting
+    on the candidate boundary ``nodes`` from ``above`` the body (a probe pressed down) or from below (a plate the
+    body rests on). ``height`` (per call) is the z of its centre (of the plane for ``radius=inf``).
+
+    Its contact surface is the graph z = z_s(r) of the cap that faces the body (above: z_s = height -
+    sqrt(rho^2 - r^2); below: height + sqrt(...)). An active node lies on it exactly: its u_r stays free and
+    its u_z = z_s(R + u_r) - Z follows (:meth:`impose`), so the Newton unknown of an active node is u_r alone;
+    :func:`solve_obstacles` writes the equations in these unknowns (chain rule, exact tangent incl. the
+    surface's curvature). The gap is the normal distance |x - c| - rho (plane: the vertical one), the compressive
+    normal force N_i = r_i . n_i with n the obstacle's unit normal into the body (nodal reactions include the
+    2 pi R of dV). Scaled units as :class:`RigidPlane`."""
+
+    def __init__(self, X: np.ndarray, nodes: np.ndarray, radius: float = np.inf, above: bool = True):
+        nodes = np.asarray(nodes, dtype=int)
+        if nodes.ndim != 1 or nodes.size == 0:
+            raise ValueError("contact needs a non-empty 1D array of candidate boundary nodes")
+        if not radius > 0:
+            raise ValueError(f"the rigid sphere's radius must be positive (scaled length), got {radius!r}")
+        self.radius, self.above = float(radius), bool(above)
+        side = 1.0 if above else -1.0
+        order = np.argsort(np.arctan2(X[0, nodes], side * X[1, nodes]))  # from the facing pole outward
+        self.nodes = nodes[order]
+        self.R, self.Z = X[0, self.nodes].copy(), X[1, self.nodes].copy()
+        self.dofs = 2 * self.nodes + 1
+
+    def surface(self, r: np.ndarray, height: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(z_s, dz_s/dr, d2z_s/dr2) of the facing cap at the radii r (scaled; r < radius)."""
+        if not np.isfinite(self.radius):
+            z = np.full_like(r, height)
+            return z, np.zeros_like(r), np.zeros_like(r)
+        rho = self.radius
+        root = np.sqrt(np.maximum(rho**2 - r**2, 1e-12 * rho**2))  # only the facing cap (r < rho) is meant
+        sgn = -1.0 if self.above else 1.0
+        return height + sgn * root, -sgn * r / root, -sgn * rho**2 / root**3
+
+    def positions(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Deformed (r, z) of the candidates."""
+        return self.R + x[2 * self.nodes], self.Z + x[self.dofs]
+
+    def gap(self, x: np.ndarray, height: float) -> np.ndarray:
+        """Normal gap of every candidate (scaled length; < 0: penetration)."""
+        r, z = self.positions(x)
+        if not np.isfinite(self.radius):
+            return (height - z) if self.above else (z - height)
+        return np.hypot(r, z - height) - self.radius
+
+    def impose(self, x: np.ndarray, height: float, active: np.ndarray) -> np.ndarray:
+        """Copy of x with the active nodes on the surface: u_z = z_s(R + u_r) - Z."""
+        x = np.array(x, dtype=float)
+        r, _ = self.positions(x)
+        zs, _, _ = self.surface(r[active], height)
+        x[self.dofs[active]] = zs - self.Z[active]
+        return x
+
+    def normals(self, x: np.ndarray, height: float) -> np.ndarray:
+        """(2, n) unit normals into the body: from the sphere's centre to the candidates (for the active nodes, on
+        the sphere, the surface normal); a plane's is -e_z above the body, +e_z below."""
+        r, z = self.positions(x)
+        if not np.isfinite(self.radius):
+            return np.stack([np.zeros_like(r), np.full_like(r, -1.0 if self.above else 1.0)])
+        n = np.stack([r, z - height])
+        return n / np.hypot(n[0], n[1])
+
+    def normal_force(self, x: np.ndarray, r: np.ndarray, height: float) -> np.ndarray:
+        """Compressive nodal contact force N_i = r_i . n_i (meaningful on active nodes)."""
+        n = self.normals(x, height)
+        return r[2 * self.nodes] * n[0] + r[self.dofs] * n[1]
+
+    def axial_force(self, r: np.ndarray, active: np.ndarray) -> float:
+        """The force the body exerts on the obstacle along the axis, positive pushing it away from the body
+        (the sum of the active nodes' axial reactions)."""
+        fz = r[self.dofs[active]].sum()
+        return float(-fz if self.above else fz)
+
+    def contact_radius(self, x: np.ndarray, active: np.ndarray, height: float) -> tuple[float, float]:
+        """(edge estimate, outermost active node) of the deformed contact radius (scaled), as
+        :meth:`RigidPlane.contact_radius` (the Hertz-like gap law between the outermost active node and the
+        next)."""
+        if not active.any():
+            return 0.0, 0.0
+        r, _ = self.positions(x)
+        k = int(np.max(np.flatnonzero(active)))
+        return edge_estimate(r, self.gap(x, height), k)
+
+
+def edge_estimate(r: np.ndarray, g: np.ndarray, k: int) -> tuple[float, float]:
+    """(edge estimate, r_k): the contact edge between the outermost active candidate k (radius r_k) and the next,
+    from the gaps g_1, g_2 of the next two with the Hertz-like law g ~ (r - a)^(3/2), clamped to [r_k, r_1]."""
+    rk = float(r[k])
+    if k + 2 >= r.size:
+        return rk, rk
+    g1, g2, r1, r2 = g[k + 1], g[k + 2], r[k + 1], r[k + 2]
+    if not (g2 > g1 > 0 and r2 > r1 > rk):
+        return rk, rk
+    rho = (g1 / g2) ** (2.0 / 3.0)
+    a = (r1 - rho * r2) / (1.0 - rho)
+    return float(np.clip(a, rk, r1)), rk
+
+
+class ObstacleSolution(NamedTuple):
+    x: np.ndarray  # full unknown vector, the active nodes on their obstacles
+    active: tuple[np.ndarray, ...]  # bool per candidate node of each obstacle
+    iterations: int  # Newton iterations summed over active-set passes
+    sets: int  # active-set passes
+    residual: np.ndarray  # full internal residual at x (the reactions on the active nodes)
+
+
+def _add_rows(M: sp.csr_matrix, dst: np.ndarray, src: np.ndarray, s: np.ndarray) -> bool:
+    """In place: row dst_k += s_k row src_k of a canonical CSR matrix whose rows dst_k and src_k have the same
+    columns (False, nothing changed, if they do not)."""
+    ptr = M.indptr
+    n = ptr[src + 1] - ptr[src]
+    if not np.array_equal(n, ptr[dst + 1] - ptr[dst]):
+        return False
+    off = np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)
+    i_dst, i_src = np.repeat(ptr[dst], n) + off, np.repeat(ptr[src], n) + off
+    if not np.array_equal(M.indices[i_dst], M.indices[i_src]):
+        return False
+    M.data[i_dst] += np.repeat(s, n) * M.data[i_src]
+    return True
+
+
+def congruence(K, rows: np.ndarray, cols: np.ndarray, s: np.ndarray) -> sp.csr_matrix | None:
+    """T^T K T for T = I + sum_k s_k e_{rows_k} e_{cols_k}^T (the u_z of a node following its u_r) with K's own
+    sparsity pattern (CSR, explicit zeros kept, so a factorisation's plan is reused across active sets and
+    iterations): valid when the rows and columns of the two dofs of a node have the same pattern, as every FE
+    matrix assembled node by node has; None when they do not."""
+    M = sp.csr_matrix(K, copy=True)
+    M.sum_duplicates()
+    M.sort_indices()
+    if not _add_rows(M, cols, rows, s):  # T^T K: row u_r += s row u_z
+        return None
+    Mt = M.T.tocsr()
+    Mt.sort_indices()
+    if not _add_rows(Mt, cols, rows, s):  # (T^T K T)^T = T^T (T^T K)^T
+        return None
+    out = Mt.T.tocsr()
+    out.sort_indices()
+    return out
+
+
+def solve_obstacles(
+    fun: Callable,
+    x0: np.ndarray,
+    obstacles: list[tuple[RigidSphere, float]],
+    active0: tuple[np.ndarray, ...],
+    free: np.ndarray,
+    *,
+    gap_tol: float = 1e-10,
+    force_tol: float = 1e-9,
+    max_sets: int = 12,
+    load=None,
+    residual: Callable | None = None,
+    admissible: Callable | None = None,
+    release_all: bool = True,
+    fixed: bool = False,
+    **newton_kw,
+) -> ObstacleSolution:
+    """Equilibrium with exact contact on several rigid obstacles (``(RigidSphere, height)`` pairs).
+
+    As :meth:`RigidPlane.solve`, with curved obstacles: for each active set Newton solves in the unknowns
+    ``free`` less the u_z of the active nodes, which follow their u_r on the surface (``RigidSphere.impose``).
+    With x = Phi(y) (u_z = z_s(r) - Z on the active nodes) the equations are T^T r(Phi(y)) = 0 with T =
+    dPhi/dy (u_z,i += z_s'(r_i) u_r,i) and the exact tangent T^T K T + diag(r_z,i z_s''(r_i)). Active-set
+    updates: penetrating candidates (gap < -gap_tol) enter, tensile active nodes (N < -force_tol of their
+    obstacle's total) leave (``release_all``: all of them at once; else the most tensile one, as ``RigidPlane``);
+    a repeated set raises ``ContactError``. ``fixed``: one solve with the active sets as given, no updates (the
+    contact edge on a node of a fitted mesh, ``fem.indentation``)."""
+    n = x0.size
+    active = [np.asarray(a, bool).copy() for a in active0]
+    if not fixed:  # every candidate that penetrates in x0 starts active
+        active = [a | (ob.gap(x0, h) < -gap_tol) for a, (ob, h) in zip(active, obstacles)]
+
+    def phi(x):
+        for (ob, h), a in zip(obstacles, active):
+            x = ob.impose(x, h, a)
+        return x
+
+    def transformed(x):
+        x = phi(x)
+        rows, cols, vals, d_idx, d_val = [], [], [], [], []
+        for (ob, h), a in zip(obstacles, active):
+            r, _ = ob.positions(x)
+            _, s, c = ob.surface(r[a], h)
+            rows.append(ob.dofs[a])
+            cols.append(2 * ob.nodes[a])
+            vals.append(s)
+            d_idx.append(2 * ob.nodes[a])
+            d_val.append(c)
+        rr, cc, vv = np.concatenate(rows), np.concatenate(cols), np.concatenate(vals)
+        di, dc = np.concatenate(d_idx), np.concatenate(d_val)
+        T = sp.identity(n, format="csr") + sp.csr_matrix((vv, (rr, cc)), shape=(n, n))
+        r_full, K = fun(x)
+        r_t = r_full.copy()
+        r_t[cc] += vv * r_full[rr]  # T^T r on the u_r of the active nodes
+
+        def tangent():
+            Km = K() if callable(K) and not sp.issparse(K) else K
+            M = congruence(Km, rr, cc, vv)
+            if M is None:  # not an FE pattern (the rows of a node's two dofs differ): sparse products
+                D = sp.csr_matrix((dc * r_full[di + 1], (di, di)), shape=(n, n))
+                return (T.T @ Km @ T + D).tocsr()
+            for i, v in zip(di, dc * r_full[di + 1]):
+                lo, hi = M.indptr[i], M.indptr[i + 1]
+                M.data[lo + np.searchsorted(M.indices[lo:hi], i)] += v
+            return M
+
+        return r_t, tangent
+
+    adm = (lambda x: admissible(phi(x))) if admissible is not None else None
+    x = np.asarray(x0, float)
+    seen, its = set(), 0
+    for k in range(1, max_sets + 1):
+        key = b"".join(a.tobytes() for a in active)
+        if key in seen:
+            raise ContactError(
+                "the contact active set cycles", load=load, hint="reduce the load/time step near the contact edge"
+            )
+        seen.add(key)
+        x = phi(x)
+        pinned = np.concatenate([ob.dofs[a] for (ob, _), a in zip(obstacles, active)])
+        fr = np.setdiff1d(free, pinned)
+        res = newton(transformed, x, free=fr, load=load, admissible=adm, **newton_kw)
+        x, its = phi(res.x), its + res.iterations
+        r = residual(x) if residual is not None else fun(x)[0]
+        if fixed:
+            return ObstacleSolution(x, tuple(active), its, k, r)
+        new, changed = [], False
+        for (ob, h), a in zip(obstacles, active):
+            N, g = ob.normal_force(x, r, h), ob.gap(x, h)
+            scale = max(float(np.sum(N[a])), 1e-300)
+            release = a & (N < -force_tol * scale)
+            enter = ~a & (g < -gap_tol)
+            b = a.copy()
+            b[enter] = True
+            if release_all:
+                b[release] = False
+            elif release.any():
+                b[np.flatnonzero(release)[np.argmin(N[release])]] = False
+            changed = changed or bool(release.any() or enter.any())
+            new.append(b)
+        if not changed:
+            return ObstacleSolution(x, tuple(active), its, k, r)
+        active = new
+    raise ContactError(
+        f"the contact active set did not settle in {max_sets} passes", load=load, hint="reduce the load/time step"
+    )

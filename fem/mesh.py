@@ -43,6 +43,9 @@ __all__ = [
     "FITTED_LEVELS",
     "FITTED_SPLIT",
     "FITTED_EDGE_MAX",
+    "full_ball_section",
+    "zone_points",
+    "surface_layers",
 ]
 
 
@@ -272,37 +275,11 @@ def ball_section(
     if key in _BALL_TOPOLOGY:  # the same divisions: only the node positions change (fitted meshes, issue 14)
         return _moved_ball(_BALL_TOPOLOGY[key], P, radius)
     Q = np.concatenate(quads)
-    # merge the blocks' shared points: each point maps to the first point within 1e-10 of it (a distance,
-    # not a rounding of the coordinates: two copies 1e-16 apart that straddle a rounding boundary stayed
-    # apart before and left a seam of unconnected nodes at some pole_points); numbered in order of first
-    # appearance (not sorted by coordinates), so meshes with the same divisions share one node numbering
-    # whatever their point positions (pole_points ...)
-    near = cKDTree(P).query_ball_point(P, r=1e-10)
-    rep = np.fromiter((min(nb) for nb in near), dtype=np.int64, count=P.shape[0])
-    first, inv = np.unique(rep, return_inverse=True)  # first: sorted = order of first appearance
-    P, Q = P[first], inv.ravel()[Q]
-    # counterclockwise orientation
-    x, y = P[Q, 0], P[Q, 1]
-    area = 0.5 * np.sum(x * np.roll(y, -1, 1) - np.roll(x, -1, 1) * y, axis=1)
-    Q[area < 0] = Q[area < 0][:, ::-1]
-    m1 = skfem.MeshQuad(P.T.copy(), Q.T.copy())
+    m1, first = _merged(P, Q)  # the blocks' shared points merged (one numbering per divisions), counterclockwise
 
     mapper: Callable[..., np.ndarray]
     if order == 2:
-        m2 = skfem.MeshQuad2.from_mesh(m1)
-        dl = m2.doflocs.copy()
-        nv, nf = m1.nvertices, m1.facets.shape[1]
-        # surface facet midpoints onto the arc
-        bf = m1.boundary_facets()
-        fv = m1.p[:, m1.facets[:, bf]]
-        onarc = np.all(np.abs(np.hypot(fv[0], fv[1]) - 1.0) < 1e-12, axis=0)
-        mids = nv + bf[onarc]
-        dl[:, mids] /= np.hypot(dl[0, mids], dl[1, mids])
-        # element centres: transfinite (serendipity) blend of the edge midpoints
-        t2f = m1.t2f
-        cen = nv + nf + np.arange(m1.nelements)
-        dl[:, cen] = 0.5 * dl[:, nv + t2f].sum(axis=1) - 0.25 * m1.p[:, m1.t].sum(axis=1)
-        mapper = lambda p, dl=dl: dl
+        mapper, mids = _on_arc(m1)
     else:
         mapper = lambda p: p
 
@@ -318,6 +295,124 @@ def ball_section(
         while len(_BALL_TOPOLOGY) > 8:
             _BALL_TOPOLOGY.pop(next(iter(_BALL_TOPOLOGY)))
     return out
+
+
+def _merged(P: np.ndarray, Q: np.ndarray) -> tuple[skfem.MeshQuad, np.ndarray]:
+    """(Q1 mesh, first): the blocks' points P (n, 2) and quads Q merged where they coincide, each point mapped to the
+    first point within 1e-10 of it (a distance, not a rounding of the coordinates: two copies 1e-16 apart that
+    straddle a rounding boundary stayed apart before and left a seam of unconnected nodes at some pole_points),
+    numbered in order of first appearance (not sorted by coordinates, so meshes with the same divisions share one
+    node numbering whatever their point positions), quads counterclockwise; ``first`` the kept points."""
+    near = cKDTree(P).query_ball_point(P, r=1e-10)
+    rep = np.fromiter((min(nb) for nb in near), dtype=np.int64, count=P.shape[0])
+    first, inv = np.unique(rep, return_inverse=True)  # first: sorted = order of first appearance
+    P, Q = P[first], inv.ravel()[Q]
+    x, y = P[Q, 0], P[Q, 1]
+    area = 0.5 * np.sum(x * np.roll(y, -1, 1) - np.roll(x, -1, 1) * y, axis=1)
+    Q[area < 0] = Q[area < 0][:, ::-1]
+    return skfem.MeshQuad(P.T.copy(), Q.T.copy()), first
+
+
+def _on_arc(m1: skfem.MeshQuad) -> tuple[Callable[..., np.ndarray], np.ndarray]:
+    """(mapper, arc midpoint dofs) of the quadratic version of a Q1 ball mesh whose surface is the unit circle:
+    the surface facet midpoints moved onto the arc, the element centres a transfinite (serendipity) blend of
+    the edge midpoints."""
+    m2 = skfem.MeshQuad2.from_mesh(m1)
+    dl = m2.doflocs.copy()
+    nv, nf = m1.nvertices, m1.facets.shape[1]
+    bf = m1.boundary_facets()
+    fv = m1.p[:, m1.facets[:, bf]]
+    onarc = np.all(np.abs(np.hypot(fv[0], fv[1]) - 1.0) < 1e-12, axis=0)
+    mids = nv + bf[onarc]
+    dl[:, mids] /= np.hypot(dl[0, mids], dl[1, mids])
+    t2f = m1.t2f
+    cen = nv + nf + np.arange(m1.nelements)
+    dl[:, cen] = 0.5 * dl[:, nv + t2f].sum(axis=1) - 0.25 * m1.p[:, m1.t].sum(axis=1)
+    return (lambda p, dl=dl: dl), mids
+
+
+def full_ball_section(
+    radius: float,
+    top_points: np.ndarray,
+    bottom_points: np.ndarray,
+    radial_points: np.ndarray,
+    *,
+    n_equator: int = 8,
+    split_angle: float = 0.25 * np.pi,
+    intorder: int | None = None,
+) -> AxiMesh:
+    """The whole meridian half disk (R >= 0, -1 <= Z <= 1) of a solid ball as an O-grid, lengths scaled by
+    ``radius``, Q2: a core rectangle [0, c sqrt2 sin(split)] x [-c sqrt2 cos(split), c sqrt2 cos(split)] (c = 0.55),
+    a top and a bottom pole block (surface arcs 0..``split_angle`` from each pole) and an equator block between
+    them (2 ``n_equator`` divisions). ``top_points`` / ``bottom_points`` (n + 1 increasing numbers from 0 to 1,
+    the same n): node positions along each pole block as fractions of its arc (and of the core's top / bottom
+    edge); the core's columns run straight from one to the other, so the two poles are refined independently (a
+    ball on a plate under a probe, ``fem.indentation``). ``radial_points``: layer boundaries of the curved blocks
+    (0 at the core, 1 at the surface). Tags "axis" (R = 0), "outer" (the surface) and an empty "symmetry" (no
+    midplane condition)."""
+    if not (radius > 0 and np.isfinite(radius)):
+        raise ValueError(f"ball radius must be positive, got {radius}")
+    if len(top_points) != len(bottom_points):
+        raise ValueError("top_points and bottom_points need the same number of divisions")
+    n = len(top_points) - 1
+    ut = _check_points(top_points, n, "top_points")
+    ub = _check_points(bottom_points, n, "bottom_points")
+    v = _check_points(radial_points, len(radial_points) - 1, "radial_points")
+    if int(n_equator) < 1:
+        raise ValueError(f"a mesh needs at least one division, got n_equator = {n_equator}")
+    c = 0.55
+    cr, cz = c * np.sqrt(2) * np.sin(split_angle), c * np.sqrt(2) * np.cos(split_angle)
+    t = np.linspace(0.0, 1.0, 2 * int(n_equator) + 1)
+    pts: list[np.ndarray] = []
+    quads: list[np.ndarray] = []
+
+    def block(P):  # P: (n1 + 1, n2 + 1, 2) structured block -> quads (orientation fixed below)
+        n1, n2 = P.shape[0] - 1, P.shape[1] - 1
+        off = sum(len(q) for q in pts)
+        pts.append(P.reshape(-1, 2))
+        idx = off + np.arange((n1 + 1) * (n2 + 1)).reshape(n1 + 1, n2 + 1)
+        quads.append(np.stack([idx[:-1, :-1], idx[1:, :-1], idx[1:, 1:], idx[:-1, 1:]], -1).reshape(-1, 4))
+
+    core_r = cr * (ub[:, None] * (1 - t[None]) + ut[:, None] * t[None])
+    block(np.stack([core_r, np.broadcast_to(cz * (2 * t - 1), core_r.shape)], -1))
+    inner = np.stack([np.full_like(t, cr), cz * (2 * t - 1)], -1)
+    ph = (0.5 * np.pi - split_angle) * (2 * t - 1)
+    outer = np.stack([np.cos(ph), np.sin(ph)], -1)
+    block((1 - v)[:, None, None] * inner[None] + v[:, None, None] * outer[None])
+    for u, sg in ((ut, 1.0), (ub, -1.0)):
+        inner = np.stack([cr * u, np.full_like(u, sg * cz)], -1)
+        outer = np.stack([np.sin(split_angle * u), sg * np.cos(split_angle * u)], -1)
+        block((1 - v)[None, :, None] * inner[:, None] + v[None, :, None] * outer[:, None])
+    m1, _ = _merged(np.concatenate(pts), np.concatenate(quads))
+    mapper, _ = _on_arc(m1)
+    tol = 1e-9
+    tags = {
+        "axis": lambda X: np.abs(X[0]) < tol,
+        "symmetry": lambda X: np.zeros(X.shape[1:], bool),
+        "outer": lambda X: np.abs(np.hypot(X[0], X[1]) - 1.0) < 1e-9,
+    }
+    return _finish(m1, 2, mapper, radius, tags, intorder)
+
+
+def zone_points(n_zone: int, n_out: int, zone: float) -> np.ndarray:
+    """Node positions (fractions of a pole block's arc) with ``n_zone`` equal divisions over [0, ``zone``] (the
+    contact zone, 0 < zone < 1) and ``n_out`` geometrically growing ones beyond it, the first as long as a zone
+    division (``full_ball_section``)."""
+    if not 0 < zone < 1:
+        raise ValueError(f"the refined zone must be a fraction of the pole block's arc in (0, 1), got {zone!r}")
+    inner = np.linspace(0.0, zone, n_zone + 1)
+    outer = zone + _geometric(n_out, 1.0 - zone, min(zone / n_zone, (1.0 - zone) / n_out))
+    return np.r_[inner, outer[1:]]
+
+
+def surface_layers(n_radial: int, depth: float, thickness: float) -> np.ndarray:
+    """Radial layer boundaries (0 at the core, 1 at the surface) of the curved blocks: geometric towards the
+    surface with the outermost layer ``depth`` thick (scaled length) in a block ``thickness`` thick, uniform if
+    that is finer."""
+    v = np.linspace(0.0, 1.0, n_radial + 1)
+    if depth < thickness * (v[-1] - v[-2]):
+        v = 1.0 - _geometric(n_radial, 1.0, depth / thickness)[::-1]
+    return v
 
 
 class _BallTopology(NamedTuple):

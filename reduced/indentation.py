@@ -67,6 +67,7 @@ import numpy as np
 
 import tissuemech.reduced  # noqa: F401  (float64 in JAX)
 from tissuemech.reduced import spheroid
+from tissuemech.reduced.material import probe_share
 from tissuemech.reduced.validation import (
     InputError,
     is_traced,
@@ -115,9 +116,7 @@ def contact_depths(displacement: Any, *, radius: Any, probe_radius: Any) -> tupl
     a = jnp.asarray(radius, dtype=jnp.float64)
     rp = jnp.asarray(probe_radius, dtype=jnp.float64)
     d = jnp.asarray(displacement, dtype=jnp.float64)
-    w1 = (rp / (1.0 + rp / a)) ** (-1.0 / 3.0)
-    w2 = a ** (-1.0 / 3.0)
-    d1 = d * w1 / (w1 + w2)
+    d1 = d * probe_share(a, rp)
     return d1, d - d1
 
 

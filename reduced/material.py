@@ -44,6 +44,7 @@ except ImportError:  # pragma: no cover
 
 __all__ = [
     "hertz_plate_f",
+    "probe_share",
     "fung_energy",
     "dW_dI1",
     "d2W_dI1",
@@ -99,6 +100,18 @@ def hertz_plate_f(x):
     x = xp.maximum(xp.asarray(x, dtype=float) if xp is np else x, 0.0)
     root = xp.sqrt(xp.where(x > 0, x, 1.0)) * (x > 0)
     return (32.0 / 3.0) * x * root
+
+
+def probe_share(radius, probe_radius):
+    """d_1 / delta: the probe-ball contact's share of the approach of a rigid sphere (radius ``probe_radius`` R_p)
+    pressed on a ball (``radius`` a0, ``inf`` for a half-space) that rests on a rigid plate, at small strain: two
+    Hertz contacts in series carry one force, so d_i ~ R_i^(-1/3) with R_1 = R_p a0 / (R_p + a0) (probe-ball) and
+    R_2 = a0 (ball-plate): d_1 / delta = R_1^(-1/3) / (R_1^(-1/3) + a0^(-1/3)) (``reduced.indentation`` derives
+    it; ``fem.indentation`` sizes its meshes with it). Any consistent length unit; NumPy or JAX by the input."""
+    xp = _xp(radius, probe_radius)
+    a = xp.asarray(radius, dtype=float) if xp is np else radius
+    w1 = (probe_radius / (1.0 + probe_radius / a)) ** (-1.0 / 3.0)
+    return w1 / (w1 + a ** (-1.0 / 3.0))
 
 
 def fung_energy(I1bar, C, alpha):

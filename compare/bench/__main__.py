@@ -14,10 +14,13 @@ SUITES = {
     "felupe": "tissuemech.compare.bench.felupe_side",
     "fem-time": "tissuemech.compare.bench.fem_time",
     "fem-gradient": "tissuemech.compare.bench.fem_gradient",
+    "fem-indentation": "tissuemech.compare.bench.fem_indentation",
     # checks run one by one (not part of "all")
     "acceptance": "tissuemech.compare.bench.acceptance",
     "stiff-kernel": "tissuemech.compare.bench.stiff_kernel",
 }
+
+SEPARATE = ("acceptance", "stiff-kernel", "fem-time", "fem-indentation", "fem-gradient")  # not part of "all"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -26,7 +29,7 @@ def main(argv: list[str] | None = None) -> int:
         print("usage: python -m tissuemech.compare.bench {" + ",".join(SUITES) + ",all} [options]")
         return 0
     name, rest = argv[0], argv[1:]
-    names = [n for n in SUITES if n not in ("acceptance", "stiff-kernel", "fem-time")] if name == "all" else [name]
+    names = [n for n in SUITES if n not in SEPARATE] if name == "all" else [name]
     for n in names:
         if n not in SUITES:
             print(f"error: unknown benchmark {n!r}; choose from {', '.join(SUITES)} or all", file=sys.stderr)

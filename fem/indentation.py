@@ -1,0 +1,550 @@
+r"""FE indentation: a rigid frictionless sphere pressed on the top of a Fung ball that rests on a rigid plate.
+
+:func:`indent` (``IndentationResult``). The ball of radius a0 sits on a rigid frictionless plate z = -a0; a
+rigid frictionless sphere of radius R_p (the AFM colloidal probe), centred on the axis at z = a0 + R_p -
+delta(t), moves down by the approach delta (the probe travel since first contact; the plate stays put). The
+scene is NOT symmetric about the midplane, so the whole meridian section R >= 0, -a0 <= Z <= a0 is meshed
+(``fem.mesh.full_ball_section``: an O-grid whose two pole blocks are refined independently, each with
+equal elements over its own contact zone and geometric growth beyond), u_r = 0 on the axis, nothing else
+fixed: the ball is held by its two contacts alone. Mixed Q2/P1-discontinuous elements, generalized Maxwell
+branches on S_iso (``fem.viscoelastic``), quasi-static time stepping (``fem.timestepping.march``).
+
+Contact is exact on both obstacles (no penalty): ``fem.contact.RigidSphere`` for the probe (its lower cap)
+and for the plate (a sphere of infinite radius below the body), solved together by
+``fem.contact.solve_obstacles`` (an active node lies on its obstacle, u_z following u_r along the surface;
+Signorini: gap >= 0, contact force >= 0, their product 0). ``contact="nodal"`` (default; time runs): node by
+node on one fixed mesh per run, sized from the largest approach of the run (its two Hertz contact radii) so that
+every level puts the same number of elements across each contact; the force carries the edge quantisation (a
+sawtooth in the approach: 3.3e-3 of F on level 1, 1.0e-3 on level 2). ``contact="fitted"`` (static states):
+every state on its own mesh whose two contact edges sit on nodes (:class:`FittedEdges`): smooth to 1e-6, observed
+order 3.5 under refinement (F at approach / (2 a0) = 0.005, R_p = a0: level 2 within 7e-5 of the Richardson
+limit, level 4 within 7e-6). Measured by ``python -m tissuemech.compare.bench.fem_indentation`` (``docs/afm.md``,
+"FE indentation").
+
+Inside, lengths are scaled by a0, stresses by C, forces by C a0^2 (``fem.problem.SceneProblem``).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import numpy as np
+
+from tissuemech.fem import viscoelastic as ve
+from tissuemech.fem.contact import ContactError, ObstacleSolution, RigidSphere, solve_obstacles
+from tissuemech.fem.forms import Material
+from tissuemech.fem.linalg import Symmetric
+from tissuemech.fem.mesh import AxiMesh, full_ball_section, surface_layers, zone_points
+from tissuemech.fem.newton import NewtonError
+from tissuemech.fem.problem import SPHEROID_MARGIN, SceneProblem, mesh_spec, roundoff_floor, secant
+from tissuemech.fem.stepping import TimedState
+from tissuemech.fem.timestepping import march, ramp_hold_schedule
+from tissuemech.reduced.material import probe_share, validate_branches, validate_material, validate_positive
+
+log = logging.getLogger(__name__)
+
+__all__ = [
+    "indent",
+    "IndentationResult",
+    "IndentProblem",
+    "FittedEdges",
+    "make_mesh",
+    "zone_mesh",
+    "hertz_split",
+    "LEVELS",
+    "MESHES",
+    "X_MIN",
+    "X_MAX",
+    "EDGE_TOL",
+]
+
+# level -> (n_zone, n_out, n_radial, n_equator): n_zone equal elements over each pole's contact zone (ZONE times
+# its Hertz contact radius at the largest approach), n_out growing ones to the end of the pole block (SPLIT),
+# n_radial layers in the curved blocks (the outermost DEPTH zone elements thick), 2 n_equator divisions of the
+# equator block. Levels 1..4 refine every count by about the same factor.
+LEVELS = {
+    0: (6, 5, 5, 4),
+    1: (10, 7, 7, 6),
+    2: (16, 10, 10, 8),
+    3: (24, 14, 14, 11),
+    4: (32, 18, 18, 14),
+}
+MESHES = {"coarse": 0, "default": 1, "fine": 2}
+SPLIT = np.radians(55.0)  # each pole block's arc, from its pole
+ZONE = 1.5  # the refined zone, in Hertz contact radii (the finite-strain contact is a few % larger)
+DEPTH = 2.0  # outermost radial layer, in zone elements
+FORCE_CHECK = 1e-6  # |F_probe - F_plate| / F
+X_MIN = 1e-5  # smallest final approach / (2 a0)
+X_MAX = 0.25  # largest approach / (2 a0)
+
+
+def hertz_split(delta: float, probe_radius: float) -> tuple[float, float, float, float]:
+    """(d_1, d_2, a_1, a_2): the small-strain two-Hertz-contacts split of the scaled approach ``delta`` (lengths /
+    a0) of a probe of scaled radius ``probe_radius`` on the unit ball resting on a plate: the probe-ball depth d_1
+    (effective radius R_1 = R_p / (1 + R_p)) and the ball-plate depth d_2 (radius 1) in proportion R_i^(-1/3)
+    (``reduced.material.probe_share``), and the contact radii a_i = sqrt(R_i d_i)."""
+    r1 = probe_radius / (1.0 + probe_radius)
+    d1 = delta * float(probe_share(1.0, probe_radius))
+    d2 = delta - d1
+    return d1, d2, float(np.sqrt(r1 * d1)), float(np.sqrt(d2))
+
+
+def make_mesh(mesh, radius: float, probe_radius: float, approach: float) -> AxiMesh:
+    """The full-section mesh of a level (``LEVELS``, or "coarse", "default", "fine") for the largest ``approach``
+    (m) of a probe of ``probe_radius`` (m) on a ball of ``radius`` (m): each pole block with ``n_zone`` equal
+    elements over ZONE times its Hertz contact radius (``hertz_split``)."""
+    level = mesh_spec(mesh, MESHES, "or a level 0..4")
+    if isinstance(level, (bool, np.bool_)) or not isinstance(level, (int, np.integer)) or int(level) not in LEVELS:
+        raise ValueError(f"mesh level must be an integer 0..4 (0 coarse, 1 default, 2 fine), got {mesh!r}")
+    _, _, a1, a2 = hertz_split(approach / radius, probe_radius / radius)
+    return zone_mesh(radius, int(level), min(ZONE * a1 / SPLIT, 0.8), min(ZONE * a2 / SPLIT, 0.8))
+
+
+def zone_mesh(radius: float, level: int, z_top: float, z_bot: float) -> AxiMesh:
+    """The level's full-section mesh (``LEVELS``) with its top / bottom pole block refined uniformly over the
+    fractions ``z_top`` / ``z_bot`` of its arc (``fem.mesh.zone_points``); every zone gives the same topology
+    and numbering."""
+    nz, no, nr, neq = LEVELS[level]
+    thick = 1.0 - 0.55 * np.sqrt(2) * np.cos(SPLIT)  # the pole blocks' thickness at the axis
+    depth = DEPTH * SPLIT * min(z_top, z_bot) / nz
+    return full_ball_section(
+        radius,
+        zone_points(nz, no, z_top),
+        zone_points(nz, no, z_bot),
+        surface_layers(nr, depth, thick),
+        n_equator=neq,
+        split_angle=SPLIT,
+        intorder=4,
+    )
+
+
+class IndentState(NamedTuple):
+    """A converged state (scaled: lengths / a0, stresses / C, forces / (C a0^2))."""
+
+    x: np.ndarray  # full unknown vector (u, q)
+    active: tuple[np.ndarray, ...]  # bool per candidate of (probe, plate)
+    visco: ve.MaxwellState  # branch stresses and S_iso after the step
+    delta: float  # scaled approach (probe travel / a0)
+    residual: np.ndarray  # full internal residual at x (the contact reactions)
+    passes: int  # active-set passes of the step
+
+
+class IndentProblem(SceneProblem):
+    """The scaled ball between the probe (above) and the plate (below) on one mesh.
+
+    ``IndentProblem(m, mat, probe_radius, beta, tau, rtol)``: the full-section mesh (scaled by a0), the scaled
+    material, the probe radius / a0, the Maxwell branches (beta_m, tau_m [s]) and Newton's relative tolerance.
+    ``probe`` and ``plate`` are ``fem.contact.RigidSphere`` obstacles on the surface nodes of the upper and the
+    lower half; ``centre`` the node at the ball's centre."""
+
+    def __init__(self, m: AxiMesh, mat: Material, probe_radius: float, beta, tau, rtol: float):
+        super().__init__(m, mat, "mixed", beta, tau)
+        X = m.X
+        outer = m.nodes["outer"]
+        self.rp = float(probe_radius)
+        self.probe = RigidSphere(X, outer[X[1, outer] > 1e-12], self.rp, above=True)
+        self.plate = RigidSphere(X, outer[X[1, outer] < -1e-12], np.inf, above=False)
+        self.centre = int(np.argmin(np.hypot(X[0], X[1])))
+        self.rtol = rtol
+        self.floor = roundoff_floor(mat.kappa, 1.0, SPHEROID_MARGIN)
+        r1 = self.rp / (1.0 + self.rp)
+        self.r_series = (r1 ** (-1.0 / 3.0) + 1.0) ** -3.0
+
+    def heights(self, delta: float) -> tuple[float, float]:
+        """(probe centre, plate) heights at the scaled approach delta."""
+        return 1.0 + self.rp - delta, -1.0
+
+    def initial(self) -> IndentState:
+        """The reference state: x = 0, the two poles touching."""
+        n = self.asm.ndof
+        a_p = np.zeros(self.probe.nodes.size, bool)
+        a_b = np.zeros(self.plate.nodes.size, bool)
+        a_p[0] = a_b[0] = True  # candidates are ordered from their pole outward
+        return IndentState(np.zeros(n), (a_p, a_b), self.maxwell_initial(), 0.0, np.zeros(n), 0)
+
+    def solve(self, s0: IndentState, d1: float, iso_scale, extra, guess, load, fixed: bool = False) -> ObstacleSolution:
+        """Equilibrium with exact contact at the scaled approach d1 from ``guess`` with the step's branch stresses."""
+        hp, hb = self.heights(d1)
+        fun = lambda x: self.asm.internal(x, self.mat, extra_S=extra, iso_scale=iso_scale, tangent="lazy")
+        res = lambda x: self.asm.internal(x, self.mat, extra_S=extra, iso_scale=iso_scale, tangent=False)[0]
+        ref = max(32.0 / 3.0 * np.sqrt(self.r_series) * max(d1, 1e-6) ** 1.5 * iso_scale, 1e-12)
+        return solve_obstacles(
+            fun,
+            guess,
+            [(self.probe, hp), (self.plate, hb)],
+            s0.active,
+            self.free,
+            load=load,
+            residual=res,
+            admissible=self.admissible,
+            ref_norm=ref,
+            rtol=self.rtol,
+            xtol=1e-9,
+            atol=self.floor,
+            max_iter=25,
+            linear=Symmetric(),
+            fixed=fixed,
+        )
+
+    def step(self, s0: IndentState, d1: float, dt: float | None, prev: IndentState | None, load: str):
+        """(state, Newton iterations) at the scaled approach d1 after a time step dt [s] (None: static)."""
+        iso_scale, extra = self.maxwell_factors(s0.visco, dt)
+        guess = s0.x
+        if prev is not None and abs(s0.delta - prev.delta) > 1e-14:
+            guess = secant(s0.x, prev.x, d1 - s0.delta, s0.delta - prev.delta)
+        sol = self.solve(s0, d1, iso_scale, extra, guess, load)
+        visco = self.maxwell_update(s0.visco, dt, sol.x)
+        return IndentState(sol.x, sol.active, visco, d1, sol.residual, sol.sets), sol.iterations
+
+    def observe(self, s: IndentState) -> dict[str, float]:
+        """Scaled observables of state s: probe and plate forces, contact radii (edge estimates and outermost
+        active nodes), the downward displacement of the ball's centre, the smallest gaps."""
+        hp, hb = self.heights(s.delta)
+        r = s.residual
+        rc_p, rn_p = self.probe.contact_radius(s.x, s.active[0], hp)
+        rc_b, rn_b = self.plate.contact_radius(s.x, s.active[1], hb)
+        return dict(
+            force=self.probe.axial_force(r, s.active[0]),
+            plate_force=self.plate.axial_force(r, s.active[1]),
+            contact_radius_probe=rc_p,
+            contact_radius_plate=rc_b,
+            contact_radius_probe_node=rn_p,
+            contact_radius_plate_node=rn_b,
+            centre_drop=-float(s.x[2 * self.centre + 1]),
+            min_gap=float(min(self.probe.gap(s.x, hp).min(), self.plate.gap(s.x, hb).min())),
+        )
+
+
+EDGE_TOL = 1e-6  # |N_edge| / F at a fitted contact edge (as the plates, fem.contact.EDGE_TOL)
+
+
+class FittedEdges:
+    """Static states whose two contact edges sit on surface nodes (one mesh per state, ``zone_mesh``).
+
+    On level L the edge node of each pole is the end of element k = round(n_zone / ZONE) of its zone; with the
+    surface nodes up to it on their obstacle and the rest free (a fixed active set), the edge node's multiplier
+    N_e falls through zero as the edge (its reference arc fraction e) moves out. A safeguarded secant per pole on
+    phi(e) = N_e / F (the poles couple weakly; both are updated from each joint solve) finds the state where the
+    Signorini conditions hold at both edges (N_e = 0 to ``tol``, the next gaps > 0): the force is then stationary
+    in the edge positions, a smooth function of the approach and of the mesh (no node-to-node jitter), as the
+    plates' ``fem.contact.EdgeSearch``."""
+
+    def __init__(self, radius: float, probe_radius: float, level: int, make: Callable[[AxiMesh], IndentProblem],
+                 tol: float = EDGE_TOL):  # fmt: skip
+        self.a0, self.level, self.make, self.tol = radius, level, make, tol
+        self.nz = LEVELS[level][0]
+        self.k = max(1, int(round(self.nz / ZONE)))
+        self.rp = probe_radius / radius
+        self.cache: dict[tuple[float, float], IndentProblem] = {}
+
+    def problem(self, e: tuple[float, float]) -> IndentProblem:
+        if e not in self.cache:
+            if len(self.cache) > 4:
+                self.cache.pop(next(iter(self.cache)))
+            zt, zb = (min(v * self.nz / self.k, 0.95) for v in e)
+            self.cache[e] = self.make(zone_mesh(self.a0, self.level, zt, zb))
+        return self.cache[e]
+
+    def state(self, prob: IndentProblem, d: float, guess: np.ndarray | None, load: str):
+        """(state, Newton iterations, (phi_top, phi_bot)) with the edge nodes as the last active ones."""
+        n_act = 2 * self.k + 1
+        acts = []
+        for ob in (prob.probe, prob.plate):
+            a = np.zeros(ob.nodes.size, bool)
+            a[:n_act] = True
+            acts.append(a)
+        s0 = prob.initial()._replace(active=tuple(acts))
+        X, n_u = prob.m.X, prob.asm.n_u
+        squeeze = np.zeros_like(s0.x)  # a uniform squeeze: admissible whatever the mesh
+        squeeze[0:n_u:2], squeeze[1:n_u:2] = 0.25 * d * X[0], -0.5 * d * (1.0 + X[1])
+        err: NewtonError | None = None
+        for x0 in (guess, squeeze):
+            if x0 is None or x0.shape != s0.x.shape:
+                continue
+            xi = x0
+            for ob, h, a in zip((prob.probe, prob.plate), prob.heights(d), acts):
+                xi = ob.impose(xi, h, a)
+            if prob.admissible(xi) is not None:
+                continue
+            try:
+                sol = prob.solve(s0, d, 1.0, None, x0, load, fixed=True)
+                break
+            except NewtonError as e:
+                err = e
+        else:
+            raise err if err is not None else NewtonError("no admissible initial guess", load=load)
+        phis = []
+        for ob, h, a in zip((prob.probe, prob.plate), prob.heights(d), sol.active):
+            N = ob.normal_force(sol.x, sol.residual, h)
+            F = max(float(N[a].sum()), 1e-300)
+            phi = float(N[n_act - 1]) / F
+            inner = float(np.min(N[max(n_act - 3, 0) : n_act - 1])) / F
+            if inner < 0:  # the last contact element lifts off in its middle: the zone is too large
+                phi = min(phi, inner)
+            g = ob.gap(sol.x, h)[n_act : n_act + 6]
+            if g.size and g.min() < -1e-9 * d:  # a free node beyond the edge penetrates: too small
+                phi = max(phi, -float(g.min()) / d)
+            phis.append(phi)
+        st = IndentState(sol.x, sol.active, prob.maxwell_initial(), d, sol.residual, 1)
+        return st, sol.iterations, phis
+
+    def solve(self, d: float, e0: tuple[float, float] | None, x0: np.ndarray | None, load: str):
+        """(problem, state, edges, Newton iterations, solves) at the scaled approach d."""
+        if e0 is None:
+            _, _, a1, a2 = hertz_split(d, self.rp)
+            e0 = (a1 / SPLIT, a2 / SPLIT)
+        e = [float(v) for v in e0]
+        lo, hi = [1e-5, 1e-5], [0.9, 0.9]
+        last: list[tuple[float, float] | None] = [None, None]
+        its, x = 0, x0
+        for n in range(1, 31):
+            prob = self.problem((e[0], e[1]))
+            st, it, phi = self.state(prob, d, x, load)
+            its, x = its + it, st.x
+            if max(abs(p) for p in phi) < self.tol:
+                return prob, st, (e[0], e[1]), its, n
+            new = []
+            for i in range(2):
+                if phi[i] > 0:
+                    lo[i] = max(lo[i], e[i])
+                else:
+                    hi[i] = min(hi[i], e[i])
+                prev = last[i]
+                if abs(phi[i]) < self.tol:
+                    cand = e[i]
+                elif prev is None or prev[1] == phi[i] or prev[0] == e[i]:
+                    cand = e[i] * (1.0 + 0.03 * np.sign(phi[i]))
+                else:  # secant in ln(e)
+                    le, lp = np.log(e[i]), np.log(prev[0])
+                    cand = float(np.exp(le - phi[i] * (le - lp) / (phi[i] - prev[1])))
+                if not lo[i] < cand < hi[i] and abs(phi[i]) >= self.tol:
+                    cand = float(np.sqrt(lo[i] * hi[i]))
+                last[i] = (e[i], phi[i])
+                new.append(cand)
+            e = new
+        raise ContactError(
+            "the fitted contact edges did not settle in 30 solves", load=load, hint="use contact='nodal'"
+        )
+
+
+@dataclass
+class IndentationResult:
+    """:func:`indent`'s result, one entry per converged step (SI: s, m, N).
+
+    ``time`` (s; static runs: the load fraction), ``approach`` (probe travel since first contact, m), ``force``
+    (the axial force on the probe, N), ``plate_force`` (on the plate, N; equal to ``force`` to 1e-6),
+    ``contact_radius_probe`` / ``contact_radius_plate`` (deformed contact radii, m: edge estimates between the
+    outermost active node and the next from the gaps of the next free nodes), ``..._node`` (the outermost active
+    node, m), ``centre_drop`` (downward displacement of the ball's centre, m: the ball-plate share of the
+    approach in the Hertz picture), ``min_gap`` (m), ``newton_iterations``, ``contact_passes``, ``wall_time``
+    (s); ``mesh``, ``static``, ``parameters``."""
+
+    time: np.ndarray
+    approach: np.ndarray
+    force: np.ndarray
+    plate_force: np.ndarray
+    contact_radius_probe: np.ndarray
+    contact_radius_plate: np.ndarray
+    contact_radius_probe_node: np.ndarray
+    contact_radius_plate_node: np.ndarray
+    centre_drop: np.ndarray
+    min_gap: np.ndarray
+    newton_iterations: np.ndarray
+    contact_passes: np.ndarray
+    wall_time: np.ndarray
+    mesh: AxiMesh
+    static: bool
+    parameters: dict = field(default_factory=dict)
+
+
+def indent(
+    *,
+    radius: float,
+    probe_radius: float,
+    C: float,
+    alpha: float,
+    branches: Sequence = (),
+    displacement: float | Callable[[float], float],
+    ramp_time: float | None = None,
+    end_time: float | None = None,
+    kappa: float = 2.2e9,
+    mesh: str | int = "default",
+    contact: str = "nodal",
+    static: bool = False,
+    n_ramp: int | None = None,
+    n_hold: int | None = None,
+    n_static: int | None = None,
+    rtol: float = 1e-10,
+) -> IndentationResult:
+    """Press a rigid frictionless sphere on the top of the Fung ball resting on a rigid frictionless plate.
+
+    Every converged step is an equilibrium with exact contact on the probe and on the plate (module doc) and the
+    Maxwell branch stresses of its time step.
+
+    Args:
+        radius: the ball's radius a0 (m).
+        probe_radius: the probe's radius R_p (m).
+        C: Fung stiffness of the relaxed (long-time) material (Pa).
+        alpha: Fung exponent (dimensionless).
+        branches: [(beta_m, tau_m), ...]: energy factors (dimensionless) and relaxation times (s); () elastic.
+        displacement: the approach delta (m; X_MIN <= delta / (2 a0) <= X_MAX) reached at ``ramp_time`` by a
+            linear ramp and then held to ``end_time``; or a callable delta(t) (m, t in s, delta(0) = 0; each step
+            then moves the probe by at most a sixth of the history's largest value, halving steps until it does).
+        ramp_time: end of the ramp (s; ignored when ``static``).
+        end_time: end of the hold (s; ignored when ``static``).
+        kappa: bulk modulus (Pa).
+        mesh: "coarse", "default", "fine" or a level 0..4 (``LEVELS``): one fixed mesh sized for the run's
+            largest approach (``make_mesh``), node-by-node contact.
+        contact: "nodal" (default: one mesh, node-by-node contact, the force carries the edge quantisation) or
+            "fitted" (``static=True`` only: every state on its own mesh whose two contact edges sit on nodes,
+            ``FittedEdges``; the force is then a smooth function of the approach and of the mesh).
+        static: equilibrium states from 0 to ``displacement`` (F_eq(delta); branches and times ignored);
+            ``time`` then holds the load fraction.
+        n_ramp, n_hold, n_static: ramp steps (default 6), geometric hold steps (default 20), static states
+            (default 8).
+        rtol: Newton's relative residual tolerance.
+
+    Returns:
+        ``IndentationResult``.
+
+    Raises:
+        ValueError: an input out of range (the message names the quantity and its unit).
+        NewtonError: a step did not converge after its cut-backs (``ContactError``: the active set did not
+            settle); the message names the step.
+        RuntimeError: the probe and plate forces differ by more than 1e-6 (relative): equilibrium not reached.
+    """
+    validate_positive("radius (the ball radius a0)", radius, "m")
+    validate_positive("probe_radius (the radius of the spherical probe)", probe_radius, "m")
+    validate_material(C, alpha, kappa)
+    br = () if static else validate_branches(branches)
+    beta = np.array([float(b) for b, _ in br])
+    tau = np.array([float(t) for _, t in br])
+    a0, rp, C = float(radius), float(probe_radius), float(C)
+    if not static:
+        if ramp_time is None or end_time is None:
+            raise ValueError("ramp_time and end_time (s) are needed unless static=True")
+        validate_positive("ramp_time", ramp_time, "s")
+        validate_positive("end_time", end_time, "s")
+        if end_time < ramp_time:
+            raise ValueError(f"end_time ({end_time} s) must be >= ramp_time ({ramp_time} s)")
+    if callable(displacement):
+        if static:
+            raise ValueError("static=True needs the final approach as a number (m), not a function of time")
+        assert ramp_time is not None and end_time is not None
+        d0 = float(displacement(0.0))
+        if abs(d0) > 1e-9 * a0:
+            raise ValueError(f"the displacement history must start at 0 (delta(0) = {d0:g} m)")
+        d_max = max(float(displacement(t)) for t in np.linspace(0.0, float(end_time), 201))
+        delta_fn = displacement
+    else:
+        validate_positive("displacement (the approach of the probe)", displacement, "m")
+        d_max = float(displacement)
+        tr = float(ramp_time) if ramp_time is not None else 1.0
+        delta_fn = lambda t: d_max * min(float(t) / tr, 1.0)
+    x_max = d_max / (2 * a0)
+    if not X_MIN <= x_max <= X_MAX:
+        raise ValueError(
+            f"the largest approach {d_max:g} m is {x_max:.3g} of the ball's diameter {2 * a0:g} m; the FE indentation "
+            f"covers {X_MIN:g} to {X_MAX:g} of it (check the units: m)"
+        )
+    d1_max = hertz_split(d_max / a0, rp / a0)[0] * a0
+    if d1_max > 0.5 * rp / (1 + rp / a0):
+        raise ValueError(
+            f"displacement {d_max:g} m pushes the probe (radius {rp:g} m) about {d1_max:g} m into the ball, more than "
+            "half its effective radius R_p a0 / (R_p + a0): beyond the contacts this scene resolves"
+        )
+    if contact not in ("nodal", "fitted"):
+        raise ValueError(f"contact must be 'nodal' or 'fitted', got {contact!r}")
+    if contact == "fitted" and not static:
+        raise ValueError("contact='fitted' (a mesh per state, its edges on nodes) needs static=True")
+    m = make_mesh(mesh, a0, rp, d_max)
+    mat = Material(1.0, float(alpha), float(kappa) / C)
+    prob = IndentProblem(m, mat, rp / a0, beta, tau, rtol)
+    too_large = None
+    if static:
+        n = n_static or 8
+        times = np.linspace(0.0, 1.0, n + 1)[1:]
+        dfun: Callable[[float], float] = lambda t: d_max * t
+    else:
+        assert ramp_time is not None and end_time is not None
+        times = ramp_hold_schedule(float(ramp_time), float(end_time), n_ramp=n_ramp or 6, n_hold=n_hold or 20)
+        dfun = delta_fn
+        if callable(displacement):
+            dd = d_max / (n_ramp or 6)
+            too_large = lambda t0, t1: abs(float(delta_fn(t1)) - float(delta_fn(t0))) > dd * (1 + 1e-12)
+
+    def dscaled(t: float) -> float:
+        d = float(dfun(t))
+        if not np.isfinite(d) or d < 0 or d > 2 * X_MAX * a0:
+            raise ValueError(f"the approach delta(t = {t:g} s) = {d!r} m must be finite, >= 0 and <= {2 * X_MAX} a0")
+        return d / a0
+
+    def load_of(t: float) -> str:
+        return f"delta = {dfun(t) * 1e6:.4g} um" if static else f"t = {t:.6g} s, delta = {dfun(t) * 1e6:.4g} um"
+
+    def step(t0: float, old: IndentState, t1: float, prev: TimedState[IndentState] | None):
+        p = prev.state if prev is not None else None
+        return prob.step(old, dscaled(t1), None if static else t1 - t0, p, load_of(t1))
+
+    runs: list[tuple[float, IndentProblem, IndentState, int, float]] = []  # (time, problem, state, its, wall)
+    if contact == "fitted":
+        fit = FittedEdges(a0, rp, int(mesh_spec(mesh, MESHES, "or a level 0..4")), lambda mm: IndentProblem(
+            mm, mat, rp / a0, beta, tau, rtol))  # fmt: skip
+        e_prev: tuple[float, float] | None = None
+        d_prev, x_prev = 0.0, None
+        for t in times:
+            w0 = time.perf_counter()
+            d = dscaled(t)
+            e0: tuple[float, float] | None = None
+            if e_prev is not None:  # the edges grow like sqrt(delta)
+                e0 = (e_prev[0] * np.sqrt(d / d_prev), e_prev[1] * np.sqrt(d / d_prev))
+            pb, st_f, e_prev, its, _ = fit.solve(d, e0, x_prev, load_of(t))
+            d_prev, x_prev = d, st_f.x
+            runs.append((float(t), pb, st_f, its, time.perf_counter() - w0))
+        m = runs[-1][1].m
+    else:
+        for st in march(step, prob.initial(), times, too_large=too_large):
+            runs.append((st.time, prob, st.state, st.newton_iterations, st.wall_time))
+    L2 = C * a0**2
+    cols: dict[str, list] = {}
+    for t_k, pb, state, its, wall in runs:
+        ob = pb.observe(state)
+        F, Fb = ob["force"], ob["plate_force"]
+        if F > 0 and abs(F - Fb) > FORCE_CHECK * abs(F) + 1e3 * pb.floor:
+            raise RuntimeError(
+                f"probe force {F * L2:.6g} N and plate force {Fb * L2:.6g} N differ by {abs(F - Fb) / F:.2e} "
+                f"(relative) at t = {t_k:.6g} s: equilibrium not reached. Hint: tighten rtol"
+            )
+        row = dict(
+            time=t_k,
+            approach=state.delta * a0,
+            newton_iterations=its,
+            contact_passes=state.passes,
+            wall_time=wall,
+        )
+        for k, v in ob.items():
+            row[k] = v * (L2 if k.endswith("force") else a0)
+        for k, v in row.items():
+            cols.setdefault(k, []).append(v)
+    arrays = {k: np.array(v) for k, v in cols.items()}
+    return IndentationResult(
+        **arrays,
+        mesh=m,
+        static=bool(static),
+        parameters=dict(
+            radius=a0,
+            probe_radius=rp,
+            C=C,
+            alpha=float(alpha),
+            kappa=float(kappa),
+            branches=tuple((float(b), float(t)) for b, t in br),
+            ramp_time=None if static else float(ramp_time),  # type: ignore[arg-type]
+            end_time=None if static else float(end_time),  # type: ignore[arg-type]
+            mesh=mesh,
+            contact=contact,
+        ),
+    )

@@ -1,0 +1,189 @@
+"""FE indentation (fem.indentation): a rigid sphere on a Fung ball resting on a plate, against its limits."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from tissuemech.fem.contact import RigidSphere, congruence
+from tissuemech.fem.indentation import indent
+from tissuemech.fem.mesh import full_ball_section, surface_layers, zone_points
+from tissuemech.reduced import indentation as ri
+from tissuemech.reduced import spheroid
+
+A0, C = 100e-6, 100.0
+
+
+def _static(x, probe_radius=A0, level=1, alpha=0.0, n_static=1, contact="fitted"):
+    return indent(
+        radius=A0, probe_radius=probe_radius, C=C, alpha=alpha, displacement=2 * A0 * x, static=True, mesh=level,
+        n_static=n_static, contact=contact,
+    )  # fmt: skip
+
+
+def _series(r, probe_radius=A0):
+    return np.asarray(ri.equilibrium_force(r.approach, radius=A0, probe_radius=probe_radius, C=C))
+
+
+def test_full_section_mesh_is_the_whole_ball():
+    m = full_ball_section(1.0, zone_points(6, 5, 0.1), zone_points(6, 5, 0.3), surface_layers(5, 0.05, 0.55))
+    X = m.X
+    assert m.nodes["symmetry"].size == 0
+    assert np.allclose(np.hypot(*X[:, m.nodes["outer"]]), 1.0)
+    assert X[1].min() == pytest.approx(-1.0) and X[1].max() == pytest.approx(1.0)
+    R, Z = X[:, m.nodes["axis"]]
+    assert np.all(R == 0) and Z.min() == pytest.approx(-1) and Z.max() == pytest.approx(1)
+    # independent refinement of the poles: the first surface node off each pole at its own zone spacing
+    top = m.nodes["outer"][X[1, m.nodes["outer"]] > 0]
+    bot = m.nodes["outer"][X[1, m.nodes["outer"]] < 0]
+    assert np.sort(X[0, top])[1] < np.sort(X[0, bot])[1]
+
+
+def test_rigid_sphere_puts_active_nodes_on_the_sphere():
+    X = np.array([[0.0, 0.1, 0.2, 0.3], [1.0, 0.99, 0.97, 0.95]])
+    probe = RigidSphere(X, np.arange(4), radius=0.5, above=True)
+    x = np.zeros(8)
+    x[2 * np.arange(4)] = 0.01  # some radial motion
+    h = 1.5 - 0.02  # the centre: the probe 0.02 into the pole
+    act = np.array([True, True, False, False])
+    y = probe.impose(x, h, act)
+    assert np.allclose(probe.gap(y, h)[act], 0.0, atol=1e-14)
+    assert probe.gap(x, h)[0] < 0  # the undeformed pole penetrates
+    n = probe.normals(y, h)
+    assert np.allclose(np.hypot(*n), 1.0) and np.all(n[1, act] < 0)  # into the body: downward
+
+
+def test_congruence_is_the_transformed_tangent():
+    rng = np.random.default_rng(1)
+    A = (rng.random((5, 5)) < 0.5).astype(float)
+    A = A + A.T + np.eye(5)
+    K = np.kron(A > 0, np.ones((2, 2))) * rng.random((10, 10))
+    K = sp.csr_matrix(K + K.T)
+    rows, cols, s = np.array([1, 5]), np.array([0, 4]), np.array([0.3, -0.7])
+    T = np.eye(10)
+    T[rows, cols] = s
+    M = congruence(K, rows, cols, s)
+    assert M is not None and M.nnz == K.nnz  # the pattern kept (explicit zeros too)
+    assert np.allclose(M.toarray(), T.T @ K.toarray() @ T, atol=1e-15)
+
+
+@pytest.fixture(scope="module")
+def small():
+    """x = 0.0005, R_p = a0, level 1, fitted contact edges."""
+    return _static(0.0005)
+
+
+def test_small_approach_obeys_two_contacts_in_series(small):
+    """x = 0.0005: the FE force within 1 % of the series Hertz law (the finite-strain deviation is ~0.24
+    sqrt(x)); the ball's centre drops by the plate contact's share of the approach (d_2 / delta = 1 / (1 +
+    2^(1/3)) for R_p = a0) to 1 %; both contacts carry the same force."""
+    r = small
+    q = r.force[-1] / _series(r)[-1]
+    assert q == pytest.approx(1.0, abs=0.01)
+    assert r.parameters["contact"] == "fitted"
+    d1, d2 = ri.contact_depths(r.approach[-1], radius=A0, probe_radius=A0)
+    assert r.centre_drop[-1] / r.approach[-1] == pytest.approx(float(d2) / r.approach[-1], rel=0.01)
+    assert np.allclose(r.force, r.plate_force, rtol=1e-6)
+    # the contact radii: Hertz a_i = sqrt(R_i d_i) to a few % (finite strain widens them)
+    assert r.contact_radius_probe[-1] == pytest.approx(np.sqrt(A0 / 2 * float(d1)), rel=0.06)
+    assert r.contact_radius_plate[-1] == pytest.approx(np.sqrt(A0 * float(d2)), rel=0.06)
+
+
+def test_finite_strain_stiffens_like_the_plates(small):
+    """x = 0.005: the FE is 1.5-2 % stiffer than the small-strain law (1.66 % converged; the plates' converged
+    table: 2.25 %), and the deviation grows with the approach."""
+    r = _static(0.005)
+    q = r.force[-1] / _series(r)[-1]
+    assert 1.012 < q < 1.025
+    assert q - 1 > 1.5 * (small.force[-1] / _series(small)[-1] - 1)
+
+
+def _plates_ratio(r):
+    """(F / F_Hertz) / (the plates' converged FE table / their Hertz law) at r's last approach."""
+    d = r.approach[-1]
+    table = float(spheroid.equilibrium_force(d, radius=A0, C=C, alpha=0.0))
+    return r.force[-1] / _series(r, 1000 * A0)[-1] / (table / float(spheroid.hertz_force(d, radius=A0, C=C)))
+
+
+def test_flat_probe_is_the_plate_scene():
+    """R_p = 1000 a0: the probe is (nearly) a plate; its deviation from Hertz is the plates' converged FE table's
+    to 3e-4 on level 1 (1.7e-4 measured; level 2: 3.5e-5), node-by-node contact to 2e-3."""
+    assert _plates_ratio(_static(0.005, probe_radius=1000 * A0)) == pytest.approx(1.0, abs=3e-4)
+    r = _static(0.005, probe_radius=1000 * A0, contact="nodal", n_static=3)
+    assert _plates_ratio(r) == pytest.approx(1.0, abs=2e-3)
+
+
+def test_fitted_edges_remove_the_quantisation():
+    """States 1/8 apart on one nodal mesh scatter about a smooth curve by ~1e-3; fitted edges are smooth to 1e-5."""
+    for contact, tol in (("fitted", 1e-5), ("nodal", 1e-2)):
+        r = _static(0.005, n_static=8, contact=contact)
+        x = r.approach[3:] / (2 * A0)
+        q = r.force[3:] / _series(r)[3:]
+        B = np.stack([np.ones_like(x), np.sqrt(x), x], 1)
+        resid = q - B @ np.linalg.lstsq(B, q, rcond=None)[0]
+        assert np.abs(resid).max() < tol
+        if contact == "nodal":
+            assert np.abs(resid).max() > 1e-4
+
+
+def test_ramp_hold_relaxes_to_the_static_force():
+    """One branch (beta = 1): a ramp 100x faster than tau gives ~(1 + beta) F_eq, the hold relaxes to F_eq
+    (the same mesh: sized by the same largest approach); a callable ramp gives the same forces."""
+    kw = dict(radius=A0, probe_radius=A0, C=C, alpha=0.0, mesh=0)
+    d = 2 * A0 * 0.002
+    F_eq = indent(**kw, displacement=d, static=True, n_static=3).force[-1]
+    r = indent(**kw, displacement=d, branches=[(1.0, 1.0)], ramp_time=0.01, end_time=40.0, n_ramp=3, n_hold=10)
+    k = int(np.argmin(abs(r.time - 0.01)))
+    assert r.force[k] / (2 * F_eq) == pytest.approx(0.995, abs=0.004)
+    assert r.force[-1] / F_eq == pytest.approx(1.0, abs=1e-6)
+    rc = indent(
+        **kw, displacement=lambda t: d * min(t / 0.01, 1.0), branches=[(1.0, 1.0)], ramp_time=0.01, end_time=40.0,
+        n_ramp=3, n_hold=10,
+    )  # fmt: skip
+    assert np.allclose(rc.force, r.force, rtol=1e-8)
+    assert r.parameters["branches"] == ((1.0, 1.0),)
+
+
+@pytest.mark.slow
+def test_half_space_limit():
+    """A small probe (R_p = a0 / 20): the force follows the series law to 1 % and the probe contact alone
+    (depth = approach - the centre's drop) follows the half-space Hertz law (4/3) E* sqrt(R_1) d_1^1.5 to 1 %."""
+    rp = A0 / 20
+    r = _static(0.0005, probe_radius=rp)
+    assert r.force[-1] / _series(r, rp)[-1] == pytest.approx(1.0, abs=0.01)
+    d1 = r.approach[-1] - r.centre_drop[-1]
+    r1 = rp * A0 / (rp + A0)
+    assert r.force[-1] / (32 / 3 * C * np.sqrt(r1) * d1**1.5) == pytest.approx(1.0, abs=0.01)
+
+
+@pytest.mark.slow
+def test_refinement_converges():
+    """x = 0.005, R_p = a0, fitted edges: F decreases monotonically over levels 0, 1, 2 with shrinking changes
+    (3.6e-4, 2.2e-4 measured; the converged F / F_Hertz is 1.016616, level 2 7e-5 above it), and the flat probe
+    meets the plates' table to 1e-4 on level 2."""
+    q = [_static(0.005, level=lev).force[-1] for lev in (0, 1, 2)]
+    assert q[0] > q[1] > q[2]
+    assert 0 < q[1] - q[2] < q[0] - q[1] < 5e-4 * q[2]
+    assert _plates_ratio(_static(0.005, probe_radius=1000 * A0, level=2)) == pytest.approx(1.0, abs=1e-4)
+
+
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        (dict(probe_radius=-1e-6), "probe_radius"),
+        (dict(displacement=1e-12), "diameter"),
+        (dict(displacement=60e-6), "diameter"),
+        (dict(static=False), "ramp_time"),
+        (dict(displacement=lambda t: 1e-6 * t), "static=True needs"),
+        (dict(mesh="huge"), "mesh"),
+        (dict(contact="fitted", static=False, ramp_time=1.0, end_time=2.0), "static=True"),
+        (dict(contact="penalty"), "contact"),
+        (dict(probe_radius=1e-6, displacement=4e-6), "effective radius"),
+    ],
+)
+def test_bad_inputs(kw, match):
+    base = dict(radius=A0, probe_radius=A0, C=C, alpha=0.0, displacement=1e-6, static=True)
+    base.update(kw)
+    with pytest.raises(ValueError, match=match):
+        indent(**base)
