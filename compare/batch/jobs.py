@@ -233,12 +233,14 @@ def collect(points: Sequence[dict], store: str | os.PathLike, function: Callable
     if folder.exists() and not folder.is_dir():
         raise StoreError(f"store {folder} exists and is not a folder")
     rows = []
+    present = False  # a file under one of these points' keys (a damaged one too): the function is the right one
     for p in points:
         key = point_key(function, p)
         f = folder / f"{key}.npz"
         row: dict[str, Any] = dict(p)
         r = None
         if f.exists():
+            present = True
             try:
                 r = load(f, key=key)
             except CorruptResultError as exc:
@@ -250,7 +252,7 @@ def collect(points: Sequence[dict], store: str | os.PathLike, function: Callable
                     row[k] = v.item() if hasattr(v, "item") else v
         rows.append(row)
     table = pd.DataFrame(rows)
-    if rows and not table["stored"].any() and folder.is_dir():
+    if rows and not present and folder.is_dir():
         held = describe(folder)
         if held:
             what = ", ".join(f"{n} result{'s' if n > 1 else ''} of {name}" for name, n in held.items())
