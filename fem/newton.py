@@ -232,8 +232,13 @@ def newton(
     solver: Callable | None = None,
     factor: Callable | None = None,
     keep: KeptFactor | None = None,
+    stagnation: bool = False,
 ) -> NewtonResult:
     """Solve fun(x)[0] = 0 from x0 (see the module docstring); returns a :class:`NewtonResult`.
+
+    ``stagnation``: also accept a state whose residual met the tolerance in two successive full Newton steps while
+    the correction stopped shrinking (not below half the previous one): the corrections are then round-off of an
+    ill-conditioned tangent (a very thin shell), not progress, and the step test on them could never pass.
 
     Raises:
         NewtonError: no convergence (the message names ``load`` and gives the residual history and a hint).
@@ -246,7 +251,7 @@ def newton(
     solver, factor, keep = lin.solve, lin.factor, lin.kept
     opts = dict(free=free, ref_norm=ref_norm, rtol=rtol, xtol=xtol, max_iter=max_iter, admissible=admissible)
     opts.update(load=load, max_backtracks=max_backtracks, growth=growth, atol=atol, solver=solver, factor=factor)
-    opts.update(diverging_after=diverging_after)
+    opts.update(diverging_after=diverging_after, stagnation=stagnation)
     if keep is None:
         return _newton(fun, x0, keep=None, **opts)
     keep.age += 1
@@ -265,7 +270,7 @@ def newton(
 
 
 def _newton(fun, x0, *, free, ref_norm, rtol, xtol, max_iter, admissible, load, max_backtracks, growth, atol,
-            solver, factor, keep, diverging_after) -> NewtonResult:  # fmt: skip
+            solver, factor, keep, diverging_after, stagnation=False) -> NewtonResult:  # fmt: skip
     x = np.array(x0, dtype=float)
     sub = None if free is None else np.asarray(free)
     free = np.arange(x.size) if free is None else np.asarray(free)
@@ -360,11 +365,13 @@ def _newton(fun, x0, *, free, ref_norm, rtol, xtol, max_iter, admissible, load, 
             raise _Astray("the residual rose after quasi-Newton steps", load=load, residuals=res + [rn])
         x, r, K = xt, rt, Kt
         res.append(rn)
-        last_dx = step * float(np.linalg.norm(dx))
+        prev_dx, last_dx = last_dx, step * float(np.linalg.norm(dx))
         if step != 1.0:
             kept = None  # a cut step: keep full Newton iterations until the residual has converged again
         if rn <= tol and last_dx <= xtol * (1.0 + np.linalg.norm(x[free])):
             return NewtonResult(x, it, res)
+        if stagnation and step == 1.0 and rn <= tol and res[-2] <= tol and last_dx >= 0.5 * prev_dx:
+            return NewtonResult(x, it, res)  # the residual is converged; the corrections are round-off
         if diverging_after is not None and len(res) > diverging_after and min(res[-3:]) > res[0]:
             raise NewtonError(
                 f"diverging: after {len(res) - 1} iterations the last three residuals all exceed the initial one",

@@ -222,26 +222,51 @@ def write_pvd(path: str | os.PathLike, mesh, frames: Sequence[Frame], *, deforme
     those names are overwritten), referenced by relative names, each with its frame's ``time`` as
     ParaView's time value. Points: the mesh dofs in reference (``deformed=False``) or deformed
     coordinates (m); see the module docstring for the fields. Returns [pvd, vtu_0, vtu_1, ...].
-    Raises ValueError for a path without the .pvd suffix or an empty list of frames.
+    Each file is written to a temporary name and renamed: a failed write (a full disk) leaves no truncated file.
+    Raises ValueError for a path without the .pvd suffix or an empty list of frames, OSError naming the file for a
+    failed write.
     """
     p = Path(path)
     if p.suffix.lower() != ".pvd":
         raise ValueError(f"the time-series path must end in .pvd, got {str(path)!r}")
     if not len(frames):
         raise ValueError("no states to write (frames is empty)")
-    p.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        p.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OSError(exc.errno, exc.strerror or str(exc), str(p.parent)) from None
     root = ET.Element("VTKFile", type="Collection", version="0.1", byte_order="LittleEndian")
     coll = ET.SubElement(root, "Collection")
     written = [p]
     for k, fr in enumerate(frames):
         vtu = p.with_name(f"{p.stem}_{k:04d}.vtu")
-        _frame_mesh(mesh, fr, deformed).write(vtu)
-        _add_field_data(vtu, {**fr.field_data, "time": fr.time, "step": k})
+        frame_mesh = _frame_mesh(mesh, fr, deformed)
+
+        def write_vtu_file(tmp: Path, fr=fr, k=k, frame_mesh=frame_mesh) -> None:
+            frame_mesh.write(tmp, file_format="vtu")
+            _add_field_data(tmp, {**fr.field_data, "time": fr.time, "step": k})
+
+        _atomic_write(vtu, write_vtu_file)
         ET.SubElement(coll, "DataSet", timestep=repr(float(fr.time)), group="", part="0", file=vtu.name)
         written.append(vtu)
     ET.indent(root)
-    ET.ElementTree(root).write(p, xml_declaration=True, encoding="utf-8")
+    _atomic_write(p, lambda tmp: ET.ElementTree(root).write(tmp, xml_declaration=True, encoding="utf-8"))
     return written
+
+
+def _atomic_write(path: Path, write) -> None:
+    """``write(tmp)`` to a temporary file beside ``path``, then renamed to it: a failed write (a full disk) leaves
+    no truncated ``path`` (an existing one stays as it was). An OSError names ``path`` (its ``filename`` too)."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.part")
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from None
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def read_pvd(path: str | os.PathLike) -> list[tuple[float, Path]]:

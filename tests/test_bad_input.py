@@ -85,6 +85,29 @@ def _fem_compress(**over):
 
 ramp50 = lambda t: 50e-6 * jnp.minimum(t / 0.2, 1.0)
 
+# a relaxation record (issue 41's fit cases fail on their inputs, before any fitting)
+T41 = np.concatenate([np.linspace(0.02, 0.2, 10), np.geomspace(0.25, 100.0, 40)])
+S41 = 100.0 * (1.0 + np.minimum(T41 / 0.2, 1.0)) * (0.6 + 0.4 * np.exp(-T41 / 20.0))
+
+
+def _relax(t=T41, d=50e-6, **over):
+    return lambda: fit.relaxation([(t, S41, d)], radius=500e-6, ramp_time=0.2, **over)
+
+
+def _design(fn, *args, **kw_):
+    from tissuemech.compare.fit import design
+
+    return lambda: getattr(design, fn)(*args, **kw_)
+
+
+def _protocol(**over):
+    from tissuemech.compare.fit.design import Protocol
+
+    return Protocol(**over)
+
+
+DESIGN_TRUTH = dict(C=150.0, alpha=0.2, beta=0.4, tau=200.0)
+
 E = ValueError
 # (name, call, exception, pattern): a message that names its quantity names it FIRST, so the pattern is anchored
 # there (an unanchored "t" or "n" also matched numpy's own "could not convert string to float: 'a'", which
@@ -334,6 +357,45 @@ CASES = [
     ("batch executor", lambda: batch.run(abs, [dict(x=1)], executor="cloud", progress=False), E, r"^executor\b"),
     ("batch points", lambda: batch.run(abs, 5, executor="serial", progress=False), E, r"^points\b"),
     ("batch function", lambda: batch.run(3, [dict(x=1)], executor="serial", progress=False), E, r"^function\b"),
+    # ---- issue 41: readers bounded, local files only
+    ("read_table device", lambda: fit.read_table("/dev/zero"), E, r"^/dev/zero: not a regular file"),
+    ("read_points device", lambda: batch.read_points("/dev/zero"), E, r"^points table /dev/zero: not a regular"),
+    ("read_points url", lambda: batch.read_points("https://example.org/p.csv"), E, r"^points table https://.*URL"),
+    ("read_points file url", lambda: batch.read_points("file:///etc/hostname"), E, r"^points table file://.*URL"),
+    # ---- issue 41: fit.relaxation
+    ("relaxation boolean times", _relax(t=T41 > 1.0), E, r"^record 0: time must be numbers \(s\); got booleans"),
+    ("relaxation initial misspelt", _relax(initial={"CC": 100.0}), E, r"^initial: unknown .*'CC'.*'alpha'"),
+    ("relaxation hertz 99.8 %", _relax(d=998e-6, equilibrium="hertz"), E, r"^equilibrium='hertz' at an approach"),
+    # ---- issue 41: compare.fit.design (truths, candidate levels)
+    ("design truth missing", _design("predict", _protocol(), dict(C=150.0)), E, r"^truth needs .*missing"),
+    ("design truth unknown", _design("predict", _protocol(), dict(DESIGN_TRUTH, CC=1.0)), E, r"^truth .*unknown"),
+    ("design truth None", _design("recommend", truth=None), E, r"^truth must be a dict"),
+    ("design truth C negative", _design("predict", _protocol(), dict(DESIGN_TRUTH, C=-1.0)), E, r"^truth C \(Pa\)"),
+    ("design truth alpha nan", _design("predict", _protocol(), kw(DESIGN_TRUTH, alpha=np.nan)), E, r"^truth alpha"),
+    ("design truth beta zero", _design("predict", _protocol(), kw(DESIGN_TRUTH, beta=0.0)), E, r"^truth beta"),
+    (
+        "design truth alpha beyond table",
+        _design("predict", _protocol(), kw(DESIGN_TRUTH, alpha=3.0)),
+        E,
+        r"^truth alpha",
+    ),
+    (
+        "design level beyond table",
+        _design("predict", _protocol(levels=(50e-6, 450e-6))),
+        E,
+        r"^compression level 450 um",
+    ),
+    (
+        "design level beyond diameter",
+        _design("predict", _protocol(levels=(1200e-6,))),
+        E,
+        r"^compression level.*diameter",
+    ),
+    ("design first beyond diameter", _design("scan_second_level", 1200e-6), E, r"^first level 1200 um"),
+    ("design candidate beyond table", _design("recommend", candidates=[1e-4, 4.5e-4]), E, r"^candidate level 450 um"),
+    ("design candidate nan", _design("recommend", candidates=[1e-4, np.nan]), E, r"^candidate level"),
+    ("design too few candidates", _design("recommend", candidates=[1e-4]), E, r"^2 levels are asked"),
+    ("design level_fisher negative", _design("level_fisher", -1e-6, _protocol()), E, r"^compression level"),
 ]
 
 
@@ -375,6 +437,10 @@ CLI_CASES = [
     (["spheroid", "--equilibrium", "foo"], "--equilibrium"),
     (["spheroid", "--radius-um", "x"], "--radius-um"),
     (["spheroid", "--end-time", "0"], "--end-time"),
+    (["design", "--noise", "-1"], "--noise"),
+    (["design", "--first-um", "1200"], "--first-um 1200"),
+    (["design", "--first-um", "450"], "--first-um 450"),
+    (["fit", "/dev/zero", "--radius-um", "500", "--displacement-um", "50", "--ramp-time", "0.2"], "/dev/zero"),
 ]
 
 
@@ -434,3 +500,121 @@ def test_read_csv_space_separated_without_header_keeps_first_row(tmp_path):
     np.savetxt(f, np.c_[t, y])
     rec = fit.read_csv(str(f), displacement=50e-6)
     assert rec.time.size == 11 and rec.time[0] == 0.0 and rec.nominal_stress[0] == pytest.approx(100.0)
+
+
+# ---------------------------------------------------------------- issue 41: files, stores, FE extremes
+
+
+def _fit_table(t=T41, s=S41, sep=",", header="time_s,stress_Pa"):
+    return "\n".join([header] + [f"{a:.12g}{sep}{b:.12g}" for a, b in zip(t, s)]) + "\n"
+
+
+def test_table_reader_reads_excel_utf16_quotes_and_trailing_delimiters(tmp_path):
+    """Excel's UTF-16 "Unicode text" export was called a "binary file"; RFC-4180 quotes and a delimiter at the end
+    of every line were refused. All read as the plain file does."""
+    plain = tmp_path / "plain.csv"
+    plain.write_text(_fit_table())
+    want = fit.read_table(plain)
+    utf16 = tmp_path / "excel.txt"
+    utf16.write_bytes(_fit_table(sep="\t", header="time_s\tstress_Pa").replace("\n", "\r\n").encode("utf-16"))
+    quoted = tmp_path / "quoted.csv"
+    quoted.write_text("\n".join(",".join(f'"{f}"' for f in line.split(",")) for line in _fit_table().splitlines()))
+    trailing = tmp_path / "trailing.csv"
+    trailing.write_text("".join(line + ",\n" for line in _fit_table().splitlines()))
+    trailing_semicolon = tmp_path / "trailing2.csv"
+    trailing_semicolon.write_text("".join(line + ";\n" for line in _fit_table(sep=";").replace(",", ";").splitlines()))
+    for f in (utf16, quoted, trailing, trailing_semicolon):
+        got = fit.read_table(f)
+        assert got.header == ("time_s", "stress_Pa"), f
+        np.testing.assert_array_equal(got.values, want.values)
+    commas = tmp_path / "commas.csv"
+    commas.write_text('"time, in s","stress, in Pa"\n"0.1","1.5"\n0.2,2.5\n')
+    got = fit.read_table(commas)
+    assert got.header == ("time, in s", "stress, in Pa") and got.values.tolist() == [[0.1, 1.5], [0.2, 2.5]]
+    # decimal commas are still named, quoted or with a trailing delimiter
+    for text in ('"time";"stress"\n"0,2";"8,61"\n"0,4";"8,59"\n', "time;stress;\n0,2;8,61;\n0,4;8,59;\n"):
+        dc = tmp_path / "dc.csv"
+        dc.write_text(text)
+        with pytest.raises(ValueError, match=r"dc.csv, line 2: .*decimal commas"):
+            fit.read_table(dc)
+    # the points table reads UTF-16 too
+    pts = tmp_path / "points.csv"
+    pts.write_bytes("C [Pa],alpha\r\n150,0.2\r\n".encode("utf-16"))
+    assert batch.read_points(pts) == [dict(C=150, alpha=0.2)]
+
+
+def test_readers_refuse_files_beyond_the_stated_size(tmp_path, monkeypatch):
+    from tissuemech.compare.fit import records
+
+    assert records.MAX_TABLE_BYTES == 256 * 2**20
+    f = tmp_path / "big.csv"
+    f.write_text(_fit_table())
+    monkeypatch.setattr(records, "MAX_TABLE_BYTES", 100)
+    for call, start in ((fit.read_table, f"{f}: "), (batch.read_points, f"points table {f}: ")):
+        with pytest.raises(ValueError) as exc:
+            call(f)
+        msg = str(exc.value)
+        assert msg.startswith(start) and "larger than the readers' limit" in msg and "MiB" in msg and "\n" not in msg
+    with pytest.raises(ValueError, match=r"^.*folder"):
+        fit.read_table(tmp_path)
+
+
+def test_hertz_fit_beyond_small_strain_warns_with_the_expected_error():
+    from tissuemech.compare.fit.estimation import HertzRangeWarning, hertz_range
+
+    hertz_range(0.05)  # small strain: silent
+    with pytest.warns(HertzRangeWarning, match=r"approach of 0.2 .* (\d+)-(\d+) % above Hertz at x = 0.2"):
+        hertz_range(0.2)
+    with pytest.raises(ValueError, match=r"^equilibrium='hertz' at an approach of 0.998 .* % above Hertz"):
+        hertz_range(0.998)
+
+
+def test_collect_names_a_damaged_file_instead_of_blaming_the_function(tmp_path):
+    """A garbage .npz under a point's key ended in "holds 1 result of (unreadable), but none of fe_spheroid": now a
+    StoreWarning names the store and the file, and the point counts as not stored."""
+    point = dict(C=150.0, alpha=0.2, beta=0.4, tau=200.0, displacement=5e-5)
+    store = tmp_path / "store"
+    store.mkdir()
+    bad = store / f"{batch.point_key(batch.fe_spheroid, point)}.npz"
+    bad.write_bytes(b"garbage" * 100)
+    with pytest.warns(batch.StoreWarning, match=rf"store {store}: result file {bad.name} is unreadable"):
+        table = batch.collect([point], store, batch.fe_spheroid)
+    assert not table["stored"].any()
+
+
+def test_to_pvd_failed_write_names_the_file_and_leaves_no_truncated_vtu(tmp_path):
+    """A full disk left a truncated VTU and said "[Errno 28]" alone; the files are now written to a temporary name
+    and renamed. A file-size limit stands in for the full disk."""
+    import resource
+    import signal
+
+    from tissuemech.fem.blastula import inflate
+
+    r = inflate(**SHELL, pressures=[50.0, 100.0], mesh="coarse", store_fields=True)
+    old = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    soft, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (2000, hard))
+    try:
+        with pytest.raises(OSError) as exc:
+            r.to_pvd(tmp_path / "run.pvd")
+    finally:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))
+        signal.signal(signal.SIGXFSZ, old)
+    assert exc.value.filename == str(tmp_path / "run_0000.vtu") and "run_0000.vtu" in str(exc.value)
+    assert list(tmp_path.iterdir()) == []  # nothing truncated, no temporary file left
+    written = r.to_pvd(tmp_path / "run.pvd")
+    assert [p.name for p in written] == ["run.pvd", "run_0000.vtu", "run_0001.vtu"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.pvd", "run_0000.vtu", "run_0001.vtu"]
+
+
+def test_thin_shell_solves_to_the_exact_shell():
+    """B = 1.001 A failed Newton with its residual already at round-off (the corrections of the ill-conditioned
+    tangent stayed above xtol): such a state is now accepted, and it is the exact shell's."""
+    from tissuemech.fem.blastula import inflate
+
+    geo = dict(inner_radius=50e-6, outer_radius=50.05e-6, C=100.0, alpha=0.2)
+    p = [0.05, 0.5, 2.0]
+    r = inflate(**geo, pressures=p)
+    exact = [float(bl.inner_stretch(q, **geo)) for q in p]
+    np.testing.assert_allclose(r.inner_stretch, exact, rtol=1e-5)  # the mesh's error at a/A = 2.9: 3.7e-6
+    assert r.inner_stretch[-1] > 2.5  # a large inflation of the membrane, not a stuck state

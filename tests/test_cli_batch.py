@@ -175,3 +175,20 @@ def test_semicolon_table_and_wrong_function_say_what_is_there(tmp_path, capsys):
     assert len(err) == 1 and "holds 1 result of tissuemech.compare.batch.points.fe_blastula" in err[0]
     assert batch_cli.main(["collect", str(pts), *args, "--out", str(tmp_path / "t.csv")]) == 0
     assert pd.read_csv(tmp_path / "t.csv")["stored"].all() and not list(tmp_path.glob(".t.csv*"))
+
+
+def test_collect_says_when_the_store_is_missing_or_a_file_is_damaged(tmp_path, capsys):
+    """A mistyped --store read like a batch not started; a garbage .npz ended in "holds 1 result of (unreadable), but
+    none of fe_spheroid": now one warning line each names the store (and the file), exit 0, nothing stored."""
+    pts = tmp_path / "p.csv"
+    pts.write_text("C,alpha,beta,tau,displacement\n150,0.2,0.4,200,5e-05\n")
+    assert batch_cli.main(["collect", str(pts), "--store", str(tmp_path / "nowhere")]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"tissuemech batch: warning: store {tmp_path / 'nowhere'} does not exist: no point is stored"]
+    store = tmp_path / "s"
+    store.mkdir()
+    key = batch.point_key(batch.fe_spheroid, batch.read_points(pts)[0])
+    (store / f"{key}.npz").write_bytes(b"garbage" * 100)
+    assert batch_cli.main(["collect", str(pts), "--store", str(store)]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"store {store}: result file {key}.npz is unreadable" in err[0], err

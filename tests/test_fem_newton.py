@@ -269,3 +269,19 @@ def test_linear_strategies_are_the_old_keywords():
         Symmetric(ordering="amd")
     with pytest.raises(ValueError, match="backend"):
         Symmetric(backend_name="umfpack")
+
+
+def test_newton_stagnation_accepts_a_converged_residual_with_round_off_corrections():
+    """An ill-conditioned tangent (a very thin shell) keeps the corrections of a converged state above xtol: with
+    ``stagnation=True`` Newton accepts the state once two successive residuals met the tolerance and the correction
+    stopped shrinking; without it the solve runs to max_iter and fails as before."""
+    rng = np.random.default_rng(0)
+    # r = 1e-9 (x - 1) + round-off: each correction moves x by ~1e-6 at random, the residual stays ~1e-15
+    fun = lambda x: (np.array([1e-9 * (x[0] - 1.0) + 1e-15 * rng.standard_normal()]), sp.csr_matrix([[1e-9]]))
+    with pytest.raises(NewtonError):  # "diverging" (the residuals wander above the first) or "no convergence"
+        newton(fun, np.array([1.0]), rtol=1e-12, xtol=1e-9)
+    res = newton(fun, np.array([1.0]), rtol=1e-12, xtol=1e-9, stagnation=True)
+    assert res.iterations <= 4 and abs(res.x[0] - 1.0) < 1e-5 and max(res.residuals) < 1e-12
+    # a contracting iteration is not stagnation: Newton still converges by its step test
+    fun2 = lambda x: (np.array([x[0] ** 3 - 8.0]), sp.csr_matrix([[3 * x[0] ** 2]]))
+    assert abs(newton(fun2, np.array([3.0]), rtol=1e-14, xtol=1e-14, stagnation=True).x[0] - 2.0) < 1e-14

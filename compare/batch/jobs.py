@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import io
 import os
 import re
 import sys
@@ -137,8 +138,9 @@ SI_UNITS = {"", "-", "1", "m", "s", "Pa", "N", "kg", "J"}  # units a points-tabl
 def read_points(path: str | os.PathLike) -> list[dict[str, Any]]:
     """The points of a CSV table (a local file, comma-separated; header = keyword names, optionally with SI units
     ``C [Pa]``; numbers in SI units), one dict per row, with Python ints/floats/strings (integral columns stay ints).
-    Raises ValueError (naming the file) for a URL, a missing or unreadable file, an empty table, a table separated
-    by anything but commas, or a non-SI unit in the header."""
+    Raises ValueError (naming the file) for a URL, a missing or unreadable file, a device or pipe, a file beyond
+    ``compare.fit.records.MAX_TABLE_BYTES``, an empty table, a table separated by anything but commas, or a non-SI
+    unit in the header."""
     import pandas as pd
 
     text = os.fspath(path)
@@ -147,15 +149,15 @@ def read_points(path: str | os.PathLike) -> list[dict[str, Any]]:
     if re.match(r"^[A-Za-z][A-Za-z0-9+.-]*://", text):
         raise ValueError(f"points table {text}: a URL; give a local CSV file (download it first)")
     file = Path(text)
-    if not file.is_file():
-        raise ValueError(
-            f"points table {file}: no such file" if not file.exists() else f"points table {file}: not a file"
-        )
+    if not file.exists():
+        raise ValueError(f"points table {file}: no such file")
+    from tissuemech.compare.fit.records import read_text
+
+    # bounded (a regular file of at most MAX_TABLE_BYTES), decoded (UTF-8, UTF-16 with BOM); pandas parses the
+    # text only: it never opens a URL or another file
+    content = read_text(file, "points table")
     try:
-        with open(file, newline="") as fh:  # a local file handle: pandas never opens a URL or another file
-            df = pd.read_csv(fh)
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ValueError(f"points table {file}: cannot be read ({getattr(exc, 'strerror', None) or exc})") from None
+        df = pd.read_csv(io.StringIO(content))
     except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
         raise ValueError(f"points table {file}: not a CSV table ({str(exc).strip().splitlines()[0]})") from None
     if len(df.columns) == 1:
@@ -231,12 +233,14 @@ def collect(points: Sequence[dict], store: str | os.PathLike, function: Callable
     if folder.exists() and not folder.is_dir():
         raise StoreError(f"store {folder} exists and is not a folder")
     rows = []
+    present = False  # a file under one of these points' keys (a damaged one too): the function is the right one
     for p in points:
         key = point_key(function, p)
         f = folder / f"{key}.npz"
         row: dict[str, Any] = dict(p)
         r = None
         if f.exists():
+            present = True
             try:
                 r = load(f, key=key)
             except CorruptResultError as exc:
@@ -248,7 +252,7 @@ def collect(points: Sequence[dict], store: str | os.PathLike, function: Callable
                     row[k] = v.item() if hasattr(v, "item") else v
         rows.append(row)
     table = pd.DataFrame(rows)
-    if rows and not table["stored"].any() and folder.is_dir():
+    if rows and not present and folder.is_dir():
         held = describe(folder)
         if held:
             what = ", ".join(f"{n} result{'s' if n > 1 else ''} of {name}" for name, n in held.items())

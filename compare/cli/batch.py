@@ -93,6 +93,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"tissuemech batch: warning: {w.message}", file=sys.stderr)
     points = read_points(args.points)
     if cmd == "collect":
+        if not Path(args.store).exists():  # a mistyped --store reads like a batch not started yet: say which
+            print(f"tissuemech batch: warning: store {args.store} does not exist: no point is stored", file=sys.stderr)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", StoreWarning)
             table = collect(points, args.store, function)

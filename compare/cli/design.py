@@ -52,6 +52,7 @@ def run(args: argparse.Namespace) -> int:
         NAMES,
         Protocol,
         check,
+        check_levels,
         predict,
         recommend,
         scan_second_level,
@@ -62,6 +63,11 @@ def run(args: argparse.Namespace) -> int:
     if args.check < 0:
         raise ValueError(f"--check must be >= 0 (fits per protocol); got {args.check}")
     pc = Protocol(noise=args.noise, ramp_time=args.ramp_time)
+    for f in args.first_um:  # before any output: a level beyond the table or the diameter is refused
+        try:
+            check_levels(f * 1e-6, pc)
+        except ValueError as exc:
+            raise ValueError(f"--first-um {f:g}: {exc}") from None
     fmt = lambda v: f"{v:.3g}"
     with pd.option_context("display.width", 200, "display.max_columns", 20):
         base = predict(pc, model_error=args.model_error)

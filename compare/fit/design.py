@@ -52,6 +52,8 @@ __all__ = [
     "DEFAULT_TRUTH",
     "NAMES",
     "Z95",
+    "check_truth",
+    "check_levels",
 ]
 
 DEFAULT_TRUTH = dict(C=150.0, alpha=0.2, beta=0.4, tau=200.0)
@@ -108,6 +110,63 @@ class Prediction:
     fisher: np.ndarray
 
 
+_UNITS = dict(C="Pa", alpha="-", beta="-", tau="s")
+
+
+def check_truth(truth: Any, equilibrium: Any = "fem") -> dict[str, float]:
+    """The parameter guess as floats: ValueError (one line, naming the parameter and unit) unless ``truth`` is a
+    mapping with exactly the keys :data:`NAMES`, each positive and finite (the design works in log parameters), and
+    alpha within the equilibrium table's calibrated range."""
+    if not isinstance(truth, dict):
+        raise ValueError(f"truth must be a dict of {list(NAMES)} (C Pa, alpha -, beta -, tau s); got {truth!r}")
+    missing = [n for n in NAMES if n not in truth]
+    unknown = sorted(set(map(str, truth)) - set(NAMES))
+    if missing or unknown:
+        raise ValueError(
+            f"truth needs exactly the parameters {list(NAMES)} (C Pa, alpha -, beta -, tau s)"
+            + (f"; missing {missing}" if missing else "")
+            + (f"; unknown {unknown}" if unknown else "")
+        )
+    out = {}
+    for n in NAMES:
+        try:
+            v = float(truth[n])
+        except (TypeError, ValueError):
+            raise ValueError(f"truth {n} ({_UNITS[n]}) must be a number; got {truth[n]!r}") from None
+        if not (math.isfinite(v) and v > 0):
+            raise ValueError(f"truth {n} ({_UNITS[n]}) must be positive and finite (the design is in log p); got {v}")
+        out[n] = v
+    mc = table_of(equilibrium)
+    if mc is not None and mc.alpha is not None:
+        lo, hi = mc.alpha_range
+        if not lo <= out["alpha"] <= hi * (1 + 1e-12):
+            raise ValueError(
+                f"truth alpha (-) = {out['alpha']:g} is outside the equilibrium table's calibrated range "
+                f"[{lo:g}, {hi:g}]: its predictions there would be extrapolated"
+            )
+    return out
+
+
+def check_levels(levels: Any, protocol: Protocol, equilibrium: Any = "fem", what: str = "compression level") -> None:
+    """ValueError (one line, naming the level in um) for a compression level (total approach, m) that is not
+    positive and finite, reaches the ball's diameter, or lies beyond the equilibrium table's range."""
+    mc = table_of(equilibrium)
+    diameter = 2 * float(protocol.radius)
+    for d in np.atleast_1d(np.asarray(levels, dtype=float)):
+        if not (math.isfinite(d) and d > 0):
+            raise ValueError(f"{what} (total approach of the plates, m) must be positive and finite; got {d}")
+        x = d / diameter
+        if x >= 1:
+            raise ValueError(
+                f"{what} {d * 1e6:.4g} um reaches the ball's diameter ({diameter * 1e6:.4g} um): the plates would touch"
+            )
+        if mc is not None and x > mc.x_max * (1 + 1e-12):
+            raise ValueError(
+                f"{what} {d * 1e6:.4g} um (delta/(2 a0) = {x:.4g}) is beyond the master table (up to {mc.x_max:.4g}, "
+                f"{mc.x_max * diameter * 1e6:.4g} um for radius {protocol.radius * 1e6:.4g} um)"
+            )
+
+
 def level_fisher(
     level: float,
     protocol: Protocol,
@@ -117,7 +176,11 @@ def level_fisher(
     model_error: float = 0.0,
 ) -> np.ndarray:
     """Fisher matrix (4 x 4, log parameters) of ONE record at total approach ``level`` (m), with the
-    record's model-error factor (relative sd ``model_error``) marginalised."""
+    record's model-error factor (relative sd ``model_error``) marginalised. ValueError (one line) for a bad
+    protocol, truth (:func:`check_truth`) or level (:func:`check_levels`)."""
+    protocol.validate()
+    truth = check_truth(truth, equilibrium)
+    check_levels(level, protocol, equilibrium)
     t = np.asarray(protocol.times, dtype=float)
     p = np.array([truth[n] for n in NAMES], dtype=float)
     theta = np.log(p)
@@ -133,6 +196,10 @@ def level_fisher(
     m = np.asarray(res_fn(jnp.asarray(theta))) * scale + ones  # residual = (m - 1) / scale
     J = np.asarray(jac_fn(jnp.asarray(theta))) * scale
     s = protocol.noise * np.max(np.abs(m))
+    if not (np.all(np.isfinite(J)) and np.all(np.isfinite(m))):
+        raise ValueError(
+            f"the model is not finite at compression level {level * 1e6:.4g} um and truth {truth}: no prediction"
+        )
     A = J.T @ J / s**2
     if model_error and model_error > 0:
         b = J.T @ m / s**2
@@ -167,13 +234,8 @@ def predict(
     Raises ValueError for an invalid protocol or a level beyond the master table.
     """
     protocol.validate()
-    mc = table_of(equilibrium)
-    if mc is not None:
-        x = max(protocol.levels) / (2 * protocol.radius)
-        if x > mc.x_max * (1 + 1e-12):
-            raise ValueError(
-                f"compression level delta/(2 a0) = {x:.4g} is beyond the master table (up to {mc.x_max:.4g})"
-            )
+    truth = check_truth(truth, equilibrium)
+    check_levels(protocol.levels, protocol, equilibrium)
     F = sum(level_fisher(d, protocol, truth, equilibrium=equilibrium, model_error=model_error) for d in protocol.levels)
     return _from_fisher(np.asarray(F), protocol, truth)
 
@@ -194,7 +256,11 @@ def scan_second_level(
 ) -> pd.DataFrame:
     """Predicted relative 95 % widths (%) of each parameter for levels (first, second), second over
     ``candidates`` (m; default 15 levels up to the table's end)."""
-    cand = _candidates(protocol) if candidates is None else np.asarray(candidates, dtype=float)
+    protocol.validate()
+    truth = check_truth(truth)
+    check_levels(first, protocol, what="first level")
+    cand = _candidates(protocol) if candidates is None else np.asarray(candidates, dtype=float).ravel()
+    check_levels(cand, protocol, what="candidate level")
     F1 = level_fisher(first, protocol, truth, model_error=model_error)
     rows = []
     for d in cand:
@@ -215,19 +281,26 @@ def recommend(
     model_error: float = 0.0,
 ) -> tuple[tuple[float, ...], Prediction]:
     """The ``n_levels`` compression levels (m, from ``candidates``, default within the table's range)
-    that minimise the predicted interval width of ``target``; returns (levels, Prediction)."""
+    that minimise the predicted interval width of ``target``; returns (levels, Prediction). ValueError (one line)
+    for a bad truth, a candidate beyond the table or the diameter, or fewer candidates than ``n_levels``."""
     if n_levels < 1:
         raise ValueError(f"n_levels must be at least 1; got {n_levels}")
     if target not in NAMES:
         raise ValueError(f"target must be one of {NAMES}; got {target!r}")
-    cand = _candidates(protocol) if candidates is None else np.asarray(candidates, dtype=float)
+    protocol.validate()
+    truth = check_truth(truth)
+    cand = _candidates(protocol) if candidates is None else np.asarray(candidates, dtype=float).ravel()
+    check_levels(cand, protocol, what="candidate level")
+    if len(cand) < n_levels:
+        raise ValueError(f"{n_levels} levels are asked for, but only {len(cand)} candidate level(s) were given (m)")
     Fs = [level_fisher(float(d), protocol, truth, model_error=model_error) for d in cand]
     best, best_w = None, math.inf
     for combo in itertools.combinations(range(len(cand)), n_levels):
         pr = _from_fisher(cast(np.ndarray, sum(Fs[k] for k in combo)), protocol, truth)
         if pr.width[target] < best_w:
             best, best_w = combo, pr.width[target]
-    best = cast(tuple[int, ...], best)  # set once any combination has a finite width
+    if best is None:
+        raise ValueError(f"no combination of the candidate levels gives a finite width of {target}")
     levels = tuple(float(cand[k]) for k in best)
     return levels, _from_fisher(cast(np.ndarray, sum(Fs[k] for k in best)), replace(protocol, levels=levels), truth)
 

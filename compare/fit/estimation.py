@@ -4,6 +4,7 @@ model-error factors, 95 % intervals; the statistics are in :mod:`tissuemech.comp
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -28,9 +29,44 @@ from tissuemech.compare.fit.records import as_records, check_information, check_
 from tissuemech.compare.fit.result import FitResult
 from tissuemech.reduced.material import validate_positive
 
-__all__ = ["relaxation", "NOISE_FREE_REL"]
+__all__ = ["relaxation", "NOISE_FREE_REL", "hertz_range", "HERTZ_X_WARN", "HERTZ_X_MAX", "HertzRangeWarning"]
 
 NOISE_FREE_REL = 1e-9  # RMS residual below this fraction of the record's peak: noise-free (synthetic) data
+HERTZ_X_WARN = 0.1  # approach / diameter beyond which the small-strain Hertz law's force error exceeds ~15 %
+HERTZ_X_MAX = 0.5  # ... and beyond which (an approach past the radius) a Hertz fit is refused
+
+
+class HertzRangeWarning(UserWarning):
+    """A fit with the small-strain Hertz law at a compression where it misses the equilibrium force (estimated
+    from the FE master table)."""
+
+
+def hertz_range(x: float) -> None:
+    """Warn (:class:`HertzRangeWarning`) for a Hertz fit at approach/diameter ``x`` > :data:`HERTZ_X_WARN`, with the
+    law's expected force error from the FE master table (FE / Hertz - 1 over its alpha range); ValueError beyond
+    :data:`HERTZ_X_MAX`, where small-strain Hertz means nothing."""
+    if x <= HERTZ_X_WARN:
+        return
+    from tissuemech.reduced.spheroid import hertz_f
+
+    mc = table_of("fem")
+    xe = min(x, mc.x_max)
+    lo_a, hi_a = mc.alpha_range
+    errs = [100.0 * (float(mc.f(xe, a)) / float(hertz_f(xe)) - 1.0) for a in (lo_a, hi_a)]
+    at = f"at x = {xe:.3g}" if xe == x else f"already at x = {xe:.3g} (the table's end)"
+    expected = f"the FE master table puts the equilibrium force {min(errs):.0f}-{max(errs):.0f} % above Hertz {at}"
+    if x > HERTZ_X_MAX:
+        raise ValueError(
+            f"equilibrium='hertz' at an approach of {x:.3g} of the ball's diameter: the small-strain Hertz law holds "
+            f"for small compressions only (x < {HERTZ_X_WARN:g}); {expected}: use the FE table (equilibrium='fem', up "
+            f"to x = {mc.x_max:.3g}) or check the displacement and radius (m)"
+        )
+    warnings.warn(
+        f"equilibrium='hertz' at an approach of {x:.3g} of the ball's diameter, beyond the small-strain range "
+        f"(x < {HERTZ_X_WARN:g}): {expected}; C is biased by about as much (equilibrium='fem' has the table)",
+        HertzRangeWarning,
+        stacklevel=3,
+    )
 
 
 def relaxation(
@@ -104,6 +140,8 @@ def relaxation(
             f"the approach is {x:.4g} of the ball's diameter, beyond the calibrated table (it reaches "
             f"{mc.x_max:.4g}): use equilibrium='hertz' (small compressions only) or a shorter approach"
         )
+    if isinstance(equilibrium, str) and equilibrium == "hertz":
+        hertz_range(x)
     if isinstance(model_error, str):
         if model_error != "auto":
             raise ValueError(
@@ -120,6 +158,9 @@ def relaxation(
     if initial is None:
         p0 = initial_guess(recs, radius, ramp_time, n_branches)
     elif isinstance(initial, dict):
+        unknown = sorted(set(map(str, initial)) - set(names))
+        if unknown:
+            raise ValueError(f"initial: unknown parameter name(s) {unknown}; the valid names are {list(names)}")
         guess = initial_guess(recs, radius, ramp_time, n_branches)
         p0 = np.array([float(initial.get(n, g)) for n, g in zip(names, guess)])
     else:

@@ -5,7 +5,11 @@ approach m); :func:`read_table` parses a CSV-like text table, :func:`read_csv` r
 CSV format (one file per compression level)
 -------------------------------------------
 * text, one sample per line: time in s, then nominal stress in Pa (``F / A_mid``) or plate force in N;
-  further columns are ignored. Fields separated by commas, semicolons, tabs or spaces.
+  further columns are ignored. Fields separated by commas, semicolons, tabs or spaces; fields may be quoted
+  (RFC 4180: ``"1.0","2.0"``, ``"time, in s"``), a delimiter at the end of every line is ignored.
+* UTF-8 (with or without BOM), Latin-1, or UTF-16 with its BOM (Excel's "Unicode text" export, tab-separated).
+  A local regular file of at most :data:`MAX_TABLE_BYTES` bytes (a device, a pipe or a larger file is refused:
+  no reader here runs without end).
 * an optional header line (the first non-comment line), e.g. ``time_s,stress_Pa`` or
   ``time_s,force_N``, or in the ``name [unit]`` style of tissuemech's own tables
   ``time [s],stress [Pa]`` / ``time [s],force [N]`` (also space-separated: ``time [s] force [N]``):
@@ -23,8 +27,11 @@ A malformed file raises ValueError with one line naming the file and, where it a
 
 from __future__ import annotations
 
+import csv
 import math
+import os
 import re
+import stat
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -46,9 +53,12 @@ __all__ = [
     "load_records",
     "COLUMN_UNITS",
     "UM",
+    "MAX_TABLE_BYTES",
+    "read_text",
 ]
 
 UM = 1e-6  # one micrometre in m (the command line's unit of lengths)
+MAX_TABLE_BYTES = 256 * 2**20  # largest text table the readers take (256 MiB, some 10 million time-stress rows)
 
 
 class Record(NamedTuple):
@@ -70,6 +80,12 @@ def as_records(records: Sequence[Any]) -> list[Record]:
             t, s, d = r
         except (TypeError, ValueError):
             raise ValueError(f"record {k}: expected (time [s], nominal_stress [Pa], displacement [m])") from None
+        for name, unit, v in (("time", "s", t), ("nominal_stress", "Pa", s)):
+            if np.asarray(v).dtype.kind == "b":  # True/False would be read as 1/0 s or Pa
+                raise ValueError(
+                    f"record {k}: {name} must be numbers ({unit}); got booleans (True/False): a mask or flags given in "
+                    "place of the samples?"
+                )
         t = np.asarray(t, dtype=float).ravel()
         s = np.asarray(s, dtype=float).ravel()
         if t.shape != s.shape:
@@ -144,18 +160,34 @@ class Table:
 _META = re.compile(r"^#\s*([A-Za-z_][A-Za-z0-9_ ]*?)\s*[:=]\s*(.+?)\s*$")
 
 
+_QUOTED = re.compile(r'"(?:[^"]|"")*"')
+
+
 def _split(line: str) -> list[str]:
+    """The fields of a line: separated by the first of ',', ';', tab found outside quotes, else by spaces; RFC-4180
+    quotes removed (``"1,5"`` stays one field), surrounding spaces stripped."""
+    bare = _QUOTED.sub("", line) if '"' in line else line
     for sep in (",", ";", "\t"):
-        if sep in line:
+        if sep in bare:
+            if '"' in line:
+                return [f.strip() for f in next(csv.reader([line], delimiter=sep, skipinitialspace=True))]
             return [f.strip() for f in line.split(sep)]
+    if '"' in line:
+        return [f.strip() for f in next(csv.reader([line], delimiter=" ", skipinitialspace=True)) if f.strip()]
     return line.split()
+
+
+def _delimited(line: str) -> bool:
+    """True for a line whose fields a ',', ';' or tab separates (outside quotes)."""
+    bare = _QUOTED.sub("", line) if '"' in line else line
+    return any(sep in bare for sep in (",", ";", "\t"))
 
 
 def _header_fields(line: str) -> list[str]:
     """Header names; with whitespace separators a ``[unit]`` / ``(unit)`` token joins the name before it."""
     fields = _split(line)
-    if any(sep in line for sep in (",", ";", "\t")):
-        return fields
+    if _delimited(line):
+        return fields[:-1] if len(fields) > 1 and fields[-1] == "" else fields
     out: list[str] = []
     for f in fields:
         if out and f[:1] in "[(" and f[-1:] in "])":
@@ -177,6 +209,8 @@ def _decimal_commas(line: str) -> bool:
             break
     else:
         parts = line.split()
+    if parts and parts[-1] == "":  # a delimiter at the end of the line
+        parts.pop()
     if len(parts) < 2 or not any(_DECIMAL_COMMA.match(f) for f in parts):
         return False
     return all(_DECIMAL_COMMA.match(f) or _number(f) is not None for f in parts)
@@ -190,25 +224,125 @@ def _number(text: str) -> float | None:
     return v
 
 
+def read_text(path: str | Path, what: str = "") -> str:
+    """The text of a local table file, bounded: ValueError (one line, naming the file) for a file that is missing,
+    unreadable, not a regular file (a device such as /dev/zero, a pipe: a stream without end), larger than
+    :data:`MAX_TABLE_BYTES`, or binary. Decodes UTF-8 (BOM or not), UTF-16 with a BOM (Excel's "Unicode text"),
+    else Latin-1. ``what`` prefixes the file name in messages (e.g. "points table")."""
+    name = f"{what} {path}" if what else str(path)
+    try:
+        st = os.stat(path)
+    except OSError as exc:
+        raise ValueError(f"{name}: cannot read the file ({exc.strerror or exc})") from None
+    if not stat.S_ISREG(st.st_mode):
+        kind = "a folder" if stat.S_ISDIR(st.st_mode) else "a device, pipe or socket (a stream without end?)"
+        raise ValueError(f"{name}: not a regular file but {kind}; give a text table saved as a file")
+    limit = MAX_TABLE_BYTES
+    too_big = (
+        f"{name}: the file is larger than the readers' limit of {limit / 2**20:g} MiB "
+        "(tissuemech.compare.fit.records.MAX_TABLE_BYTES): split it or thin its rows (for a fit, a few "
+        "thousand samples per record inform it as well)"
+    )
+    if st.st_size > limit:
+        raise ValueError(f"{too_big}; it has {st.st_size / 2**20:.4g} MiB")
+    try:
+        with open(path, "rb") as fh:
+            raw = fh.read(limit + 1)
+    except OSError as exc:
+        raise ValueError(f"{name}: cannot read the file ({exc.strerror or exc})") from None
+    if len(raw) > limit:  # grew while read
+        raise ValueError(too_big)
+    binary = f"{name}: binary file, not a text table"
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):  # UTF-16 with its BOM: Excel's "Unicode text"
+        try:
+            return raw.decode("utf-16")
+        except UnicodeDecodeError:
+            raise ValueError(f"{binary} (it starts with a UTF-16 mark but does not decode as UTF-16)") from None
+    if b"\x00" in raw:
+        raise ValueError(f"{binary} (save it as CSV text: UTF-8, or UTF-16 with its byte-order mark)")
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        text = raw.decode("latin-1")
+    if any(ch < " " and ch not in "\r\n\t" for ch in text):
+        raise ValueError(binary)
+    return text
+
+
+_CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f]")
+
+
+def _plain_table(path: str, text: str) -> Table | None:
+    """The table of a plain, well-formed text (no quotes, one separator, finite numbers, no decimal commas) parsed in
+    one vectorised pass (a million rows in about a second); None for anything else: the line-by-line parse of
+    :func:`read_table` then reads it or names the line at fault."""
+    if '"' in text or _CONTROL.search(text):
+        return None
+    meta: dict[str, str] = {}
+    rows: list[str] = []
+    lines: list[int] = []
+    for no, line in enumerate(text.splitlines(), start=1):
+        s = line.strip()
+        if not s:
+            continue
+        if s[0] == "#":
+            m = _META.match(s)
+            if m:
+                meta[m.group(1).strip().lower().replace(" ", "_")] = m.group(2)
+            continue
+        rows.append(s)
+        lines.append(no)
+    if not rows:
+        return None
+    header: tuple[str, ...] = ()
+    fields = _split(rows[0])
+    if len(fields) > 1 and fields[-1] == "" and _delimited(rows[0]):
+        fields.pop()
+    if any(_number(f) is None for f in fields):
+        if not all(_number(f) is None and f for f in fields):
+            return None
+        header = tuple(_header_fields(rows[0]))
+        rows, lines = rows[1:], lines[1:]
+        if not rows:
+            return None
+    sep = next((c for c in (",", ";", "\t") if c in rows[0]), None)
+    body = "\n".join(rows)
+    if sep is None and any(c in body for c in ",;\t"):
+        return None
+    if sep in (";", "\t") and "," in body:  # decimal commas? the line-by-line parse tells
+        return None
+    if sep is None:
+        counts = {len(r.split()) for r in rows}
+    else:
+        rows = [r[:-1].rstrip() if r.endswith(sep) else r for r in rows]  # a delimiter at the end of the line
+        counts = {r.count(sep) + 1 for r in rows}
+        body = "\n".join(rows).replace(sep, " ")
+    if len(counts) != 1:
+        return None
+    ncol = counts.pop()
+    if ncol < 2 or (header and len(header) != ncol):
+        return None
+    tokens = body.split()
+    if len(tokens) != ncol * len(rows):
+        return None
+    try:
+        values = np.array(tokens, dtype=float).reshape(len(rows), ncol)
+    except ValueError:
+        return None
+    if not np.all(np.isfinite(values)):
+        return None
+    return Table(path, header, values, meta, tuple(lines))
+
+
 def read_table(path: str | Path) -> Table:
     """Read a CSV-like numeric table (module doc: the format). Raises ValueError with one line naming
-    the file and, where it applies, the line: empty, binary, ragged, one column, text in numbers."""
+    the file and, where it applies, the line: missing, not a regular file, beyond :data:`MAX_TABLE_BYTES`, empty,
+    binary, ragged, one column, text in numbers, decimal commas."""
     path = str(path)
-    try:
-        raw = Path(path).read_bytes()
-    except OSError as exc:
-        raise ValueError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
-    if b"\x00" in raw:
-        raise ValueError(f"{path}: binary file, not a text CSV (time in s, stress in Pa)")
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        try:
-            text = raw.decode("latin-1")
-        except UnicodeDecodeError:  # pragma: no cover (latin-1 decodes anything)
-            raise ValueError(f"{path}: not a text file") from None
-        if sum(ch < " " and ch not in "\r\n\t" for ch in text) > 0:
-            raise ValueError(f"{path}: binary file, not a text CSV (time in s, stress in Pa)") from None
+    text = read_text(path)
+    fast = _plain_table(path, text)
+    if fast is not None:
+        return fast
     header: tuple[str, ...] = ()
     rows: list[list[float]] = []
     lines: list[int] = []
@@ -225,7 +359,7 @@ def read_table(path: str | Path) -> Table:
             continue
         if any(ch < " " and ch != "\t" for ch in s):
             raise ValueError(f"{path}, line {no}: control characters (a binary file?), not a text CSV")
-        if "," in s and _decimal_commas(s):
+        if "," in s and _decimal_commas(s.replace('"', "")):
             raise ValueError(
                 f"{path}, line {no}: {s!r} uses decimal commas (0,2 meaning 0.2); this reader needs decimal points: "
                 "export the file with '.' as the decimal separator (or replace ',' by '.' when the fields are "
@@ -233,6 +367,8 @@ def read_table(path: str | Path) -> Table:
                 "the columns to tissuemech.compare.fit.relaxation"
             )
         fields = _split(s)
+        if len(fields) > 1 and fields[-1] == "" and _delimited(s):
+            fields.pop()  # a delimiter at the end of the line
         nums = [_number(f) for f in fields]
         if ncol is None and not header and not rows and any(v is None for v in nums):
             if all(_number(f) is None and f for f in fields):
