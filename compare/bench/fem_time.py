@@ -40,6 +40,16 @@ reference's spatial error, not level 1's. Against level 1's own time-converged f
 cost O(n_ramp^2) stress transfers: 1.5 s of a 5.6 s run at 6 steps, 21 s of 28 s at 24. The Fig. 10 and
 Figs 8-9 cases (tau = 200 s, default 6 steps) move by <= 4e-8 of F against "transfer".
 
+Measured, ``--adaptive`` (2026-12-03, level 1, against level 1's own time-converged force: fixed 12 / 24 / 48
+ramp steps, orders 1.95, 1.97, 1.98, 1.86, 1.93, 1.93, in 108 s; F / F_ref - 1 at t = 0.05, 0.1, 0.15, 0.2, 1,
+10 s): fixed 12 -3.16e-3, -1.13e-3, -5.76e-4, -3.83e-4, -2.1e-6, -1.5e-6; 24 -8.15e-4, -2.89e-4, -1.46e-4,
+-1.06e-4, -5.5e-7, -3.8e-7; 48 -2.10e-4, -7.34e-5, -3.68e-5, -2.91e-5, -1.5e-7, -1.0e-7. Adaptive(5e-4): 34 ramp
+/ 57 steps, -1.70e-4, -1.25e-4, -1.14e-4, -1.35e-4, -4.6e-7, -3.1e-7 (43 s); Adaptive(2e-4) (the default): 52 /
+76, -6.99e-5, -5.01e-5, -5.29e-5, -7.45e-5, -2.9e-7, -1.8e-7 (59 s); Adaptive(1e-4): 74 / 98, -3.67e-5,
+-2.25e-5, -2.58e-5, -3.96e-5, -1.9e-7, -1.2e-7 (178 s); observed orders in the ramp step count 2.09, 2.14, 1.82,
+1.40 (5e-4 -> 2e-4) and 1.82, 2.27, 2.04, 1.79 (2e-4 -> 1e-4) at t <= 0.2 s (the ~1e-7 at 1 s and 10 s is the
+reference's own accuracy).
+
 Measured before issue 35 (14 min; F / F_ref - 1 on level 1 for n_ramp = 6, 12, 24, 48, 96):
 t = 0.2 s: "transfer" -1.53e-3, -7.6e-4, -5.1e-4, +3.1e-4, +4.7e-3 (drifts as the ramp is refined);
 "points" -1.56e-3, -8.7e-4, -6.5e-4, -6.9e-4, -5.8e-4 (no drift, scatter ~1e-4); "chain" (6, 24, 96 only)
