@@ -68,19 +68,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from tissuemech.compare import cases
 from tissuemech.fem.contact import FittedEdge
 from tissuemech.fem.spheroid import compress
 from tissuemech.fem.stepping import Adaptive
 
-CASE = dict(
-    radius=500e-6,
-    C=150.0,
-    alpha=0.2,
-    branches=[(0.8, 0.05), (0.3, 20.0)],
-    displacement=100e-6,
-    ramp_time=0.2,
-    end_time=200.0,
-)
+CASE = cases.FAST_BRANCHES
 TIMES = (0.05, 0.1, 0.15, 0.2, 1.0, 10.0)
 QUICK_TIMES = (0.1, 0.2, 1.0)
 REFERENCE_STEPS = (24, 48, 96)

@@ -52,6 +52,7 @@ SPHEROID_FIGURES = (
     "fig9_mean_von_mises.png",
     "fig10_nominal_stress.png",
     "accuracy_spheroid.png",
+    "time_convergence_spheroid.png",
 )
 TABLES = (
     "blastula_sets.csv",
@@ -63,7 +64,12 @@ TABLES = (
     "stability_stiff_solvers.csv",
     "seed_comparison.csv",
 )
-SPHEROID_TABLES = ("accuracy_spheroid.csv", "stability_compression.csv", "spheroid_seed.csv")
+SPHEROID_TABLES = (
+    "accuracy_spheroid.csv",
+    "time_convergence_spheroid.csv",
+    "stability_compression.csv",
+    "spheroid_seed.csv",
+)
 
 
 def _guarded(key: str, fn: Callable[[], Section], *, quick: bool) -> Section:
