@@ -59,7 +59,7 @@ def _fe(alpha: float, branches, x: float, times: np.ndarray, level: int, tol: fl
         stepping=Adaptive(tol=tol),
     )
     k = [int(np.argmin(np.abs(r.time - t))) for t in times]
-    return r.force[k], int(r.parameters["n_steps"])
+    return r.force[k], int((r.parameters or {})["n_steps"])
 
 
 def ramp_error(
