@@ -18,6 +18,11 @@ F_eq is pluggable (``equilibrium=``):
 * a callable ``F_eq(delta, *, radius, C, alpha) -> N`` (JAX-traceable; its delta-derivative is taken
   by ``jax.jvp``).
 
+Validity during the ramp: the lumped convolution is exact for branches much slower than the ramp and in the
+hold's long-time limit; a branch relaxing during the ramp is off the finite-strain FE by up to 0.49 % (tau ~ 0.3
+ramp_time; 0.17 % at 0.05, 0.28 % at 1, 0.1 % at 3, 0.045 % at 10 ramp times, at x = 0.1), gone ~3 tau into the
+hold: :data:`RAMP_ERROR`, :func:`lumped_ramp_error` (docs/modelling.md; the fit's ``model_error="auto"`` uses it).
+
 The nominal stress (Pa) divides by the deformed midplane area, sigma~ = F / (pi r_mid^2), with r_mid
 pluggable the same way (``midplane=``): ``"incompressible"`` (the volume-preserving oblate estimate
 r_mid = a0 / sqrt(1 - x): a spheroid keeping its volume when its height shrinks by delta), ``"fem"``
