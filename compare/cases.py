@@ -70,6 +70,16 @@ FIG10: dict[str, Any] = dict(
 )
 FIG10_END_TIME = 1500.0
 FIG10_TIMES = (0.2, 1500.0)  # where the accuracy studies read sigma~
+# issue 35's fast two-branch case (a branch a quarter of the ramp, as cell cortex relaxation gives): time convergence
+FAST_BRANCHES: dict[str, Any] = dict(
+    radius=SPHEROID_RADIUS,
+    C=150.0,
+    alpha=0.2,
+    branches=[(0.8, 0.05), (0.3, 20.0)],
+    displacement=100 * UM,
+    ramp_time=SPHEROID_RAMP_TIME,
+    end_time=200.0,
+)
 SPHEROID_CHECK_CASES: dict[str, dict[str, float]] = {
     "Fig. 10": dict(C=150.0, alpha=0.2, beta=0.4, tau=200.0, displacement=50 * UM),
     "Figs 8-9": dict(C=200.0, alpha=0.2, beta=1.2, tau=200.0, displacement=200 * UM),

@@ -43,9 +43,9 @@ from tissuemech.fem.linalg import Reuse, Symmetric
 from tissuemech.fem.mesh import FITTED_LEVELS, FITTED_SPLIT, AxiMesh, fitted_mesh
 from tissuemech.fem.output import SpheroidField, SpheroidResult
 from tissuemech.fem.problem import SPHEROID_MARGIN, SceneProblem, check_mesh, mesh_spec, roundoff_floor, secant
-from tissuemech.fem.stepping import Step, TimedState
+from tissuemech.fem.stepping import Adaptive, Fixed, Step, TimedState
 from tissuemech.fem.surface import SurfaceTension
-from tissuemech.fem.timestepping import march, ramp_hold_schedule
+from tissuemech.fem.timestepping import march
 from tissuemech.reduced.material import (
     hertz_plate_f,
     validate_branches,
@@ -303,6 +303,7 @@ def compress(
     field_times: Sequence[float] | str = (),
     n_ramp: int | None = None,
     n_hold: int | None = None,
+    stepping: Fixed | Adaptive | None = None,
     n_static: int | None = None,
     rtol: float = 1e-10,
     surface_tension: float = 0.0,
@@ -359,8 +360,14 @@ def compress(
             ``"all"``: every converged step (for ``SpheroidResult.to_pvd``). A stored field is given on the
             result's ``mesh`` (the last state's): ``deformed_nodes`` are the state's deformed positions (m),
             ``displacement`` = deformed_nodes - the result mesh's reference positions.
-        n_ramp: ramp steps (default 6).
-        n_hold: geometrically growing hold steps (default 20).
+        n_ramp: ramp steps: giving it (or ``n_hold``) means ``stepping=Fixed(n_ramp, n_hold)`` (defaults 6, 20).
+        n_hold: geometrically growing hold steps (see ``n_ramp``).
+        stepping: the step-size strategy of a time run (``fem.stepping``): ``Fixed(n_ramp=6, n_hold=20)``, equal ramp
+            steps and geometric hold steps, or ``Adaptive(tol=2e-4)`` (the default): those steps refined where the
+            Maxwell update's time error (estimated on the lumped recursion of the Hertz force) exceeds ``tol`` of
+            the force, so a branch as fast as the ramp is resolved (issue 35: 0.05 s on a 0.2 s ramp takes ~50
+            ramp steps) while slow branches (Fig. 10, tau = 200 s) keep the 6 + 20 steps. The step count is
+            ``parameters["n_steps"]`` (and one entry per step in every column).
         n_static: static steps (default: 0.04 in delta / a0 on a level, 0.02 on a mesh object, at least 8;
             failed steps are cut back).
         rtol: Newton's relative residual tolerance.
@@ -481,9 +488,14 @@ def compress(
         dfun = lambda t: d_max * t
         too_large = None
     else:
-        breaks = list(ft)
-        times = ramp_hold_schedule(
-            float(ramp_time), float(end_time), n_ramp=n_ramp or 6, n_hold=n_hold or 20, breakpoints=breaks
+        stepper = time_steps(stepping, n_ramp, n_hold)
+        times = stepper.schedule(
+            float(ramp_time),
+            float(end_time),
+            beta=beta,
+            tau=tau,
+            load=np.vectorize(lambda t: max(float(delta_fn(t)), 0.0) ** 1.5),  # the Hertz shape F_eq ~ delta^1.5
+            breakpoints=list(ft),
         )
         dfun = delta_fn
         too_large = None
@@ -491,7 +503,8 @@ def compress(
             d0 = float(delta_fn(0.0))
             if abs(d0) > 1e-9 * a0:
                 raise ValueError(f"the displacement history must start at 0 (delta(0) = {d0:g} m)")
-            dd = max(abs(float(delta_fn(t))) for t in np.linspace(0, ramp_time, 7)) / (n_ramp or 6)
+            n_base = stepper.n_ramp if isinstance(stepper, Fixed) else stepper.base.n_ramp
+            dd = max(abs(float(delta_fn(t))) for t in np.linspace(0, ramp_time, 7)) / n_base
             dd = max(dd, 1e-3 * a0)
             too_large = lambda t0, t1: abs(float(delta_fn(t1)) - float(delta_fn(t0))) > dd
 
@@ -618,6 +631,8 @@ def compress(
             ramp_time=None if static else float(ramp_time),
             end_time=None if static else float(end_time),
             contact=modes,
+            n_steps=len(steps),
+            **({} if static else {"stepping": stepper}),
             **({"surface_tension": float(surface_tension)} if surface_tension else {}),
         ),
     )
@@ -775,6 +790,20 @@ def _gradients(
         n: {"force": dF[n], "midplane_radius": dr[n], "nominal_stress": dF[n] / area - 2 * F / area / rm * dr[n]}
         for n in dF
     }
+
+
+def time_steps(stepping: Fixed | Adaptive | None, n_ramp: int | None, n_hold: int | None) -> Fixed | Adaptive:
+    """The step strategy of a time run from ``compress``'s ``stepping``, ``n_ramp``, ``n_hold`` (n_ramp / n_hold
+    mean ``Fixed``; none of them: ``Adaptive()``)."""
+    if stepping is not None:
+        if n_ramp is not None or n_hold is not None:
+            raise ValueError("give either stepping= or n_ramp= / n_hold= (they mean Fixed(n_ramp, n_hold)), not both")
+        if not isinstance(stepping, (Fixed, Adaptive)):
+            raise ValueError(f"stepping must be fem.stepping.Fixed(...) or Adaptive(...), got {stepping!r}")
+        return stepping
+    if n_ramp is None and n_hold is None:
+        return Adaptive()
+    return Fixed(n_ramp=n_ramp or 6, n_hold=n_hold or 20)  # 0 / None: the default (release 0.1's `or`)
 
 
 # the names of release 0.1 (compare.bench.fem_perf reaches into them)

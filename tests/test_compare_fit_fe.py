@@ -23,7 +23,7 @@ def test_fe_in_the_loop_recovers_a_truth_off_the_reduced_table():
     recs = []
     for d in (20e-6, 40e-6):
         r = fs.compress(radius=A0, C=TRUTH["C"], alpha=TRUTH["alpha"], branches=[(TRUTH["beta"], TRUTH["tau"])],
-                        displacement=d, ramp_time=TR, end_time=END, mesh="coarse", contact="nodal")  # fmt: skip
+                        displacement=d, ramp_time=TR, end_time=END, mesh="coarse", contact="nodal", n_ramp=6, n_hold=20)  # fmt: skip
         np.testing.assert_allclose(r.time, step_times(ramp_time=TR, end_time=END))
         recs.append((r.time, r.nominal_stress * (1 + 0.01 * rng.standard_normal(r.time.size)), d))
     res = fe_relaxation(

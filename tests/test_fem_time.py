@@ -9,6 +9,8 @@ from tissuemech.fem.contact import FittedEdge, replayed_history
 from tissuemech.fem.forms import Assembler, Material
 from tissuemech.fem.mesh import fitted_mesh
 from tissuemech.fem.spheroid import compress
+from tissuemech.fem.stepping import Adaptive, Fixed, lumped_force, lumped_time_error
+from tissuemech.fem.timestepping import ramp_hold_schedule
 
 A0 = 500e-6
 BETA, TAU = np.array([0.8, 0.3]), np.array([0.05, 20.0])
@@ -105,3 +107,78 @@ def test_fast_branch_force_converges_in_the_step_with_replay():
     d1, d2 = np.abs(F[1] - F[0]), np.abs(F[2] - F[1])
     assert np.all(d2 < d1)
     assert np.all(np.log2(d1 / d2) >= 1.5), np.log2(d1 / d2)
+
+
+# ---- adaptive steps (fem.stepping.Adaptive, the default of compress) --------------------------------------------
+
+FAST = dict(beta=[0.8, 0.3], tau=[0.05, 20.0])
+OUT = [0.05, 0.1, 0.15, 0.2, 1.0, 10.0]
+
+
+def _hertz(t):
+    return np.minimum(np.asarray(t, float) / 0.2, 1.0) ** 1.5
+
+
+def test_fixed_is_the_ramp_hold_schedule():
+    got = Fixed(n_ramp=8, n_hold=12).schedule(0.2, 100.0, breakpoints=[0.05, 3.0], **FAST)
+    np.testing.assert_array_equal(got, ramp_hold_schedule(0.2, 100.0, n_ramp=8, n_hold=12, breakpoints=[0.05, 3.0]))
+
+
+def test_lumped_force_is_exact_for_a_linear_load_and_relaxes_in_the_hold():
+    """The Maxwell update is exact for a load linear in time over each step: on a linear ramp F = F_eq +
+    beta tau F_eq' (1 - e^{-t/tau}) at any step; held after, the branch decays as e^{-(t - t_r)/tau}."""
+    beta, tau, tr = 0.7, 0.3, 1.0
+    load = lambda t: np.minimum(np.asarray(t, float) / tr, 1.0)
+    t = np.array([0.1, 0.4, 1.0, 1.7, 3.0])
+    q_r = beta * tau / tr * (1 - np.exp(-tr / tau))
+    want = np.where(t <= tr, t / tr + beta * tau / tr * (1 - np.exp(-t / tau)), 1.0 + q_r * np.exp(-(t - tr) / tau))
+    np.testing.assert_allclose(lumped_force(t, load, [beta], [tau]), want, rtol=1e-13)
+
+
+def test_adaptive_keeps_the_base_steps_for_slow_branches():
+    """Fig. 10's branch (tau = 200 s on a 0.2 s ramp): the base schedule is already fine, nothing is added."""
+    base = Fixed().schedule(0.2, 200.0)
+    np.testing.assert_array_equal(Adaptive().schedule(0.2, 200.0, beta=[0.8], tau=[200.0]), base)
+    np.testing.assert_array_equal(Adaptive().schedule(0.2, 200.0), base)  # elastic
+
+
+def test_adaptive_meets_its_tolerance_and_tightening_it_converges_at_second_order():
+    """Fast branch (tau = ramp / 4): the estimated time error of the lumped force is below tol at every step,
+    far below the default 6 ramp steps' (1.1e-2), and the true error (against a 100x finer run) at the output
+    times falls ~ N^-2 with the ramp step count N."""
+    fine = np.unique(np.r_[np.linspace(0, 0.2, 20001)[1:], np.geomspace(0.2, 200.0, 4000), OUT])
+    F_fine = lumped_force(fine, _hertz, **FAST)
+    ref = np.array([F_fine[np.argmin(np.abs(fine - t))] for t in OUT])
+    fixed = Fixed().schedule(0.2, 200.0, breakpoints=OUT)
+    assert np.abs(lumped_time_error(fixed, _hertz, **FAST)).max() > 1e-2
+    errs, n_ramp = [], []
+    for tol in (4e-4, 1e-4):
+        ts = Adaptive(tol=tol).schedule(0.2, 200.0, breakpoints=OUT, **FAST)
+        assert set(OUT) <= set(ts.tolist())
+        est = lumped_time_error(ts, _hertz, **FAST)
+        assert np.abs(est).max() <= tol
+        F = lumped_force(ts, _hertz, **FAST)
+        errs.append(np.array([F[np.argmin(np.abs(ts - t))] for t in OUT]) / ref - 1)
+        n_ramp.append(int(np.sum(ts <= 0.2)))
+    assert np.all(np.abs(errs[0][:4]) < 4e-4) and np.all(np.abs(errs[1][:4]) < 1e-4)
+    order = np.log(np.abs(errs[0][:4] / errs[1][:4])) / np.log(n_ramp[1] / n_ramp[0])
+    assert np.all((order > 1.6) & (order < 2.6)), order
+
+
+def test_step_strategies_reject_bad_settings():
+    with pytest.raises(ValueError, match="n_ramp"):
+        Fixed(n_ramp=0)
+    with pytest.raises(ValueError, match="tol"):
+        Adaptive(tol=0.0)
+    with pytest.raises(ValueError, match="stepping="):
+        compress(**CASE, mesh=0, n_ramp=6, stepping=Adaptive())
+
+
+def test_compress_reports_its_steps():
+    """The default stepping of a time run is Adaptive(); the step count is in parameters["n_steps"]."""
+    kw = {k: v for k, v in CASE.items() if k != "n_hold"}
+    r = compress(**{**kw, "branches": [(0.8, 200.0)], "end_time": 0.3}, mesh=0)
+    assert r.parameters["stepping"] == Adaptive()
+    base = Fixed().schedule(0.2, 0.3)  # tau = 200 s: the base steps, unchanged
+    assert r.parameters["n_steps"] == r.time.size == base.size
+    np.testing.assert_allclose(r.time, base)

@@ -114,7 +114,7 @@ def fe_fit(mesh: str) -> None:
     recs = []
     for d in (20e-6, 40e-6):
         r = fs.compress(radius=100e-6, C=truth["C"], alpha=truth["alpha"], branches=[(truth["beta"], truth["tau"])],
-                        displacement=d, ramp_time=1.0, end_time=300.0, mesh=mesh, contact="nodal")  # fmt: skip
+                        displacement=d, ramp_time=1.0, end_time=300.0, mesh=mesh, contact="nodal", n_ramp=6, n_hold=20)  # fmt: skip
         recs.append((r.time, r.nominal_stress * (1 + 0.01 * rng.standard_normal(r.time.size)), d))
     res = fe_relaxation(
         recs, radius=100e-6, ramp_time=1.0, initial=dict(C=100.0, alpha=1.2, beta=0.3, tau=10.0), mesh=mesh

@@ -173,6 +173,19 @@ def model_error_of(equilibrium: Any) -> float:
     return DEFAULT_MODEL_ERROR_REL if v is None else v
 
 
+def ramp_model_error(params: dict[str, float], n_branches: int, ramp_time: float, x: float = 0.1) -> float:
+    """The lumped model's own 1-sigma error during the ramp for fitted branches ``params`` (names of
+    :func:`parameter_names`): half (a 2-sigma bound, as the table's ``model_error_rel``) of
+    ``reduced.spheroid.lumped_ramp_error`` at the largest approach ``x`` = delta/(2 a0). A branch whose tau is near
+    the ramp (tau / ramp_time 0.05-3) makes it 0.05-0.25 %, far above the table's 1.5e-5 (issue 35)."""
+    from tissuemech.reduced.spheroid import lumped_ramp_error
+
+    names = parameter_names(n_branches)
+    beta = [params[n] for n in names[2 : 2 + n_branches]]
+    tau = [params[n] for n in names[2 + n_branches :]]
+    return 0.5 * lumped_ramp_error(tau, float(ramp_time), beta, x=x)
+
+
 def stated_accuracy(equilibrium: Any) -> float | None:
     """The equilibrium table's own stated accuracy (metadata ``model_error_rel``, relative, >= 0), or None where
     the law is no table or states none. ``relaxation`` flags records that scatter about the model by less than

@@ -288,3 +288,32 @@ def stability_charts(
     compression_panel(axes["E"], compression)
     fig.suptitle("Stability map: each method pushed until it fails (tables: stability_*.csv)", fontsize=11)
     return fig
+
+
+def time_convergence_chart(df: pd.DataFrame, *, title: str):
+    """Log-log error vs ramp steps of a time-convergence table (``compare.studies.accuracy.spheroid_time_convergence``):
+    the FE with fixed steps (one line per output time, and their max), the FE with adaptive steps (markers, labelled
+    with their tol) and the lumped recursion's estimate of the same error (dashed)."""
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(8, 6.5), layout="constrained")
+    fx = df[df.method == "FE fixed"]
+    ad = df[df.method == "FE adaptive"]
+    cols = [c for c in df.columns if c.startswith("error ") and c.endswith(" s")]
+    for c in cols:
+        ax.loglog(fx.ramp_steps, np.abs(fx[c].to_numpy(float)), "-", lw=1, alpha=0.6, label=f"FE fixed, t = {c[6:]}")
+    ax.loglog(fx.ramp_steps, fx.error, "k-o", ms=5, label="FE fixed, max over the times")
+    ax.loglog(fx.ramp_steps, fx["lumped estimate"], "k--", lw=1, label="lumped estimate (fixed), max")
+    ax.loglog(ad.ramp_steps, ad.error, "rs", ms=8, mfc="none", label="FE adaptive, max")
+    ax.loglog(ad.ramp_steps, ad["lumped estimate"], "r+", ms=9, label="lumped estimate (adaptive)")
+    for r in ad.itertuples():
+        ax.annotate(str(r.setting), (r.ramp_steps, r.error), textcoords="offset points", xytext=(6, 6), fontsize=8)
+    n = fx.ramp_steps.to_numpy(float)
+    if n.size:
+        e0 = float(fx.error.iloc[0])
+        ax.loglog(n, e0 * (n / n[0]) ** -2.0, ":", color="grey", label="slope -2")
+    ax.set_xlabel("ramp steps")
+    ax.set_ylabel("|F / F_ref - 1|")
+    ax.set_title(title, fontsize=10)
+    ax.grid(True, which="both", alpha=0.3)
+    _legend_below(ax, ncol=2)
+    return fig

@@ -53,6 +53,7 @@ SPHEROID_FIGURES = (
     "fig10_nominal_stress.png",
     "accuracy_spheroid.png",
     "tensiometry.png",
+    "time_convergence_spheroid.png",
 )
 TABLES = (
     "blastula_sets.csv",
@@ -66,6 +67,7 @@ TABLES = (
 )
 SPHEROID_TABLES = (
     "accuracy_spheroid.csv",
+    "time_convergence_spheroid.csv",
     "stability_compression.csv",
     "spheroid_seed.csv",
     "tensiometry_static.csv",

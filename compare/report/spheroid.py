@@ -450,4 +450,8 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
         md_table(df.drop(columns=["reference"], errors="ignore")),
         "",
     ]
+    progress("spheroid: convergence in time (fast branches)")
+    from tissuemech.compare.report.accuracy import time_convergence
+
+    sec.md += time_convergence(sec)  # next to the mesh convergence above
     return sec

@@ -30,6 +30,12 @@ reduced lumped model (jitted; the fastest of 21 calls after compile) with the He
 FE-calibrated law (tables passed by the caller), FE on every level (the fastest of ``fe_repeats`` runs,
 mesh set-up included in each).
 
+Spheroid in time (``spheroid_time_convergence``, issue 35): the fast two-branch case (``cases.FAST_BRANCHES``,
+tau = 0.05 s on a 0.2 s ramp) on one contact-edge-fitted level, F at t = 0.05, 0.1, 0.2 s for fixed ramp steps
+(``fem.stepping.Fixed``) and adaptive ones (``fem.stepping.Adaptive``, the default), against the level's own
+time-converged force (the Richardson limit of the three finest fixed runs, observed order), next to the lumped
+recursion's estimate of the same error (``fem.stepping.lumped_force``, what ``Adaptive`` controls).
+
 ``pareto(df)`` marks the rows not dominated in (wall time, error).
 """
 
@@ -52,7 +58,17 @@ ODE_RTOLS = (1e-3, 1e-4, 1e-6, 1e-8, 1e-10)
 FE_MESHES = ((2, 4), (4, 8), (8, 16), (16, 32))
 FE_MESHES_QUICK = ((1, 2), (2, 4), (4, 8), (8, 16))
 
-__all__ = ["blastula_accuracy", "spheroid_accuracy", "pareto", "timed", "timed_stats", "FE_MESHES", "FE_MESHES_QUICK"]
+__all__ = [
+    "blastula_accuracy",
+    "spheroid_accuracy",
+    "spheroid_time_convergence",
+    "TIME_TIMES",
+    "pareto",
+    "timed",
+    "timed_stats",
+    "FE_MESHES",
+    "FE_MESHES_QUICK",
+]
 
 
 _T = TypeVar("_T")
@@ -302,3 +318,81 @@ def spheroid_accuracy(
     df = pd.DataFrame(rows).rename(columns=_SPHEROID_COLUMNS)
     df["pareto"] = pareto(df)
     return df, {m: r for m, (_, r) in fe.items()}
+
+
+TIME_TIMES = (0.05, 0.1, 0.2)  # s, where spheroid_time_convergence reads F (the ramp of cases.FAST_BRANCHES)
+
+
+def spheroid_time_convergence(
+    quick: bool = False,
+    level: int | None = None,
+    fixed: Sequence[int] | None = None,
+    tols: Sequence[float] | None = None,
+) -> pd.DataFrame:
+    """F / F_ref - 1 at ``TIME_TIMES`` per step strategy on the fast two-branch case (see the module docstring).
+
+    Defaults: level 1, fixed n_ramp = 6, 12, 24, 48, Adaptive tol = 5e-4, 2e-4; quick: level 0, n_ramp = 6, 12, 24,
+    tol = 1e-3 (the run ends at the ramp's end, 0.2 s). Columns: method ("FE fixed", "FE adaptive", "FE
+    Richardson"), setting, ramp steps, ``error 0.05 s`` ..., error (max |.| over the times), ``lumped estimate``
+    (the same max for the lumped recursion on the same steps, against its own 100x finer run), ``wall_time [s]``.
+    """
+    from tissuemech.fem.spheroid import compress
+    from tissuemech.fem.stepping import Adaptive, lumped_force
+
+    level = (0 if quick else 1) if level is None else int(level)
+    fixed = list(fixed or ((6, 12, 24) if quick else (6, 12, 24, 48)))
+    tols = list(tols or ((1e-3,) if quick else (5e-4, 2e-4)))
+    if len(fixed) < 3:
+        raise ValueError("spheroid_time_convergence needs >= 3 fixed step counts (the three finest give the reference)")
+    case = dict(cases.FAST_BRANCHES, end_time=TIME_TIMES[-1])
+    ts = np.asarray(TIME_TIMES)
+    beta = [b for b, _ in case["branches"]]
+    tau = [t for _, t in case["branches"]]
+    shape = lambda t: np.minimum(np.asarray(t, float) / case["ramp_time"], 1.0) ** 1.5
+    fine = np.unique(np.r_[np.linspace(0.0, ts[-1], 20001)[1:], ts])
+    F_fine = lumped_force(fine, shape, beta, tau)
+    lumped_ref = np.array([F_fine[np.argmin(np.abs(fine - t))] for t in ts])
+
+    def run(label: str, setting: str, **stepping) -> dict:
+        t0 = time.perf_counter()
+        r = compress(**case, mesh=level, field_times=list(ts), **stepping)
+        wall = time.perf_counter() - t0
+        k = [int(np.argmin(np.abs(r.time - t))) for t in ts]
+        Fl = lumped_force(r.time, shape, beta, tau)[k]
+        return dict(
+            method=label,
+            setting=setting,
+            ramp_steps=int(np.sum(r.time <= case["ramp_time"] * (1 + 1e-12))),
+            F=r.force[k],
+            lumped=float(np.max(np.abs(Fl / lumped_ref - 1))),
+            **{WALL: wall},
+        )
+
+    rows = [run("FE fixed", f"n_ramp = {n}", n_ramp=n) for n in fixed]
+    rows += [run("FE adaptive", f"tol = {tol:g}", stepping=Adaptive(tol=tol)) for tol in tols]
+    F1, F2, F4 = (rows[i]["F"] for i in range(len(fixed) - 3, len(fixed)))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        p = np.clip(np.nan_to_num(np.log2(np.abs(F2 - F1) / np.abs(F4 - F2)), nan=2.0), 1.0, 3.0)
+    F_ref = F4 + (F4 - F2) / (2.0**p - 1.0)
+    out = []
+    for r in rows:
+        e = r.pop("F") / F_ref - 1.0
+        out.append(
+            dict(
+                **{k: r[k] for k in ("method", "setting", "ramp_steps")},
+                **{f"error {t:g} s": v for t, v in zip(ts, e)},
+                error=float(np.max(np.abs(e))),
+                **{"lumped estimate": r["lumped"], WALL: r[WALL]},
+            )
+        )
+    out.append(
+        dict(
+            method="FE Richardson",
+            setting=f"n_ramp = {', '.join(map(str, fixed[-3:]))}; order " + ", ".join(f"{v:.2f}" for v in p),
+            ramp_steps=np.nan,
+            error=np.nan,
+        )
+    )
+    df = pd.DataFrame(out)
+    df.attrs["level"] = level
+    return df
