@@ -23,9 +23,10 @@ FE-made records. Rerun after regenerating the master table: the numbers follow t
 The error-model rows (:data:`SCENARIOS`, :func:`scenario_study`; ``tissuemech coverage --scenarios
 [--n-scenario 200]``): reduced-made records with 1 % noise that is white, AR(1) with lag-1 correlation 0.9, or
 proportional to the signal, or white plus a 0.5 % smooth misfit (:func:`add_misfit`), on sparse records (the
-protocol above) and dense ones (:data:`DENSE`: 2000 samples every 0.75 s); each fit's own intervals and the Wald
-intervals of every error model of :mod:`tissuemech.compare.fit.diagnostics` are scored. Target: 90-99 % for
-every parameter on every row. Measured (120 fits per row, 2026-12-03): docs/fitting.md.
+protocol above) and dense ones (:data:`DENSE`: 2000 samples every 0.75 s), and creep records (:data:`CREEP`: 3 and
+25 uN held, 1 % white noise on the approach, fitted by :func:`tissuemech.compare.fit.protocols.records_fit`); each
+fit's own intervals and the Wald intervals of every error model of :mod:`tissuemech.compare.fit.diagnostics` are
+scored. Target: 90-99 % for every parameter on every row. Measured (200 fits per row, 2026-12-03): docs/fitting.md.
 """
 
 from __future__ import annotations
