@@ -2,10 +2,14 @@ r"""``tissuemech fit``: fit the spheroid model to your own compression-relaxatio
 
     tissuemech fit DATA.csv [DATA2.csv ...] --radius-um R --displacement-um D [D2 ...] --ramp-time T
                    [--quantity auto|stress|force] [--equilibrium fem|hertz] [--branches N]
-                   [--model-error auto|X] [--out DIR]
+                   [--model-error auto|X] [--protocol auto|relaxation|creep|history] [--force-un F] [--out DIR]
 
 The files: one CSV per compression level, time in s and nominal stress in Pa or plate force in N, an optional
 header naming the columns with units, ``#`` comments (:mod:`tissuemech.compare.fit.records` has the format).
+Creep and measured-history files carry ``time, approach, force`` columns (e.g. ``time [min], approach [um],
+force [uN]``); ``--protocol`` says what each records, or (auto) it is inferred from the columns and the force and
+printed; they are fitted with :func:`tissuemech.compare.fit.protocols.records_fit`, mixed with relaxation files
+if any, and ``fit-records.csv`` holds each record's data, model and residual.
 
 Output: the parameter table with 95 % intervals and the identifiability report (stdout), and in
 ``--out`` (default ``fit-results``): ``fit.json`` (everything: parameters, intervals and their kind,

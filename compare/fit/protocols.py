@@ -26,7 +26,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -425,6 +425,8 @@ def records_fit(
         tuple(jnp.asarray(s) for s in peaks),
     )
     kw = dict(kinds=kinds, radius=float(radius), ramp_time=float(ramp_time), equilibrium=equilibrium, nb=n_branches)
+    res_fn: Callable
+    jac_fn: Callable
     try:
         hash(equilibrium)
         res_fn = functools.partial(_residual_jit, data=args[0], ys=args[1], peaks=args[2], **kw)
