@@ -116,7 +116,7 @@ def run(args: argparse.Namespace) -> None:
     if args.protocol in ("creep", "history"):
         raise ValueError(
             f"--protocol {args.protocol} needs files with time, approach and force columns (a header such as "
-            "'time [s], approach [um], force [uN]'); none of the files names an approach column"
+            "'time [s], approach [um], force [uN]'); none of the files names approach and force columns"
         )
     disps = None if args.displacement_um is None else [d * UM for d in args.displacement_um]
     recs, forces = fit.load_records(
@@ -165,9 +165,11 @@ def run(args: argparse.Namespace) -> None:
 
 
 def _has_approach(path: str) -> bool:
+    """True for a creep / measured-history file: its header names an approach and a force column."""
     from tissuemech.compare.fit.records import header_columns, read_table
 
-    return "approach" in header_columns(read_table(path))
+    cols = header_columns(read_table(path))
+    return "approach" in cols and "force" in cols
 
 
 def _run_protocols(args: argparse.Namespace, radius: float) -> None:
@@ -193,7 +195,7 @@ def _run_protocols(args: argparse.Namespace, radius: float) -> None:
         if path in relax:
             recs.append(fit.Record(*by_path[path]))
             kinds.append("relaxation")
-            print(f"{path}: relaxation (no approach column)")
+            print(f"{path}: relaxation (no approach and force columns)")
             continue
         asked = "auto" if args.protocol == "auto" else args.protocol
         rec, kind, why = protocols.read_protocol_csv(path, protocol=asked, ramp_time=args.ramp_time, force=force)
