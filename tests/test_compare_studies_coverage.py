@@ -106,3 +106,15 @@ def test_error_model_rows_cover():
     assert (default["coverage %"] >= 100 * 9 / 12).all(), default
     white = table[table["errors"] == "white"]
     assert white["coverage %"].mean() < 70, white
+
+
+@pytest.mark.slow
+def test_creep_row_covers():
+    """10 fits of reduced-made creep records (3 and 25 uN held, 1 % white noise on the approach, fitted by
+    compare.fit.protocols.records_fit): the default intervals hold the truth >= 8 times per parameter (P(fewer) ~
+    1 % for a true 95 % interval)."""
+    df = coverage.scenario_study(["creep"], n=10, seed=7, intervals="wald", log=None)
+    table = coverage.summarise_scenarios(df)
+    default = table[table["errors"] == "default"]
+    assert len(default) == 4 and (default["fits"] == 10).all()
+    assert (default["coverage %"] >= 80).all(), default

@@ -2,10 +2,14 @@ r"""``tissuemech fit``: fit the spheroid model to your own compression-relaxatio
 
     tissuemech fit DATA.csv [DATA2.csv ...] --radius-um R --displacement-um D [D2 ...] --ramp-time T
                    [--quantity auto|stress|force] [--equilibrium fem|hertz] [--branches N]
-                   [--model-error auto|X] [--out DIR]
+                   [--model-error auto|X] [--protocol auto|relaxation|creep|history] [--force-un F] [--out DIR]
 
 The files: one CSV per compression level, time in s and nominal stress in Pa or plate force in N, an optional
 header naming the columns with units, ``#`` comments (:mod:`tissuemech.compare.fit.records` has the format).
+Creep and measured-history files carry ``time, approach, force`` columns (e.g. ``time [min], approach [um],
+force [uN]``); ``--protocol`` says what each records, or (auto) it is inferred from the columns and the force and
+printed; they are fitted with :func:`tissuemech.compare.fit.protocols.records_fit`, mixed with relaxation files
+if any, and ``fit-records.csv`` holds each record's data, model and residual.
 
 Output: the parameter table with 95 % intervals and the identifiability report (stdout), and in
 ``--out`` (default ``fit-results``): ``fit.json`` (everything: parameters, intervals and their kind,
@@ -79,6 +83,21 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="lower bound of the model's smooth misfit (relative RMS, e.g. 0.002) the intervals allow for; the "
         "residuals show only the part the parameters cannot absorb (default 0: estimated from them alone)",
     )
+    f.add_argument(
+        "--protocol",
+        choices=["auto", "relaxation", "creep", "history"],
+        default="auto",
+        help="what each file records: relaxation (time, stress or force; the displacement is held), creep (time, "
+        "approach, force: the held force drives the model, the approach is fitted), history (time, approach, force: "
+        "the measured approach drives the model, the force is fitted); auto (default): relaxation for files without "
+        "an approach column, else creep when the force is held after the ramp, history otherwise (printed)",
+    )
+    f.add_argument(
+        "--force-un",
+        type=_positive,
+        default=None,
+        help="the held force of creep files in uN (default: the median of each file's force column over the hold)",
+    )
     f.add_argument("--out", default="fit-results", help="folder for fit.json and fit.png (default: %(default)s)")
     f.add_argument("--no-figure", action="store_true", help="skip fit.png")
     return f
@@ -92,6 +111,13 @@ def run(args: argparse.Namespace) -> None:
         raise ValueError(f"--branches must be at least 1; got {args.branches}")
     output_folder("--out", args.out)  # before the fit
     radius = args.radius_um * UM
+    if args.protocol != "relaxation" and any(_has_approach(p) for p in args.files):
+        return _run_protocols(args, radius)
+    if args.protocol in ("creep", "history"):
+        raise ValueError(
+            f"--protocol {args.protocol} needs files with time, approach and force columns (a header such as "
+            "'time [s], approach [um], force [uN]'); none of the files names approach and force columns"
+        )
     disps = None if args.displacement_um is None else [d * UM for d in args.displacement_um]
     recs, forces = fit.load_records(
         list(args.files), radius=radius, displacements=disps, ramp_time=args.ramp_time, quantity=args.quantity
@@ -133,6 +159,88 @@ def run(args: argparse.Namespace) -> None:
         fig = fit_figure(
             recs, res, radius=radius, ramp_time=args.ramp_time, equilibrium=args.equilibrium, midplane=midplane
         )
+        save_figure(fig, str(out / "fit.png"))
+        written.append(str(out / "fit.png"))
+    print("wrote " + ", ".join(written))
+
+
+def _has_approach(path: str) -> bool:
+    """True for a creep / measured-history file: its header names an approach and a force column."""
+    from tissuemech.compare.fit.records import header_columns, read_table
+
+    cols = header_columns(read_table(path))
+    return "approach" in cols and "force" in cols
+
+
+def _run_protocols(args: argparse.Namespace, radius: float) -> None:
+    """``tissuemech fit`` on creep / measured-history files (mixed with relaxation files, if any)."""
+    import numpy as np
+
+    from tissuemech.compare import fit
+    from tissuemech.compare.fit import protocols
+
+    recs, kinds = [], []
+    relax = [p for p in args.files if not _has_approach(p)]
+    disps = None if args.displacement_um is None else [d * UM for d in args.displacement_um]
+    if relax:
+        rr, forces = fit.load_records(relax, radius=radius, displacements=disps, ramp_time=args.ramp_time)
+        if any(forces):
+            raise ValueError(
+                "relaxation files of forces (N) cannot be mixed with creep or history files: give them as nominal "
+                "stress (Pa), or record the approach too ('time, approach, force' columns) and fit them as histories"
+            )
+        by_path = dict(zip(relax, rr))
+    force = None if args.force_un is None else args.force_un * UM
+    for path in args.files:
+        if path in relax:
+            recs.append(fit.Record(*by_path[path]))
+            kinds.append("relaxation")
+            print(f"{path}: relaxation (no approach and force columns)")
+            continue
+        asked = "auto" if args.protocol == "auto" else args.protocol
+        rec, kind, why = protocols.read_protocol_csv(path, protocol=asked, ramp_time=args.ramp_time, force=force)
+        print(f"{path}: {why}")
+        recs.append(rec)
+        kinds.append(kind)
+    res = protocols.records_fit(
+        recs,
+        radius=radius,
+        ramp_time=args.ramp_time,
+        n_branches=args.branches,
+        equilibrium=args.equilibrium,
+        model_error=args.model_error,
+        misfit=args.misfit,
+    )
+    print(res.summary())
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    d = res.to_dict()
+    d["inputs"] = {
+        "files": [str(f) for f in args.files],
+        "protocols": kinds,
+        "radius_m": radius,
+        "ramp_time_s": args.ramp_time,
+        "equilibrium": args.equilibrium,
+        "n_points": [int(np.size(r[0])) for r in recs],
+        "misfit_rel": args.misfit,
+    }
+    (out / "fit.json").write_text(json.dumps(d, indent=1))
+    # data, model and residual of every record, in the records' units
+    lines = ["record,protocol,time [s],observed,model,residual,unit"]
+    kw = dict(radius=radius, ramp_time=args.ramp_time, equilibrium=args.equilibrium)
+    for j, (rec, kind, unit) in enumerate(zip(recs, kinds, res.units)):
+        y = np.asarray(rec[2] if kind == "history" else rec[1])
+        m = protocols.predict(rec, res.params, **kw) * (res.model_error_factors[j] if res.model_error_factors else 1.0)
+        lines += [f"{j + 1},{kind},{t:.9g},{a:.9g},{b:.9g},{a - b:.9g},{unit}" for t, a, b in zip(rec[0], y, m)]
+        rms = float(np.sqrt(np.mean((y - m) ** 2)))
+        rel = 100 * rms / np.max(np.abs(y))
+        print(f"record {j + 1} ({kind}, {args.files[j]}): RMS residual {rms:.3g} {unit} ({rel:.2g} % of the peak)")
+    (out / "fit-records.csv").write_text("\n".join(lines) + "\n")
+    written = [str(out / "fit.json"), str(out / "fit-records.csv")]
+    if not args.no_figure:
+        from tissuemech.compare.plots.fit import protocol_figure
+
+        fig = protocol_figure(recs, res, radius=radius, ramp_time=args.ramp_time, equilibrium=args.equilibrium)
         save_figure(fig, str(out / "fit.png"))
         written.append(str(out / "fit.png"))
     print("wrote " + ", ".join(written))

@@ -4,7 +4,8 @@ Where things are: :mod:`.records` (Record, the CSV reader, the checks a record m
 (parameters, the JAX residual and its Jacobian, bounds, the model-error term of a law), :mod:`.problem`
 (weighted residuals, the bounded solver), :mod:`.intervals` (Wald / profile intervals, identifiability),
 :mod:`.diagnostics` (residual diagnostics, the error model of the intervals), :mod:`.result` (FitResult),
-:mod:`.estimation` (:func:`relaxation`), :mod:`.design` (experiment design: predicted interval widths),
+:mod:`.estimation` (:func:`relaxation`), :mod:`.protocols` (:func:`records_fit`: creep, measured-history and mixed
+records), :mod:`.design` (experiment design: predicted interval widths),
 :mod:`.fe` (:func:`fe_relaxation`: the FE in the loop, exact FE Jacobians, beyond the reduced model's table).
 The names below are re-exported here: ``from tissuemech.compare.fit import relaxation, read_csv, FitResult,
 Record``.
@@ -79,6 +80,7 @@ from tissuemech.compare.fit.model import (
     parameter_names,
     table_of,
 )
+from tissuemech.compare.fit.protocols import CreepRecord, HistoryRecord, records_fit
 from tissuemech.compare.fit.records import (
     COLUMN_UNITS,
     Record,
@@ -95,6 +97,9 @@ __all__ = [
     "FEFitResult",
     "step_times",
     "Record",
+    "CreepRecord",
+    "HistoryRecord",
+    "records_fit",
     "FitResult",
     "Identifiability",
     "relaxation",

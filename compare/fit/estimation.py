@@ -27,11 +27,21 @@ from tissuemech.compare.fit.model import (
     table_of,
 )
 from tissuemech.compare.fit.problem import Problem, masked_solver, safe
-from tissuemech.compare.fit.records import as_records, check_information, check_ramp
+from tissuemech.compare.fit.records import Record, as_records, check_information, check_ramp
 from tissuemech.compare.fit.result import FitResult
 from tissuemech.reduced.material import validate_positive
 
-__all__ = ["relaxation", "NOISE_FREE_REL", "hertz_range", "HERTZ_X_WARN", "HERTZ_X_MAX", "HertzRangeWarning"]
+__all__ = [
+    "relaxation",
+    "estimate",
+    "model_error_value",
+    "starting_point",
+    "NOISE_FREE_REL",
+    "hertz_range",
+    "HERTZ_X_WARN",
+    "HERTZ_X_MAX",
+    "HertzRangeWarning",
+]
 
 NOISE_FREE_REL = 1e-9  # RMS residual below this fraction of the record's peak: noise-free (synthetic) data
 HERTZ_X_WARN = 0.1  # approach / diameter beyond which the small-strain Hertz law's force error exceeds ~15 %
@@ -145,40 +155,104 @@ def relaxation(
         )
     if isinstance(equilibrium, str) and equilibrium == "hertz":
         hertz_range(x)
+    eps = model_error_value(model_error, equilibrium)
+    model = default_model() if model is None else model
+    p0 = starting_point(initial, names, lambda: initial_guess(recs, radius, ramp_time, n_branches))
+    res_fn, jac_fn, scale = residual_builder(recs, float(radius), float(ramp_time), n_branches, equilibrium, model)
+    res = estimate(
+        recs,
+        res_fn,
+        jac_fn,
+        scale,
+        names=names,
+        p0=p0,
+        n_branches=n_branches,
+        equilibrium=equilibrium,
+        ramp_time=float(ramp_time),
+        eps=eps,
+        max_nfev=max_nfev,
+        intervals=intervals,
+        errors=errors,
+        misfit=misfit,
+    )
+    if isinstance(model_error, str):  # "auto": the lumped model's ramp error for the fitted branches (issue 35)
+        ramp_eps = ramp_model_error(dict(res.params), n_branches, float(ramp_time), x)
+        if ramp_eps > eps:
+            res = relaxation(**{**call, "model_error": float(ramp_eps), "initial": dict(res.params)})
+            note = (
+                f"model_error 'auto' raised from {eps:.2g} (the table's) to {ramp_eps:.2g}: a fitted tau is near the "
+                "ramp, where the lumped model is up to 0.5 % off the FE (reduced.spheroid.lumped_ramp_error)"
+            )
+            return dataclasses.replace(res, flags=res.flags + (note,))
+    return res
+
+
+def model_error_value(model_error: float | str | None, equilibrium: Any) -> float:
+    """The relative model-error term of ``model_error`` ("auto": :func:`model_error_of` the law; None: 0); ValueError
+    for anything else than a finite number >= 0."""
     if isinstance(model_error, str):
         if model_error != "auto":
             raise ValueError(
                 f"model_error must be a number (relative, e.g. 0.005), 'auto' or None; got {model_error!r}"
             )
-        eps = model_error_of(equilibrium)
-    else:
-        eps = 0.0 if model_error is None else float(model_error)
-        if not (math.isfinite(eps) and eps >= 0):
-            raise ValueError(
-                f"model_error (relative 1-sigma error of the force, -) must be a finite number >= 0; got {model_error}"
-            )
-    model = default_model() if model is None else model
+        return model_error_of(equilibrium)
+    eps = 0.0 if model_error is None else float(model_error)
+    if not (math.isfinite(eps) and eps >= 0):
+        raise ValueError(
+            f"model_error (relative 1-sigma error of the force, -) must be a finite number >= 0; got {model_error}"
+        )
+    return eps
+
+
+def starting_point(
+    initial: dict[str, float] | Sequence[float] | None, names: tuple[str, ...], guess: Callable[[], np.ndarray]
+) -> np.ndarray:
+    """The starting parameters (in ``names`` order): ``initial`` (a dict by name, the rest from ``guess()``, or a
+    full sequence) or ``guess()``; ValueError for a wrong length or a non-positive value."""
     if initial is None:
-        p0 = initial_guess(recs, radius, ramp_time, n_branches)
+        p0 = np.asarray(guess(), dtype=float)
     elif isinstance(initial, dict):
         unknown = sorted(set(map(str, initial)) - set(names))
         if unknown:
             raise ValueError(f"initial: unknown parameter name(s) {unknown}; the valid names are {list(names)}")
-        guess = initial_guess(recs, radius, ramp_time, n_branches)
-        p0 = np.array([float(initial.get(n, g)) for n, g in zip(names, guess)])
+        p0 = np.array([float(initial.get(n, g)) for n, g in zip(names, guess())])
     else:
         p0 = np.asarray(initial, dtype=float)
         if p0.shape != (len(names),):
             raise ValueError(f"initial needs {len(names)} values in the order {names}; got {p0.size}")
     if np.any(p0 <= 0) or not np.all(np.isfinite(p0)):
         raise ValueError(f"initial values must be positive and finite; got {dict(zip(names, p0))}")
+    return p0
+
+
+def estimate(
+    recs: Sequence[Record],
+    res_fn: Callable,
+    jac_fn: Callable,
+    scale: float,
+    *,
+    names: tuple[str, ...],
+    p0: np.ndarray,
+    n_branches: int,
+    equilibrium: Any,
+    ramp_time: float,
+    eps: float,
+    max_nfev: int,
+    intervals: str,
+    errors: str,
+    misfit: float,
+) -> FitResult:
+    """The fit behind :func:`relaxation` and :func:`tissuemech.compare.fit.protocols.records_fit`: weighted least
+    squares from ``p0`` of the residual ``res_fn`` (log-parameters -> (model - data) / ``scale``, its Jacobian
+    ``jac_fn``) against the records' observed values (``recs[j].nominal_stress``, the observable of each record in
+    the units of ``scale``), per-record noise, the model-error factors ``eps``, the error model and the 95 % intervals
+    (module doc of :mod:`tissuemech.compare.fit`). ``ramp_time`` (s) sets the relaxation times' lower search bound and
+    the discrepancy's log-time axis."""
     P, R = len(names), len(recs)
     lo_t, hi_t = search_bounds(
         names, n_branches, equilibrium, float(ramp_time), max(float(np.max(r.time)) for r in recs)
     )
     theta0 = np.clip(np.log(p0), lo_t + 1e-9, hi_t - 1e-9)
-
-    res_fn, jac_fn, scale = residual_builder(recs, float(radius), float(ramp_time), n_branches, equilibrium, model)
     if not np.all(np.isfinite(np.asarray(res_fn(jnp.asarray(theta0))))):
         raise RuntimeError(
             f"the model returned NaN/inf at the starting point {dict(zip(names, p0))}. "
@@ -213,16 +287,6 @@ def relaxation(
                 break
         prob.sig = np.maximum(noise_prev, floor)[prob.idx]  # the weights z is the optimum for
     z = sol.x
-    if isinstance(model_error, str):  # "auto": the lumped model's ramp error for the fitted branches (issue 35)
-        fitted = {nm: float(v) for nm, v in zip(names, np.exp(z[:P]))}
-        ramp_eps = ramp_model_error(fitted, n_branches, float(ramp_time), x)
-        if ramp_eps > eps:
-            res = relaxation(**{**call, "model_error": float(ramp_eps), "initial": fitted})
-            note = (
-                f"model_error 'auto' raised from {eps:.2g} (the table's) to {ramp_eps:.2g}: a fitted tau is near the "
-                "ramp, where the lumped model is up to 0.5 % off the FE (reduced.spheroid.lumped_ramp_error)"
-            )
-            return dataclasses.replace(res, flags=res.flags + (note,))
     flags: list[str] = []
     noise_free = bool(np.any(noise < NOISE_FREE_REL * peaks))
     if noise_free:

@@ -55,6 +55,7 @@ __all__ = [
     "UM",
     "MAX_TABLE_BYTES",
     "read_text",
+    "header_columns",
 ]
 
 UM = 1e-6  # one micrometre in m (the command line's unit of lengths)
@@ -399,11 +400,13 @@ COLUMN_UNITS = {
     "time": {"s": 1.0, "ms": 1e-3, "min": 60.0, "h": 3600.0},
     "stress": {"Pa": 1.0, "mPa": 1e-3, "kPa": 1e3, "MPa": 1e6},
     "force": {"N": 1.0, "mN": 1e-3, "uN": 1e-6, "µN": 1e-6, "μN": 1e-6, "nN": 1e-9},
+    "approach": {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6, "nm": 1e-9},
 }
 _NAMES = {
     "time": ("t", "time"),
     "stress": ("stress", "sigma", "nominal_stress", "stress_nominal"),
     "force": ("force", "f", "plate_force", "load"),
+    "approach": ("approach", "delta", "plate_approach", "displacement", "compression"),
 }
 
 
@@ -450,6 +453,23 @@ def _columns(table: Table, quantity: str) -> tuple[int, int, float, float, bool]
         )
     force = quantity == "force" if quantity != "auto" else named == "force"
     return ti, vi, factors[0], factors[1], force
+
+
+def header_columns(table: Table) -> dict[str, tuple[int, float]]:
+    """The columns a table's header names: quantity ("time", "stress", "force", "approach") -> (column index,
+    factor to SI); the first column of each quantity; ValueError naming the column for an unknown unit."""
+    out: dict[str, tuple[int, float]] = {}
+    for i, name in enumerate(table.header):
+        kind, unit = _column(name)
+        if kind is None or kind in out:
+            continue
+        if unit is not None and unit not in COLUMN_UNITS[kind]:
+            raise ValueError(
+                f"{table.path}: column {name!r}: unit {unit!r} is not one this reader knows for {kind} "
+                f"({', '.join(COLUMN_UNITS[kind])}); convert the column or rename its header"
+            )
+        out[kind] = (i, 1.0 if unit is None else COLUMN_UNITS[kind][unit])
+    return out
 
 
 def _incompressible_rmid(t: np.ndarray, radius: float, displacement: float, ramp_time: float) -> np.ndarray:

@@ -39,6 +39,8 @@ class FitResult:
     discrepancy   estimated relative RMS size of each record's smooth discrepancy term (0: none found)
     correlation   per record: the residuals' lag-1 autocorrelation used for prewhitening (0 .. 0.97)
     wald_by_error_model  the Wald 95 % interval of each parameter under each error model (comparison studies)
+    protocols, units  per record of :func:`~tissuemech.compare.fit.protocols.records_fit`: "relaxation", "creep" or
+                  "history", and the unit of its observable and noise (Pa, m, N); empty: all relaxation (Pa)
     success       True when the optimizer converged AND the intervals are usable (no flag below)
     flags         warnings that make intervals unusable or one-sided, in words
     message       optimizer message (and flags); ``nfev`` model evaluations of the final pass
@@ -66,6 +68,8 @@ class FitResult:
     covariances: dict[str, np.ndarray] = field(default_factory=dict)
     correlation: tuple[float, ...] = field(default=())
     wald_by_error_model: dict[str, dict[str, tuple[float, float]]] = field(default_factory=dict)
+    units: tuple[str, ...] = field(default=())
+    protocols: tuple[str, ...] = field(default=())
 
     @property
     def report(self) -> str:
@@ -97,9 +101,16 @@ class FitResult:
                 f"{n + ' [' + unit + ']':>10} {self.params[n]:12.5g} {lo:12.5g} {hi:12.5g}  "
                 f"{n} {self.interval_text(n)}" + (f"  ({method})" if method else "")
             )
-        lines.append(f"RMS residual: {self.residual:.4g} Pa")
-        if self.noise:
-            lines.append("noise sd per record: " + ", ".join(f"{s:.3g}" for s in self.noise) + " Pa")
+        if self.units:
+            lines.append(f"RMS residual: {100 * self.residual:.3g} % of each record's peak")
+            lines.append(
+                "noise sd per record: "
+                + ", ".join(f"{s:.3g} {u} ({k})" for s, u, k in zip(self.noise, self.units, self.protocols))
+            )
+        else:
+            lines.append(f"RMS residual: {self.residual:.4g} Pa")
+            if self.noise:
+                lines.append("noise sd per record: " + ", ".join(f"{s:.3g}" for s in self.noise) + " Pa")
         if self.model_error:
             lines.append(f"model-error term: {100 * self.model_error:.3g} % (1 sigma, per record, on the force)")
         if self.errors == "robust":
@@ -138,8 +149,16 @@ class FitResult:
             "interval_methods": dict(self.methods),
             "interval_text": {n: self.interval_text(n) for n in self.names},
             "units": {n: PARAMETER_UNITS[n.split("_")[0]] for n in self.names},
-            "rms_residual_Pa": num(self.residual),
-            "noise_sd_Pa": [num(s) for s in self.noise],
+            **(
+                {
+                    "protocols": list(self.protocols),
+                    "rms_residual_rel": num(self.residual),
+                    "noise_sd": [num(s) for s in self.noise],
+                    "noise_units": list(self.units),
+                }
+                if self.units
+                else {"rms_residual_Pa": num(self.residual), "noise_sd_Pa": [num(s) for s in self.noise]}
+            ),
             "model_error_rel": num(self.model_error),
             "model_error_factors": [num(v) for v in self.model_error_factors],
             "errors": self.errors,

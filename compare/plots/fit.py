@@ -9,7 +9,7 @@ import numpy as np
 
 from tissuemech.compare.plots import pyplot as _plt
 
-__all__ = ["fit_figure"]
+__all__ = ["fit_figure", "protocol_figure"]
 
 UM = 1e-6
 
@@ -48,5 +48,50 @@ def fit_figure(
     axr.axhline(0.0, color="k", lw=0.6)
     axr.set_ylabel("residual (Pa)")
     axr.set_xlabel("time (s)")
+    fig.tight_layout()
+    return fig
+
+
+def protocol_figure(records: Sequence[Any], result: Any, *, radius: float, ramp_time: float, equilibrium: Any):
+    """Data and model (top) and residuals (bottom) of every record of a
+    :func:`~tissuemech.compare.fit.protocols.records_fit` (one column per record: nominal stress in Pa, approach in
+    um or force in uN against time in s). Returns the figure (nothing is shown or saved here)."""
+    from tissuemech.compare.fit.protocols import predict, protocol_of
+
+    plt = _plt()
+    n = len(records)
+    fig, axes = plt.subplots(
+        2, n, figsize=(4.2 * n, 6), squeeze=False, sharex="col", gridspec_kw={"height_ratios": [3, 1.3]}
+    )
+    for j, rec in enumerate(records):
+        kind = protocol_of(rec)
+        t = np.asarray(rec[0])
+        y = np.asarray(rec[1] if kind != "history" else rec[2])
+        label, unit, k = {
+            "relaxation": ("nominal stress", "Pa", 1.0),
+            "creep": ("approach", "um", 1e6),
+            "history": ("force", "uN", 1e6),
+        }[kind]
+        tt = np.unique(np.concatenate([np.linspace(0.0, max(float(t.max()), 1e-9), 400)[1:], t]))
+        if kind == "history":
+            tt = tt[tt >= t.min()]
+        kw = dict(radius=radius, ramp_time=ramp_time, equilibrium=equilibrium)
+        m = predict(rec, result.params, **kw)
+        m_dense = predict(rec, result.params, times=tt, **kw)
+        if result.model_error_factors:
+            m, m_dense = m * result.model_error_factors[j], m_dense * result.model_error_factors[j]
+        ax, axr = axes[0, j], axes[1, j]
+        ax.plot(t, k * y, ".", ms=3, label="data")
+        ax.plot(tt, k * m_dense, "-", lw=1.2, label="model")
+        axr.plot(t, k * (y - m), ".", ms=3)
+        axr.axhline(0.0, color="k", lw=0.6)
+        ax.set_xscale("symlog", linthresh=max(ramp_time, 1e-6))
+        ax.set_title(f"record {j + 1}: {kind}", fontsize=9)
+        ax.set_ylabel(f"{label} ({unit})")
+        axr.set_ylabel(f"residual ({unit})")
+        axr.set_xlabel("time (s)")
+        ax.legend(fontsize=7)
+    txt = ", ".join(f"{nm} = {result.params[nm]:.4g}" for nm in result.names)
+    fig.suptitle("tissuemech fit: " + txt, fontsize=8)
     fig.tight_layout()
     return fig
