@@ -1181,7 +1181,8 @@ def _evaluate(
     br = validate_branches(branches)
     if isinstance(displacement, tuple):  # a measured history (times, approaches): piecewise linear, kinks at the times
         displacement, kinks = _measured_history(displacement)
-        jump_times = kinks if jump_times is None else tuple(jump_times) + kinks
+        if kinks or jump_times is not None:  # traced samples have no static kinks: none to name then
+            jump_times = kinks if jump_times is None else tuple(jump_times) + kinks
     eager = not is_traced(
         t,
         radius,
