@@ -30,9 +30,13 @@ from tissuemech.fem.contact import (
     PlateStep,
     RigidPlane,
     contact_treatment,
+    first_state,
+    fitted_stepper,
     nodal_step,
+    plate_force,
     static_fitted,
     timed_fitted,
+    top_approach,
 )
 from tissuemech.fem.forms import Material
 from tissuemech.fem.kinematics import invariants
@@ -40,6 +44,7 @@ from tissuemech.fem.linalg import Reuse, Symmetric
 from tissuemech.fem.mesh import FITTED_LEVELS, FITTED_SPLIT, AxiMesh, fitted_mesh
 from tissuemech.fem.output import SpheroidField, SpheroidResult
 from tissuemech.fem.problem import SPHEROID_MARGIN, SceneProblem, check_mesh, mesh_spec, roundoff_floor, secant
+from tissuemech.fem.protocols import Record, force_controlled, record_schedule
 from tissuemech.fem.stepping import Step, TimedState
 from tissuemech.fem.surface import SurfaceTension
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
@@ -80,6 +85,11 @@ __all__ += ["EDGE_TOL", "EDGE_MIN", "EDGE_MAX", "AFFINE_MAX_ITER", "SPLIT", "X_M
 # x >= 1.25e-7, which every level converges at; at 1e-7 the coarse level's first state did not (its residual stuck
 # at round-off), and at x = 1e-6 F_FE / F_table is already 1.43 / 1.016 (coarse / default)
 X_MIN = 1e-6
+# force control and measured histories: a step moving the plate by at most this fraction of the approach counts as
+# held (``fem.contact.fitted_stepper``: the Maxwell history carried to the step's mesh, not replayed from t = 0). The
+# replay's smoothed history drifts over long steps: the Fig. 10 creep (coarse) ends 4.3e-4 off the reduced approach
+# with replay in the creep, 6e-5 with it carried (python -m tissuemech.compare.bench.fem_protocols)
+PROTOCOL_HOLD = 0.05
 
 
 def hertz_force(approach, radius: float, C: float):
@@ -235,9 +245,10 @@ def compress(
     C: float,
     alpha: float,
     branches: Sequence = (),
-    displacement: float | Callable[[float], float],
-    ramp_time: float,
-    end_time: float,
+    displacement: float | Callable[[float], float] | tuple | None = None,
+    ramp_time: float | None = None,
+    end_time: float | None = None,
+    force: float | Callable[[float], float] | tuple | None = None,
     kappa: float = 2.2e9,
     mesh: str | int | AxiMesh = "default",
     contact: str | FittedEdge | NodalContact | None = None,
@@ -341,7 +352,27 @@ def compress(
     beta = np.array([float(b) for b, _ in br])
     tau = np.array([float(t) for _, t in br])
     a0, C = float(radius), float(C)
-    if callable(displacement):
+    if (displacement is None) == (force is None):
+        raise ValueError(
+            "give exactly one of displacement= (the plate approach: m, a function of t or (times, approaches)) and "
+            "force= (the plate force: N, a function of t or (times, forces)); got "
+            + ("both" if force is not None else "neither")
+        )
+    proto = None  # force control or a measured history (fem.protocols)
+    if force is not None or isinstance(displacement, (tuple, list)):
+        if static:
+            raise ValueError(
+                "static=True needs the final approach as a number (m) in displacement=, not a force or a history"
+            )
+        proto = _protocol(displacement, force, ramp_time, end_time, a0, n_ramp or 6)
+        ramp_time, end_time = proto.ramp_time, proto.end_time
+        delta_fn, d_max = proto.value, None
+    elif not static and (ramp_time is None or end_time is None):
+        raise ValueError(
+            "ramp_time and end_time (s) are needed with a displacement number or function (they are optional only "
+            "for a measured history displacement=(times, approaches) or with force=)"
+        )
+    elif callable(displacement):
         if static:
             raise ValueError("static=True needs the final approach as a number (m), not a function of time")
         delta_fn = displacement
@@ -369,6 +400,7 @@ def compress(
         if d_max is not None:
             tr = float(ramp_time)
             delta_fn = lambda t: d_max * min(float(t) / tr, 1.0)
+    assert end_time is not None and ramp_time is not None or static
     store_all = isinstance(field_times, str) and field_times == "all"
     if isinstance(field_times, str) and not store_all:
         raise ValueError(f"field_times must be times in s or 'all', got {field_times!r}")
@@ -402,6 +434,9 @@ def compress(
         times = np.linspace(0.0, 1.0, n + 1)[1:]
         dfun = lambda t: d_max * t
         too_large = None
+    elif proto is not None:
+        times = proto.schedule(n_hold or 20, list(ft))
+        dfun, too_large = delta_fn, proto.too_large
     else:
         breaks = list(ft)
         times = ramp_hold_schedule(
@@ -424,33 +459,37 @@ def compress(
         return d / (2 * a0)
 
     def load_of(t1):
+        if proto is not None and proto.kind == "force":
+            return f"t = {t1:.6g} s, F = {proto.target(t1) * 1e6:.6g} uN"
         return f"delta = {dfun(t1) * 1e6:.4g} um" if static else f"t = {t1:.6g} s, delta = {dfun(t1) * 1e6:.4g} um"
 
     steps: list[Step[PlateStep[BallProblem]]]
-    if fit is not None:  # every state / step on its own fitted mesh
+    if proto is not None and proto.kind == "force":  # an outer iteration on the approach per step (fem.protocols)
+        steps = _force_steps(
+            fit, treat, lambda: _nodal_start(mesh, a0, mat, beta, tau, rtol, gam), beta, tau,
+            lambda t: proto.target(t) / (C * a0**2), times, too_large, load_of,
+        )  # fmt: skip
+    elif fit is not None:  # every state / step on its own fitted mesh
         if static:
             steps = static_fitted(fit, dscaled, times, load_of)
         else:  # the Maxwell history carried between the steps' meshes (FittedEdge.history)
             assert isinstance(treat, FittedEdge)  # fit is made for a FittedEdge only
             steps = timed_fitted(
-                fit, beta, tau, dscaled, times, load_of, too_large, history=treat.history, remesh=treat.remesh
-            )
+                fit, beta, tau, dscaled, times, load_of, too_large, history=treat.history, remesh=treat.remesh,
+                **({"hold": PROTOCOL_HOLD} if proto is not None else {}),
+            )  # fmt: skip
     else:
-        m0 = make_mesh(mesh, a0)
-        prob = BallProblem(m0, mat, beta, tau, rtol, gam)
-        n0 = prob.asm.ndof
-        pole = np.argmin(np.hypot(prob.plane.R, prob.plane.Z - 1.0))
-        active0 = np.zeros(prob.plane.nodes.size, bool)
-        active0[pole] = True
-        s0 = PlateState(np.zeros(n0), active0, prob.maxwell_initial(), 0.0, np.zeros(n0), 1.0, None, 0)
+        start = _nodal_start(mesh, a0, mat, beta, tau, rtol, gam)
 
         def step(
             t0: float, old: PlateStep[BallProblem], t1: float, prev: TimedState[PlateStep[BallProblem]] | None
         ) -> tuple[PlateStep[BallProblem], int]:
             return nodal_step(old, prev, dscaled(t1), None if static else t1 - t0, load_of(t1))
 
-        steps = march(step, PlateStep(s0, prob, float("nan")), times, too_large=too_large)
-    modes = tuple("fitted" if np.isfinite(st.state.edge) else "nodal" for st in steps)
+        steps = march(step, start, times, too_large=too_large)
+    modes = tuple(
+        ("fitted" if np.isfinite(st.state.edge) else "nodal") if st.state.state.active.any() else "none" for st in steps
+    )
     m = steps[-1].state.problem.m
     L2 = C * a0**2
     rows: list[_Row] = []
@@ -509,6 +548,7 @@ def compress(
             )
     col = {name: np.array(values) for name, values in zip(_Row._fields, zip(*rows))}
     area = np.pi * col["midplane_radius"] ** 2
+    touching = np.array([m_ != "none" for m_ in modes])
     return SpheroidResult(
         **col,
         midplane_area=area,
@@ -526,8 +566,124 @@ def compress(
             end_time=None if static else float(end_time),
             contact=modes,
             **({"surface_tension": float(surface_tension)} if surface_tension else {}),
+            **(_protocol_parameters(proto, col["time"], touching) if proto is not None else {}),
         ),
+        in_contact=touching,
     )
+
+
+class _Protocol(NamedTuple):
+    """Force control or a measured history of :func:`compress` (SI: s, m, N)."""
+
+    kind: str  # "displacement" or "force"
+    value: Callable[[float], float] | None  # the approach delta(t) (m); None under force control
+    target: Callable[[float], float]  # the prescribed quantity of t (m or N)
+    ramp_time: float  # s (the time scale of the first steps)
+    end_time: float  # s
+    schedule: Callable[[int, list], np.ndarray]  # (n_hold, output times) -> step end times (s)
+    too_large: Callable[[float, float], bool] | None
+
+
+def _protocol(displacement, force, ramp_time, end_time, a0: float, n_ramp: int) -> _Protocol:
+    """Validate a force control (``force=`` a number, a callable or (times, forces)) or a measured history
+    (``displacement=(times, approaches)``) and give its schedule (``fem.protocols``)."""
+    kind = "force" if force is not None else "displacement"
+    spec = force if force is not None else displacement
+    unit = "N" if kind == "force" else "m"
+    if isinstance(spec, (tuple, list)):
+        if len(spec) != 2:
+            raise ValueError(f"{kind} as a tuple must be (times, {kind}s): two arrays in s and {unit}")
+        rec = Record(spec[0], spec[1], "approach" if kind == "displacement" else "force", unit)
+        if kind == "displacement" and np.max(rec.values) >= 1.6 * a0:
+            raise ValueError(
+                f"the approach history reaches {np.max(rec.values):g} m: it would squeeze the ball (diameter "
+                f"{2 * a0:g} m) to less than 20 % of its height; the model is not meant for that"
+            )
+        if not np.max(rec.values) > 0:
+            raise ValueError(f"the {kind} history (times, {kind}s) is 0 throughout: nothing presses the ball")
+        end = float(rec.times[-1]) if end_time is None else float(end_time)
+        validate_positive("end_time", end, "s")
+        tr = None if ramp_time is None else float(ramp_time)
+        if tr is not None:
+            validate_positive("ramp_time (the time scale of the first steps)", tr, "s")
+        cap = float(np.max(rec.values)) / n_ramp
+        first = None if tr is None else tr / n_ramp
+        sched = lambda n_hold, breaks: record_schedule(rec, end, cap=cap, first=first, breakpoints=breaks)
+        # the ramp time reported: the first time the record reaches its largest value
+        ramp = min(tr if tr is not None else float(rec.times[int(np.argmax(rec.values))]), end)
+        return _Protocol(kind, rec if kind == "displacement" else None, rec, ramp, end, sched, None)
+    if ramp_time is None or end_time is None:
+        raise ValueError(f"ramp_time and end_time (s) are needed with {kind}= a number or a function of time")
+    validate_positive("ramp_time", ramp_time, "s")
+    validate_positive("end_time", end_time, "s")
+    tr, end = float(ramp_time), float(end_time)
+    if end < tr:
+        raise ValueError(f"end_time ({end} s) must be >= ramp_time ({tr} s)")
+    sched = lambda n_hold, breaks: ramp_hold_schedule(tr, end, n_ramp=n_ramp, n_hold=n_hold, breakpoints=breaks)
+    if callable(spec):  # a force history F(t) (a displacement callable takes compress's own path)
+        f0 = float(spec(0.0))
+        if f0 != 0.0:
+            raise ValueError(f"the force history must start at 0 N at t = 0 (first contact); F(0) = {f0:g} N")
+
+        def target(t: float) -> float:
+            f = float(spec(t))
+            if not np.isfinite(f) or f < 0:
+                raise ValueError(f"the force F(t = {t:g} s) = {f!r} N must be finite and >= 0 (the plates only push)")
+            return f
+
+        # the ramp's step: the largest change of the force over n_ramp equal steps of the ramp
+        cap = float(np.max(np.abs(np.diff([target(t) for t in np.linspace(0, tr, n_ramp + 1)])))) * (1 + 1e-9)
+        if not cap > 0:
+            raise ValueError("the force history is 0 over the ramp (0 <= t <= ramp_time): nothing presses the ball")
+        too_large = lambda t0, t1: abs(target(t1) - target(t0)) > cap
+        return _Protocol(kind, None, target, tr, end, sched, too_large)
+    validate_positive("force (the held plate force)", spec, "N")
+    F = float(spec)
+    return _Protocol(kind, None, lambda t: F * min(float(t) / tr, 1.0), tr, end, sched, None)
+
+
+def _protocol_parameters(proto: _Protocol, times: np.ndarray, touching: np.ndarray) -> dict:
+    """``parameters`` entries of a force control or measured history: the control, the times (s) where the plates
+    lost the ball (contact_lost: the first step without contact) and touched it again (contact_regained)."""
+    lost = [float(times[k]) for k in range(1, times.size) if touching[k - 1] and not touching[k]]
+    regained = [float(times[k]) for k in range(1, times.size) if touching[k] and not touching[k - 1]]
+    return dict(control=proto.kind, contact_lost=tuple(lost), contact_regained=tuple(regained))
+
+
+def _nodal_start(mesh, a0: float, mat: Material, beta, tau, rtol: float, gam: float) -> PlateStep[BallProblem]:
+    """The reference state of node-by-node contact on one fixed mesh (the pole node active)."""
+    m0 = make_mesh(mesh, a0)
+    prob = BallProblem(m0, mat, beta, tau, rtol, gam)
+    n0 = prob.asm.ndof
+    pole = np.argmin(np.hypot(prob.plane.R, prob.plane.Z - 1.0))
+    active0 = np.zeros(prob.plane.nodes.size, bool)
+    active0[pole] = True
+    s0 = PlateState(np.zeros(n0), active0, prob.maxwell_initial(), 0.0, np.zeros(n0), 1.0, None, 0)
+    return PlateStep(s0, prob, float("nan"))
+
+
+def _force_steps(fit, treat, nodal_start, beta, tau, f_of_t, times, too_large, load_of):
+    """The march under the prescribed (scaled) plate force f_of_t(t): every step an outer iteration on the approach
+    around the displacement-controlled step (``fem.protocols.force_controlled``), on fitted meshes or node by node."""
+    if fit is not None:
+        assert isinstance(treat, FittedEdge)
+        step_to = fitted_stepper(
+            fit, beta, tau, load_of, history=treat.history, remesh=treat.remesh, hold=PROTOCOL_HOLD
+        )
+        start = first_state(fit, beta.size)
+    else:
+        start = nodal_start()
+        step_to = lambda t0, old, t1, prev, d1: nodal_step(old, prev, d1, t1 - t0, load_of(t1))
+    step = force_controlled(
+        step_to,
+        plate_force,
+        lambda st: st.state.delta,
+        top_approach,
+        f_of_t,
+        load_of,
+        stiffness=1.0 + float(np.sum(beta)),
+    )
+    return march(step, start, times, too_large=too_large)
 
 
 # the names of release 0.1 (compare.bench.fem_perf reaches into them)
