@@ -583,6 +583,14 @@ def top_approach(step: PlateStep) -> float:
     return float(np.min(step.problem.plane.gap(step.state.x, 1.0)))
 
 
+def regain_top(step: PlateStep) -> float:
+    """The scaled approach at which the plate would just touch the ball of this state: its top without contact;
+    in contact the approach less what the elastic (Hertz) unloading of its force would recover."""
+    if not step.state.active.any():
+        return top_approach(step)
+    return max(step.state.delta - (3.0 * max(plate_force(step), 0.0) / 32.0) ** (2.0 / 3.0), 0.0)
+
+
 def contact_lost(old: PlateStep, d1: float) -> bool:
     """Whether a step from ``old`` to the scaled approach d1 is likely free of contact (the free ball is then tried
     first): no contact before (except the reference state going on to press), or the plate moving up by more than
@@ -759,7 +767,7 @@ def fitted_stepper(
         elif np.isnan(old.edge):  # node-by-node contact (beyond the fitted range)
             e0 = float("nan")
         elif old.edge <= 0.0:  # the first contact (again, after a free step: from the ball's top)
-            e0 = edge_guess([], [], d1 if s_old.delta == 0.0 else max(d1 - top_approach(old), 1e-3 * d1))
+            e0 = edge_guess([], [], d1 if s_old.delta == 0.0 else max(d1 - regain_top(old), 1e-3 * d1))
         elif (
             prev is not None and p_old is not None and prev.state.edge > 0.0 and abs(s_old.delta - p_old.delta) > 1e-14
         ):  # nan: False
@@ -837,10 +845,10 @@ def fitted_stepper(
             """The path after this step (history="replay"; empty otherwise)."""
             return (*old.path, (prob.m, x, S, dt)) if history == "replay" else ()
 
-        def nodal() -> tuple[PlateStep[P], int]:
+        def nodal(warn: bool = True) -> tuple[PlateStep[P], int]:
             """Node-by-node contact on the previous step's mesh (beyond the fitted range)."""
             prob = old.problem
-            if not np.isnan(old.edge):
+            if warn and not np.isnan(old.edge):
                 _warn_nodal(load_of_t(t1))
             visco0 = s_old.visco if history == "replay" else on(prob)  # replay: it lives on this mesh
             if visco0 is not s_old.visco:  # anchored elsewhere: S_iso^n evaluated on this mesh, Q_m interpolated
@@ -870,6 +878,10 @@ def fitted_stepper(
         except NewtonError as err:
             if old.edge > 0.0 and beyond_fit([old.edge], e0, err):
                 return nodal()
+            if old.edge == 0.0 and s_old.delta > 0.0:  # contact regained, too small yet for a fitted edge: node by
+                # node on the last mesh for this step (edge 0: the next step searches a fitted edge again)
+                got = nodal(warn=False)
+                return got[0]._replace(edge=0.0), got[1]
             raise
         prob, es_ = sol.problem, sol.state
         visco, where, where_edge = updated(prob, es_.x, sol.edge, held=d1 == s_old.delta)

@@ -207,7 +207,9 @@ def force_controlled(
             its_sum += int(its)
             F = force_of(st)
             r = F - f1
-            log.debug("force control at %s: x = delta / (2 a0) = %.12g -> F / F_target - 1 = %.3e", label(t1), d, r / f1)
+            log.debug(
+                "force control at %s: x = delta / (2 a0) = %.12g -> F / F_target - 1 = %.3e", label(t1), d, r / f1
+            )
             if best is None or abs(r) < abs(best[1]):
                 best = (st, r)
             if abs(r) <= tol * f1:
