@@ -758,9 +758,16 @@ def fitted_stepper(
         s_old = old.state
         guess = s_old.x
         p_old = prev.state.state if prev is not None else None
+        # extrapolate from the last two steps only where the last one moved the plate by at least a tenth of this one
+        # (a creep step after a nearly held one would extrapolate by a huge factor)
+        moved = (
+            p_old is not None
+            and d1 is not None
+            and abs(s_old.delta - p_old.delta) > max(1e-14, 0.1 * abs(d1 - s_old.delta))
+        )
         if free or d1 is None:  # the free ball's history only (on the previous step's mesh): no guess, no edge
             e0 = float("nan")
-        elif p_old is not None and abs(s_old.delta - p_old.delta) > 1e-14:
+        elif p_old is not None and moved:
             guess = s_old.x + (s_old.x - p_old.x) * (d1 - s_old.delta) / (s_old.delta - p_old.delta)
         if free or d1 is None:
             pass
@@ -768,9 +775,7 @@ def fitted_stepper(
             e0 = float("nan")
         elif old.edge <= 0.0:  # the first contact (again, after a free step: from the ball's top)
             e0 = edge_guess([], [], d1 if s_old.delta == 0.0 else max(d1 - regain_top(old), 1e-3 * d1))
-        elif (
-            prev is not None and p_old is not None and prev.state.edge > 0.0 and abs(s_old.delta - p_old.delta) > 1e-14
-        ):  # nan: False
+        elif prev is not None and p_old is not None and prev.state.edge > 0.0 and moved:  # nan: False
             e0 = edge_guess([p_old.delta, s_old.delta], [prev.state.edge, old.edge], d1)
         else:
             e0 = old.edge * np.sqrt(d1 / s_old.delta) if s_old.delta > 0 else old.edge

@@ -201,9 +201,17 @@ def force_controlled(
         side = 0
         u = u_of(d_a)
         best = None
+        failed: NewtonError | None = None
         for _ in range(max_iter):
             u_cur, d = u, d_of(u)
-            st, its = step_to(t0, old, t1, prev, d)
+            try:
+                st, its = step_to(t0, old, t1, prev, d)
+            except NewtonError as err:  # a trial too far (its edge search or Newton failed): halfway back
+                failed = err
+                ok = [p for p in pts if p[1] != 0.0] or [(u_of(d_old), 0.0)]
+                u = 0.5 * (u_cur + min(ok, key=lambda p: abs(p[1]))[0])
+                log.debug("force control at %s: the trial x = %.12g failed (%s)", label(t1), d, err.args[0])
+                continue
             its_sum += int(its)
             F = force_of(st)
             r = F - f1
@@ -239,7 +247,7 @@ def force_controlled(
             f"the force control did not converge at {label(t1)}: the plate force is {best[1] / f1 + 1:.6g} of the "
             f"target after {max_iter} approaches"
             if best is not None
-            else f"force control failed at {label(t1)}",
+            else f"the force control failed at {label(t1)}: every trial approach failed ({failed})",
             load=label(t1),
             hint="reduce the time step (more ramp steps) or check that the force history is reachable",
         )

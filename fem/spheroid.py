@@ -208,7 +208,7 @@ class BallProblem(SceneProblem):
         dt [s] (None: static), predicted by the secant through ``prev`` (a ``PlateState`` or None)."""
         iso_scale, extra = self.maxwell_factors(s0.visco, dt)
         guess = s0.x
-        if prev is not None and abs(s0.delta - prev.delta) > 1e-14:
+        if prev is not None and abs(s0.delta - prev.delta) > max(1e-14, 0.1 * abs(d1 - s0.delta)):
             guess = secant(s0.x, prev.x, d1 - s0.delta, s0.delta - prev.delta)
         sol = self.solve(s0, d1, iso_scale, extra, guess, load)
         visco = self.maxwell_update(s0.visco, dt, sol.x)
