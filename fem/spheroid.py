@@ -13,6 +13,7 @@ contact-edge-fitted meshes are ``fem.mesh.fitted_mesh`` (``LEVELS``), the edge s
 from __future__ import annotations
 
 import logging
+import warnings
 from collections.abc import Callable, Sequence
 from typing import NamedTuple
 
@@ -65,6 +66,10 @@ __all__ = [
     "MESHES",
     "LEVELS",
     "hertz_force",
+    "SmallApproachWarning",
+    "small_approach_error",
+    "warn_small_approach",
+    "SMALL_APPROACH_ERRORS",
     "FittedEdge",
     "NodalContact",
     "Observation",
@@ -80,7 +85,7 @@ LEVELS = FITTED_LEVELS
 MESHES = {"coarse": 0, "default": 1, "fine": 2}
 FORCE_CHECK = 1e-6  # |F_contact - F_reaction| / F
 SPLIT = FITTED_SPLIT  # the pole block's arc (55 deg); EDGE_TOL, EDGE_MIN, EDGE_MAX, AFFINE_MAX_ITER: fem.contact
-__all__ += ["EDGE_TOL", "EDGE_MIN", "EDGE_MAX", "AFFINE_MAX_ITER", "SPLIT", "X_MIN"]
+__all__ += ["EDGE_TOL", "EDGE_MIN", "EDGE_MAX", "AFFINE_MAX_ITER", "SPLIT", "X_MIN", "PROTOCOL_HOLD"]
 # smallest final approach delta/(2 a0) of a run (issue 14 audit): the first static state (1/8 of it) is then
 # x >= 1.25e-7, which every level converges at; at 1e-7 the coarse level's first state did not (its residual stuck
 # at round-off), and at x = 1e-6 F_FE / F_table is already 1.43 / 1.016 (coarse / default)
@@ -90,6 +95,50 @@ X_MIN = 1e-6
 # replay's smoothed history drifts over long steps: the Fig. 10 creep (coarse) ends 4.3e-4 off the reduced approach
 # with replay in the creep, 6e-5 with it carried (python -m tissuemech.compare.bench.fem_protocols)
 PROTOCOL_HOLD = 0.05
+
+
+class SmallApproachWarning(UserWarning):
+    """The approach is below the design range of the mesh level: the contact zone holds too few elements there and the
+    force is too high (``SMALL_APPROACH_ERRORS``)."""
+
+
+# F_FE / F_table - 1 of a static state at x = delta / (2 a0) per level (alpha = 0.2; the table is the Richardson-
+# converged FE, within 3e-4 of Hertz at x <= 1e-5); measured on levels 0-2 (issue 41): the coarse level is 43 % too
+# stiff at x = 1e-6, the default 1.6 %; level 2 stays within 1e-3 down to X_MIN, levels 3-4 finer still
+SMALL_APPROACH_ERRORS: dict[int, tuple[tuple[float, float], ...]] = {
+    0: ((1e-6, 0.43), (1e-5, 0.20), (1e-4, 8.5e-2), (1e-3, 2.7e-2), (3e-3, 1.2e-2), (1e-2, 3.6e-3), (3e-2, 5.4e-4)),
+    1: ((1e-6, 1.6e-2), (1e-5, 8.1e-3), (1e-4, 3.3e-3), (1e-3, 1.0e-3), (3e-3, 4.0e-4), (1e-2, 9.0e-5)),
+    2: ((1e-6, 9.4e-4), (1e-5, 4.9e-4), (1e-4, 2.0e-4)),
+}
+DESIGN_ERROR = 1e-3  # a level's design range: the approaches whose force error (above) is at most this
+
+
+def small_approach_error(x: float, level: int) -> float:
+    """The expected relative force error (F_FE / F_converged - 1, interpolated in log-log from
+    ``SMALL_APPROACH_ERRORS``; 0 past the measured range) of level ``level`` at x = delta / (2 a0)."""
+    table = SMALL_APPROACH_ERRORS.get(level)
+    if table is None or x >= table[-1][0]:
+        return 0.0
+    xs, es = (np.log([p[i] for p in table]) for i in (0, 1))
+    return float(np.exp(np.interp(np.log(max(x, 1e-300)), xs, es)))
+
+
+def warn_small_approach(x: float, level: int | None) -> None:
+    """A ``SmallApproachWarning`` when the largest approach x = delta / (2 a0) of a run on a level lies below the
+    level's design range (its expected force error above ``DESIGN_ERROR``); a mesh object is the caller's choice."""
+    if level is None:
+        return
+    err = small_approach_error(x, level)
+    if err > DESIGN_ERROR:
+        lo = next((p[0] for p in SMALL_APPROACH_ERRORS[level] if p[1] <= DESIGN_ERROR), None)
+        warnings.warn(
+            f"the approach delta/(2 a0) = {x:.3g} is below the design range of mesh level {level} "
+            f"(x >= {lo if lo is not None else 3e-2:g}: force error <= {DESIGN_ERROR:g}); expect the FE force about "
+            f"{100 * err:.2g} % too high there (the contact zone spans too few elements). Use a finer level "
+            "(mesh=2: <= 0.1 % down to x = 1e-6) or tissuemech.reduced.spheroid",
+            SmallApproachWarning,
+            stacklevel=3,
+        )
 
 
 def hertz_force(approach, radius: float, C: float):
@@ -276,9 +325,33 @@ def compress(
             diameter the contact force nears round-off) of the two plates, reached at ``ramp_time`` by a linear
             ramp and then held to ``end_time``; or a callable delta(t) (m, t in s, delta(0) = 0): ``ramp_time`` is
             then the time scale of the fine initial steps and each step moves the plate by at most the ramp's step
-            (steps are halved until it does).
-        ramp_time: end of the ramp (s, 0 < ramp_time <= end_time; ignored when ``static``).
-        end_time: end of the hold (s; ignored when ``static``).
+            (steps are halved until it does); or a measured history ``(times, approaches)`` (arrays in s and m,
+            times strictly increasing from 0, approaches >= 0 from 0): linear between the samples, held after the
+            last. Its steps (``fem.protocols.record_schedule``) land on the kinks that matter (the record simplified
+            to 1e-3 of the step cap, at most 400 kinks: a dense record of 10^5 samples of a few straight pieces gives
+            a few dozen steps), move the plate by at most max(approach) / n_ramp, and grow by 1.5 from the shortest
+            such step after every kink (``ramp_time`` given: from ramp_time / n_ramp; ``end_time`` defaults to the
+            last sample). The plates may move apart: when they retract faster than the ball recovers the contact is
+            lost (force exactly 0, never negative; ``in_contact`` False, ``parameters["contact"]`` "none", the times
+            in ``parameters["contact_lost"]`` / ``["contact_regained"]``); the free ball recovers with its Maxwell
+            history and the contact comes back when the plates reach its top (node by node on the last fitted mesh
+            while it is too small for a fitted edge, fitted again from the next step).
+        force: instead of ``displacement`` (exactly one of them; N): force control. A number F: the plate force ramped
+            linearly to F at ``ramp_time`` and held to ``end_time`` (creep); a callable F(t) (N, F(0) = 0, >= 0;
+            steps change the force by at most the ramp's largest step) or ``(times, forces)`` (as a measured history
+            above), which may remove the force (recovery: at F = 0 the plates leave the ball, whose approach is then
+            the plate touching its recovering top, ``in_contact`` False). Every step solves for the approach whose
+            plate force is F(t) to 1e-7 (``fem.protocols.force_controlled``: a secant / regula falsi iteration on
+            the approach around the displacement-controlled step, each trial a full step with its fitted edge; a
+            failure names the step's time (s) and force). ``approach`` (m) is then the observable, ``force`` F(t).
+            ``n_hold`` defaults to 40 here (the creep moves the plate through the hold: the time error is 2nd
+            order, on the Fig. 10 creep 4.5e-4 of the approach at 20 hold steps, 1.0e-4 at 40).
+            On a level, steps that move the plate by < 5 % of the approach (``PROTOCOL_HOLD``: creep) carry the Maxwell
+            history to the step's mesh instead of replaying it (the replay drifts over long steps). Accuracy
+            (``python -m tissuemech.compare.bench.fem_protocols``): see docs/validation.md.
+        ramp_time: end of the ramp (s, 0 < ramp_time <= end_time; ignored when ``static``; optional for a measured
+            history).
+        end_time: end of the hold (s; ignored when ``static``; for a measured history default its last time).
         mesh: "coarse", "default", "fine" or a level 0..4 (0 = coarse, 1 = default, 2 = fine; ``LEVELS``
             gives (n_core, n_radial, surface grading, n_contact, n_equator) of :func:`fitted_mesh`):
             CONTACT-EDGE-FITTED meshes. Static runs solve every state on its own mesh whose surface node
@@ -334,10 +407,13 @@ def compress(
         runs on a level the edge node; else an edge estimate between the outermost active node and the
         next from the gaps of the first free nodes), ``contact_radius_node`` (the outermost active node,
         m), ``min_gap`` (m), ``min_contact_force`` (N), ``newton_iterations``, ``contact_passes``,
-        ``wall_time`` (s); ``fields`` (``SpheroidField``), ``mesh``, ``static``, ``parameters``.
+        ``wall_time`` (s), ``in_contact`` (bool); ``fields`` (``SpheroidField``), ``mesh``, ``static``,
+        ``parameters`` (with force= or a measured history also ``control`` ("force" / "displacement"),
+        ``contact_lost`` and ``contact_regained``: the times in s of the first step without / with contact again).
 
     Raises:
-        ValueError: an input out of range (the message names the quantity and its unit).
+        ValueError: an input out of range (the message names the quantity and its unit), both or neither of
+            ``displacement`` and ``force``.
         NewtonError: a step did not converge after its cut-backs (``ContactError``: the active set or the
             fitted contact edge did not settle); the message names the step's time or approach.
         RuntimeError: the plate force and the midplane reaction differ by more than 1e-6 (relative): the
@@ -416,6 +492,7 @@ def compress(
         )
 
     level = _level(mesh)
+    warn_small_approach(_largest_x(proto, d_max, delta_fn, ramp_time, a0, C), level)
     treat = contact_treatment(contact if contact is not None else ("fitted" if level is not None else "nodal"))
     if isinstance(treat, FittedEdge) and level is None:
         raise ValueError(
@@ -435,7 +512,9 @@ def compress(
         dfun = lambda t: d_max * t
         too_large = None
     elif proto is not None:
-        times = proto.schedule(n_hold or 20, list(ft))
+        # force control: 40 hold steps by default (the creep moves the plate through the hold: its time error is
+        # 2nd order, Fig. 10 creep on level 0 4.5e-4 of the approach at 20 steps, 1.0e-4 at 40)
+        times = proto.schedule(n_hold or (40 if proto.kind == "force" else 20), list(ft))
         dfun, too_large = delta_fn, proto.too_large
     else:
         breaks = list(ft)
@@ -608,7 +687,11 @@ def _protocol(displacement, force, ramp_time, end_time, a0: float, n_ramp: int) 
             validate_positive("ramp_time (the time scale of the first steps)", tr, "s")
         cap = float(np.max(rec.values)) / n_ramp
         first = None if tr is None else tr / n_ramp
-        sched = lambda n_hold, breaks: record_schedule(rec, end, cap=cap, first=first, breakpoints=breaks)
+        # force control: the hold steps grow by 1.25, not 1.5 (the creep moves the plate through the hold)
+        growth = 1.25 if kind == "force" else 1.5
+        sched = lambda n_hold, breaks: record_schedule(
+            rec, end, cap=cap, first=first, breakpoints=breaks, growth=growth
+        )
         # the ramp time reported: the first time the record reaches its largest value
         ramp = min(tr if tr is not None else float(rec.times[int(np.argmax(rec.values))]), end)
         return _Protocol(kind, rec if kind == "displacement" else None, rec, ramp, end, sched, None)
@@ -640,6 +723,22 @@ def _protocol(displacement, force, ramp_time, end_time, a0: float, n_ramp: int) 
     validate_positive("force (the held plate force)", spec, "N")
     F = float(spec)
     return _Protocol(kind, None, lambda t: F * min(float(t) / tr, 1.0), tr, end, sched, None)
+
+
+def _largest_x(proto: _Protocol | None, d_max: float | None, delta_fn, ramp_time, a0: float, C: float) -> float:
+    """The run's largest approach x = delta / (2 a0) (a force: its relaxed Hertz approach) for the design-range check."""
+    if proto is None:
+        d = d_max if d_max is not None else max(float(delta_fn(t)) for t in np.linspace(0, float(ramp_time), 7))
+        return d / (2 * a0)
+    rec = proto.target
+    top = (
+        float(np.max(rec.values))
+        if isinstance(rec, Record)
+        else max(rec(t) for t in np.linspace(0, proto.ramp_time, 7))
+    )
+    if proto.kind == "displacement":
+        return top / (2 * a0)
+    return (3.0 * top / (32.0 * C * a0**2)) ** (2.0 / 3.0)
 
 
 def _protocol_parameters(proto: _Protocol, times: np.ndarray, touching: np.ndarray) -> dict:

@@ -68,6 +68,50 @@ def reduced_history(t: np.ndarray) -> np.ndarray:
     return np.asarray(force(t, **MATERIAL, displacement=measured_history()))
 
 
+OSC_MATERIAL = dict(radius=500e-6, C=150.0, alpha=0.2, branches=[(0.4, 1.0)])
+OSC_APPROACH, OSC_AMPLITUDE, OSC_HOLD, OSC_PERIODS = 50e-6, 0.5e-6, 10.0, 3
+OSC_FREQUENCIES = (0.05, 0.16, 0.5)  # Hz: omega tau = 0.31, 1.0, 3.1
+
+
+def oscillation_record(f: float, n_per_period: int = 64) -> tuple[np.ndarray, np.ndarray]:
+    """(times s, approaches m): 50 um in 0.2 s, held 10 s (10 tau: relaxed), then 3 periods of 0.5 um at f Hz."""
+    T = 1.0 / f
+    ts = OSC_HOLD + np.linspace(0.0, OSC_PERIODS * T, OSC_PERIODS * n_per_period + 1)
+    t = np.r_[0.0, 0.2, ts]
+    d = np.r_[0.0, OSC_APPROACH, OSC_APPROACH + OSC_AMPLITUDE * np.sin(2 * np.pi * f * (ts - OSC_HOLD))]
+    return t, d
+
+
+def fe_dynamic_stiffness(level: int, f: float) -> tuple[float, float, float]:
+    """(storage, loss in N/m, wall s): the FE force over the last two periods fitted by F0 + F1 (t - t0) +
+    eps (K' sin + K'' cos) (least squares on the step times)."""
+    t0 = time.perf_counter()
+    r = compress(**OSC_MATERIAL, displacement=oscillation_record(f), mesh=level)
+    k = r.time >= OSC_HOLD + (OSC_PERIODS - 2) / f - 1e-12
+    tt = r.time[k] - OSC_HOLD
+    w = 2 * np.pi * f
+    A = np.stack([np.ones_like(tt), tt, np.sin(w * tt), np.cos(w * tt)], axis=1)
+    c = np.linalg.lstsq(A, r.force[k], rcond=None)[0]
+    return c[2] / OSC_AMPLITUDE, c[3] / OSC_AMPLITUDE, time.perf_counter() - t0
+
+
+def oscillation(level: int) -> None:
+    from tissuemech.reduced.oscillation import dynamic_stiffness
+
+    print(
+        f"\n## oscillation (branch (0.4, 1 s), 0.5 um about 50 um): FE (level {level}) / lumped - 1 of the storage and "
+        "loss stiffness"
+    )
+    print("  f [Hz] | K' FE [N/m] |    K' lumped |  K' error | K'' FE [N/m] |  K'' lumped | K'' error | wall [s]")
+    for f in OSC_FREQUENCIES:
+        s_fe, l_fe, wall = fe_dynamic_stiffness(level, f)
+        s_r, l_r = (float(v) for v in dynamic_stiffness(f, **OSC_MATERIAL, approach=OSC_APPROACH))
+        print(
+            f"{f:8.3g} | {s_fe:11.5g} | {s_r:11.5g} | {s_fe / s_r - 1:+.2e} | {l_fe:11.5g} | {l_r:11.5g} | "
+            f"{l_fe / l_r - 1:+.2e} | {wall:6.1f}"
+        )
+
+
 def at(t: np.ndarray, v: np.ndarray, times: Sequence[float]) -> np.ndarray:
     """The values at the step times closest to ``times`` (they are step times: field_times)."""
     return np.array([v[int(np.argmin(np.abs(t - s)))] for s in times])
@@ -81,6 +125,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m tissuemech.compare.bench.fem_protocols", description=__doc__)
     ap.add_argument("--levels", default="1,2,3", help="FE levels; the three finest give the Richardson reference")
     ap.add_argument("--quick", action="store_true", help="the default level (1) against the reduced model only")
+    ap.add_argument("--oscillation", action="store_true", help="with --quick: the oscillation rows too (level 1)")
     a = ap.parse_args(argv)
     levels = [1] if a.quick else [int(v) for v in a.levels.split(",")]
     if not a.quick and len(levels) < 3:
@@ -110,6 +155,8 @@ def main(argv: list[str] | None = None) -> int:
                 )
             )
         runs[name] = (vals, red(np.array(times)), times)
+    if a.oscillation or not a.quick:
+        oscillation(1)
     if a.quick:
         return 0
     h = [1.0 / LEVELS[lev][0] for lev in levels[-3:]]
