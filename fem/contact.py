@@ -852,6 +852,7 @@ def fitted_stepper(
 
         def nodal(warn: bool = True) -> tuple[PlateStep[P], int]:
             """Node-by-node contact on the previous step's mesh (beyond the fitted range)."""
+            assert d1 is not None  # a contact step
             prob = old.problem
             if warn and not np.isnan(old.edge):
                 _warn_nodal(load_of_t(t1))
@@ -885,8 +886,8 @@ def fitted_stepper(
                 return nodal()
             if old.edge == 0.0 and s_old.delta > 0.0:  # contact regained, too small yet for a fitted edge: node by
                 # node on the last mesh for this step (edge 0: the next step searches a fitted edge again)
-                got = nodal(warn=False)
-                return got[0]._replace(edge=0.0), got[1]
+                regained, its_regained = nodal(warn=False)
+                return regained._replace(edge=0.0), its_regained
             raise
         prob, es_ = sol.problem, sol.state
         visco, where, where_edge = updated(prob, es_.x, sol.edge, held=d1 == s_old.delta)

@@ -15,7 +15,7 @@ from __future__ import annotations
 import logging
 import warnings
 from collections.abc import Callable, Sequence
-from typing import NamedTuple
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 
@@ -435,6 +435,7 @@ def compress(
             + ("both" if force is not None else "neither")
         )
     proto = None  # force control or a measured history (fem.protocols)
+    delta_fn: Any = None
     if force is not None or isinstance(displacement, (tuple, list)):
         if static:
             raise ValueError(
@@ -455,7 +456,7 @@ def compress(
         d_max = None
     else:
         validate_positive("displacement (the total approach of the plates)", displacement, "m")
-        d_max = float(displacement)
+        d_max = float(cast(float, displacement))
         if d_max < X_MIN * 2 * a0:
             raise ValueError(
                 f"displacement {d_max:g} m is delta/(2 a0) = {d_max / (2 * a0):.2g} of the diameter, below the "
@@ -469,6 +470,7 @@ def compress(
                 "than 20 % of its height; the model is not meant for that"
             )
     if not static:
+        assert ramp_time is not None and end_time is not None  # refused above
         validate_positive("ramp_time", ramp_time, "s")
         validate_positive("end_time", end_time, "s")
         if end_time < ramp_time:
@@ -476,7 +478,8 @@ def compress(
         if d_max is not None:
             tr = float(ramp_time)
             delta_fn = lambda t: d_max * min(float(t) / tr, 1.0)
-    assert end_time is not None and ramp_time is not None or static
+    ramp_time = 0.0 if ramp_time is None else float(ramp_time)  # None only for static runs (unused there)
+    end_time = 0.0 if end_time is None else float(end_time)
     store_all = isinstance(field_times, str) and field_times == "all"
     if isinstance(field_times, str) and not store_all:
         raise ValueError(f"field_times must be times in s or 'all', got {field_times!r}")
@@ -492,7 +495,7 @@ def compress(
         )
 
     level = _level(mesh)
-    warn_small_approach(_largest_x(proto, d_max, delta_fn, ramp_time, a0, C), level)
+    warn_small_approach(_largest_x(proto, d_max, displacement, ramp_time, a0, C), level)
     treat = contact_treatment(contact if contact is not None else ("fitted" if level is not None else "nodal"))
     if isinstance(treat, FittedEdge) and level is None:
         raise ValueError(

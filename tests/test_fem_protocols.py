@@ -89,6 +89,7 @@ def creep_recovery():
     )
 
 
+@pytest.mark.slow
 def test_creep_approach_grows_under_a_held_force(creep_recovery):
     r = creep_recovery
     hold = (r.time >= 0.2 - 1e-12) & (r.time <= 3.0 + 1e-12)
@@ -100,6 +101,7 @@ def test_creep_approach_grows_under_a_held_force(creep_recovery):
     assert np.all(r.force >= 0)
 
 
+@pytest.mark.slow
 def test_recovery_after_the_force_is_removed(creep_recovery):
     """Force 0 from 3.2 s: the plates lose the ball (flagged, force exactly 0), its top recovers toward the undeformed
     ball (approach -> 0, monotone) with the branch's time."""
@@ -149,3 +151,72 @@ def test_measured_history_kinks_are_steps_and_follow_the_record():
     assert np.allclose(r.force[ramp], d.force[: ramp.sum()], rtol=1e-9)
     assert r.time.size < 40
     assert np.interp(4.0, r.time, r.force) == pytest.approx(d.force[-1], rel=2e-3)
+
+
+# ---- the small-approach warning (issue 41) ----------------------------------------------------------------------
+def test_small_approach_warns_with_the_expected_error():
+    from tissuemech.fem.spheroid import SmallApproachWarning, small_approach_error
+
+    assert small_approach_error(1e-6, 0) == pytest.approx(0.43)
+    assert small_approach_error(1e-6, 1) == pytest.approx(1.6e-2)
+    assert small_approach_error(0.05, 1) == 0.0 and small_approach_error(1e-6, 3) == 0.0
+    with pytest.warns(SmallApproachWarning, match=r"below the design range of mesh level 1 .* 1.6 % too high"):
+        compress(**MAT, displacement=2 * A0 * 1e-6, static=True, mesh="default", n_static=1)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SmallApproachWarning)
+        compress(**MAT, displacement=2 * A0 * 0.01, static=True, mesh="default", n_static=1)
+
+
+# ---- oscillation: the lumped model's dynamic stiffness ----------------------------------------------------------
+def test_dynamic_stiffness_limits_jit_and_inputs():
+    """omega -> 0: the relaxed k_eq = dF_eq/ddelta, no loss; omega -> inf: (1 + sum beta) k_eq; one branch: the loss
+    peaks at omega tau = 1 with k_eq beta / 2; jit over frequencies."""
+    import jax
+
+    from tissuemech.reduced.oscillation import dynamic_stiffness, equilibrium_stiffness
+    from tissuemech.reduced.spheroid import equilibrium_force
+
+    d0 = 50e-6
+    k = float(equilibrium_stiffness(d0, radius=A0, C=150.0, alpha=0.2))
+    h = 1e-9
+    fd = (equilibrium_force(d0 + h, **MAT) - equilibrium_force(d0 - h, **MAT)) / (2 * h)
+    assert k == pytest.approx(float(fd), rel=1e-6)
+    mat = dict(**MAT, branches=[(0.4, 1.0)])
+    s0, l0 = dynamic_stiffness(0.0, **mat, approach=d0)
+    s_inf, l_inf = dynamic_stiffness(1e9, **mat, approach=d0)
+    assert float(s0) == pytest.approx(k) and float(l0) == 0.0
+    assert float(s_inf) == pytest.approx(1.4 * k, rel=1e-9) and float(l_inf) < 1e-8 * k
+    fs = np.geomspace(0.01, 10.0, 301)
+    s, loss = (np.asarray(v) for v in jax.jit(lambda q: dynamic_stiffness(q, **mat, approach=d0))(fs))
+    assert np.all(np.diff(s) > 0)
+    assert fs[np.argmax(loss)] == pytest.approx(1 / (2 * np.pi), rel=0.03) and loss.max() == pytest.approx(
+        0.2 * k, rel=1e-3
+    )
+    with pytest.raises(ValueError, match="frequency"):
+        dynamic_stiffness(-1.0, **mat, approach=d0)
+
+
+@pytest.mark.slow
+def test_dynamic_stiffness_is_the_steady_response_of_the_lumped_law():
+    """The closed form against ``reduced.spheroid.force`` driven by a small sinusoid about a relaxed compression
+    (amplitude 1e-3 of the approach: linear to ~1e-3), its last period fitted; limits omega -> 0 and infinity."""
+    import jax
+
+    from tissuemech.reduced.oscillation import dynamic_stiffness
+    from tissuemech.reduced.spheroid import force
+
+    mat = dict(radius=A0, C=150.0, alpha=0.2, branches=[(0.4, 1.0), (0.2, 0.1)])
+    d0, eps, f = 50e-6, 50e-9, 0.7
+    hold = 20.0
+    disp = lambda t: jax.numpy.where(
+        t < 0.2, d0 * t / 0.2, d0 + eps * jax.numpy.sin(2 * np.pi * f * (t - hold)) * (t >= hold)
+    )
+    t = hold + np.linspace(2 / f, 3 / f, 201)
+    F = np.asarray(force(t, **mat, displacement=disp, jump_times=(0.2, hold), method="ode"))
+    w, tt = 2 * np.pi * f, t - hold
+    A = np.stack([np.ones_like(tt), np.sin(w * tt), np.cos(w * tt)], axis=1)
+    c = np.linalg.lstsq(A, F, rcond=None)[0]
+    K1, K2 = (float(v) for v in dynamic_stiffness(f, **mat, approach=d0))
+    assert c[1] / eps == pytest.approx(K1, rel=2e-3) and c[2] / eps == pytest.approx(K2, rel=2e-3)
