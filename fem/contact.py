@@ -70,6 +70,11 @@ __all__ = [
     "nodal_step",
     "static_fitted",
     "timed_fitted",
+    "fitted_stepper",
+    "without_contact",
+    "contact_lost",
+    "plate_force",
+    "top_approach",
     "replayed_history",
     "ContactSolution",
     "ContactError",
@@ -538,13 +543,88 @@ def first_state(search: EdgeSearch[P], n_branches: int) -> PlateStep[P]:
     )
 
 
-def nodal_step(old: PlateStep[P], prev: TimedState[PlateStep[P]] | None, d1: float, dt: float | None, load: str):
+def nodal_step(
+    old: PlateStep[P], prev: TimedState[PlateStep[P]] | None, d1: float | None, dt: float | None, load: str
+) -> tuple[PlateStep[P], int]:
     """(state, iterations): node-by-node contact on ``old``'s mesh (beyond the fitted range, or a fixed mesh); the
-    secant predictor uses ``prev`` when it is a state of the same mesh."""
+    secant predictor uses ``prev`` when it is a state of the same mesh. Contact may be lost and regained
+    (:func:`without_contact`, tried first where :func:`contact_lost` expects it or after a failed unloading step);
+    ``d1=None``: the free ball, its approach the plate touching its top."""
     prob = old.problem
+
+    def free() -> tuple[PlateStep[P], int] | None:
+        got = without_contact(prob, old.state, d1, dt, load)
+        return None if got is None else (PlateStep(got[0], prob, float("nan")), got[1])
+
+    if d1 is None or contact_lost(old, d1):
+        done = free()
+        if done is not None:
+            return done
+        assert d1 is not None  # with no plate to touch the free ball is always admissible
     s_prev = prev.state.state if prev is not None and prev.state.problem is prob else None
-    st, its = prob.step(old.state, d1, dt, s_prev, load)
+    try:
+        st, its = prob.step(old.state, d1, dt, s_prev, load)
+    except NewtonError:
+        done = free() if d1 < old.state.delta else None
+        if done is None:
+            raise
+        return done
     return PlateStep(st, prob, float("nan")), its
+
+
+# ---- contact lost and regained (unloading, force removed) ------------------------------------------------------
+FAR = -1.0  # the scaled approach of a plate out of reach (h = 2 a0): the free ball
+GAP_TOL = 1e-9  # a plate within this (scaled) distance of the free ball's top does not touch it
+
+
+def plate_force(step: PlateStep) -> float:
+    """The plate force of a converged state (scaled by C a0^2): the sum of the active nodes' multipliers."""
+    s = step.state
+    return float(step.problem.plane.normal_force(s.residual)[s.active].sum()) if s.active.any() else 0.0
+
+
+def top_approach(step: PlateStep) -> float:
+    """The scaled approach at which the plate touches the ball's top in this state (0 for the undeformed ball)."""
+    return float(np.min(step.problem.plane.gap(step.state.x, 1.0)))
+
+
+def regain_top(step: PlateStep) -> float:
+    """The scaled approach at which the plate would just touch the ball of this state: its top without contact;
+    in contact the approach less what the elastic (Hertz) unloading of its force would recover."""
+    if not step.state.active.any():
+        return top_approach(step)
+    return max(step.state.delta - (3.0 * max(plate_force(step), 0.0) / 32.0) ** (2.0 / 3.0), 0.0)
+
+
+def contact_lost(old: PlateStep, d1: float) -> bool:
+    """Whether a step from ``old`` to the scaled approach d1 is likely free of contact (the free ball is then tried
+    first): no contact before (except the reference state going on to press), or the plate moving up by more than
+    half the approach the elastic (instantaneous, Hertz) unloading of the old force would recover."""
+    s = old.state
+    if not s.active.any():
+        return s.delta > 0.0 or d1 <= 0.0
+    if d1 >= s.delta:
+        return False
+    reach = (3.0 * max(plate_force(old), 0.0) / (32.0 * max(float(s.iso_scale), 1.0))) ** (2.0 / 3.0)
+    return s.delta - d1 > 0.5 * reach
+
+
+def without_contact(
+    prob: P, s0: PlateState, d1: float | None, dt: float | None, load: str
+) -> tuple[PlateState, int] | None:
+    """(state, iterations) of the step from ``s0`` with the plate out of reach (the free ball, with its Maxwell
+    history: it recovers), or None when the plate at the scaled approach d1 would touch it (the free ball's top
+    above h = 1 - d1 by more than ``GAP_TOL``: the step has contact). ``d1=None``: the plate touching the free top
+    (the state's approach is then that of the top). The state's active set is empty, its force 0."""
+    st, its = prob.step(s0._replace(active=np.zeros_like(s0.active)), FAR, dt, None, load)
+    if st.active.any():
+        return None
+    d_top = float(np.min(prob.plane.gap(st.x, 1.0)))  # h = 1: the gap of the top is 1 - z_top
+    if d1 is None:
+        d1 = d_top
+    elif d1 > d_top + GAP_TOL:
+        return None
+    return st._replace(delta=float(d1)), its
 
 
 def static_fitted(search: EdgeSearch[P], d_of_t, times, load_of_t, max_cuts: int = 6) -> list[Step[PlateStep[P]]]:
@@ -596,6 +676,7 @@ def timed_fitted(
     too_large=None,
     history: str = "replay",
     remesh: float = REMESH,
+    hold: float = 0.0,
 ) -> list[Step[PlateStep[P]]]:
     """Time steps on fitted meshes (one per step).
 
@@ -629,34 +710,86 @@ def timed_fitted(
 
     While the plate is held the edge stays where it is, the mesh with it, and the history is taken as it is.
     """
+    step_to = fitted_stepper(fit, beta, tau, load_of_t, history=history, remesh=remesh, hold=hold)
+
+    def step(
+        t0: float, old: PlateStep[P], t1: float, prev: TimedState[PlateStep[P]] | None
+    ) -> tuple[PlateStep[P], int]:
+        return step_to(t0, old, t1, prev, d_of_t(t1))
+
+    return march(step, first_state(fit, beta.size), times, too_large=too_large)
+
+
+def fitted_stepper(
+    fit: EdgeSearch[P], beta, tau, load_of_t, history: str = "replay", remesh: float = REMESH, hold: float = 0.0
+) -> Callable[..., tuple[PlateStep[P], int]]:
+    """The one-step function of :func:`timed_fitted`: ``step_to(t0, old, t1, prev, d1)`` -> (PlateStep, Newton
+    iterations), the step from ``old`` at t0 to t1 (s) with the plate at the scaled approach ``d1`` (any value: the
+    force control of ``fem.spheroid.compress`` calls it for several trial approaches from the same ``old``), or
+    ``d1=None``: the ball without contact, its approach the plate touching its top (:func:`without_contact`).
+    Contact may be lost (a free step on the last mesh, force 0, edge 0: the next contact is searched as a first
+    contact) and regained (:func:`contact_lost` says when to try the free ball first). ``hold``: a step moving the
+    plate by at most this fraction of the approach counts as held (the history then carried as by "transfer", not
+    replayed; 0: only a plate standing still)."""
     if history not in HISTORIES:
         raise ValueError(f"history must be one of {HISTORIES}, got {history!r}")
     if not remesh > 1.0:
         raise ValueError(f"remesh (a factor of the contact edge) must be > 1, got {remesh!r}")
 
-    def step(
-        t0: float, old: PlateStep[P], t1: float, prev: TimedState[PlateStep[P]] | None
+    def step_to(
+        t0: float, old: PlateStep[P], t1: float, prev: TimedState[PlateStep[P]] | None, d1: float | None
     ) -> tuple[PlateStep[P], int]:
-        d1, dt = d_of_t(t1), t1 - t0
+        if d1 is None or contact_lost(old, d1):  # try the free ball first
+            got = attempt(t0, old, t1, prev, d1, free=True)
+            if got is not None:
+                return got
+            assert d1 is not None  # with no plate to touch the free ball is always admissible
+        try:
+            got = attempt(t0, old, t1, prev, d1, free=False)
+        except NewtonError:
+            if d1 < old.state.delta or not old.state.active.any():  # unloading: the contact may have been lost
+                got = attempt(t0, old, t1, prev, d1, free=True)
+                if got is not None:
+                    return got
+            raise
+        assert got is not None  # a contact step returns its state or raises
+        return got
+
+    def attempt(
+        t0: float, old: PlateStep[P], t1: float, prev: TimedState[PlateStep[P]] | None, d1: float | None, free: bool
+    ) -> tuple[PlateStep[P], int] | None:
+        """The step with contact at d1, or (``free``) without contact (None: the ball would touch the plate)."""
+        dt = t1 - t0
         s_old = old.state
         guess = s_old.x
         p_old = prev.state.state if prev is not None else None
-        if p_old is not None and abs(s_old.delta - p_old.delta) > 1e-14:
-            guess = s_old.x + (s_old.x - p_old.x) * (d1 - s_old.delta) / (s_old.delta - p_old.delta)
-        if np.isnan(old.edge):  # node-by-node contact (beyond the fitted range)
+        # extrapolate from the last two steps only where the last one moved the plate by at least a tenth of this one
+        # (a creep step after a nearly held one would extrapolate by a huge factor)
+        moved = (
+            p_old is not None
+            and d1 is not None
+            and abs(s_old.delta - p_old.delta) > max(1e-14, 0.1 * abs(d1 - s_old.delta))
+        )
+        if free or d1 is None:  # the free ball's history only (on the previous step's mesh): no guess, no edge
             e0 = float("nan")
-        elif old.edge <= 0.0:  # the first contact
-            e0 = edge_guess([], [], d1)
-        elif (
-            prev is not None and p_old is not None and prev.state.edge > 0.0 and abs(s_old.delta - p_old.delta) > 1e-14
-        ):  # nan: False
+        elif p_old is not None and moved:
+            guess = s_old.x + (s_old.x - p_old.x) * (d1 - s_old.delta) / (s_old.delta - p_old.delta)
+        if free or d1 is None:
+            pass
+        elif np.isnan(old.edge):  # node-by-node contact (beyond the fitted range)
+            e0 = float("nan")
+        elif old.edge <= 0.0:  # the first contact (again, after a free step: from the ball's top)
+            e0 = edge_guess([], [], d1 if s_old.delta == 0.0 else max(d1 - regain_top(old), 1e-3 * d1))
+        elif prev is not None and p_old is not None and prev.state.edge > 0.0 and moved:  # nan: False
             e0 = edge_guess([p_old.delta, s_old.delta], [prev.state.edge, old.edge], d1)
         else:
             e0 = old.edge * np.sqrt(d1 / s_old.delta) if s_old.delta > 0 else old.edge
         H = old.history_mesh if old.history_mesh is not None else old.problem.m  # where s_old.visco lives
         H_edge = old.history_edge if old.history_mesh is not None else old.edge
         quiet = beta.size == 0 or not np.any(s_old.visco.S_iso)  # no history yet: it lives anywhere
-        holding = d1 == s_old.delta  # the plate stands still: the edge hardly moves (replay: as "transfer")
+        # the plate stands still (or, ``hold``, moves by at most that fraction of the approach): the edge hardly moves
+        # (replay: as "transfer")
+        holding = d1 == s_old.delta or (d1 is not None and abs(d1 - s_old.delta) <= hold * s_old.delta)
         cache: dict = {}
 
         def on(prob: P) -> ve.MaxwellState:
@@ -722,10 +855,11 @@ def timed_fitted(
             """The path after this step (history="replay"; empty otherwise)."""
             return (*old.path, (prob.m, x, S, dt)) if history == "replay" else ()
 
-        def nodal() -> tuple[PlateStep[P], int]:
+        def nodal(warn: bool = True) -> tuple[PlateStep[P], int]:
             """Node-by-node contact on the previous step's mesh (beyond the fitted range)."""
+            assert d1 is not None  # a contact step
             prob = old.problem
-            if not np.isnan(old.edge):
+            if warn and not np.isnan(old.edge):
                 _warn_nodal(load_of_t(t1))
             visco0 = s_old.visco if history == "replay" else on(prob)  # replay: it lives on this mesh
             if visco0 is not s_old.visco:  # anchored elsewhere: S_iso^n evaluated on this mesh, Q_m interpolated
@@ -736,6 +870,18 @@ def timed_fitted(
             st = PlateState(sol.x, sol.active, visco, d1, sol.residual, iso_scale, extra, sol.sets)
             return PlateStep(st, prob, float("nan"), path=walked(prob, sol.x, visco.S_iso)), sol.iterations
 
+        if free:  # on the previous step's mesh, its history there (as nodal() below)
+            prob = old.problem
+            visco0 = s_old.visco if history == "replay" else on(prob)
+            if visco0 is not s_old.visco:
+                visco0 = visco0._replace(S_iso=prob.asm.iso_S(s_old.x, prob.mat))
+            got = without_contact(prob, s_old._replace(visco=visco0), d1, dt, load_of_t(t1))
+            if got is None:
+                return None
+            st_free, its_free = got
+            edge_free = float("nan") if np.isnan(old.edge) else 0.0  # next contact: searched as a first one
+            return PlateStep(st_free, prob, edge_free, path=walked(prob, st_free.x, st_free.visco.S_iso)), its_free
+        assert d1 is not None  # a contact step has a plate position
         if np.isnan(old.edge) or (old.edge > 0.0 and e0 > EDGE_MAX):
             return nodal()
         try:
@@ -743,13 +889,17 @@ def timed_fitted(
         except NewtonError as err:
             if old.edge > 0.0 and beyond_fit([old.edge], e0, err):
                 return nodal()
+            if old.edge == 0.0 and s_old.delta > 0.0:  # contact regained, too small yet for a fitted edge: node by
+                # node on the last mesh for this step (edge 0: the next step searches a fitted edge again)
+                regained, its_regained = nodal(warn=False)
+                return regained._replace(edge=0.0), its_regained
             raise
         prob, es_ = sol.problem, sol.state
         visco, where, where_edge = updated(prob, es_.x, sol.edge, held=d1 == s_old.delta)
         st = PlateState(es_.x, es_.active, visco, d1, es_.residual, es_.iso_scale, es_.extra_S, sol.solves)
         return PlateStep(st, prob, sol.edge, where, where_edge, walked(prob, es_.x, visco.S_iso)), sol.iterations
 
-    return march(step, first_state(fit, beta.size), times, too_large=too_large)
+    return step_to
 
 
 # ---- a rigid sphere (or plane) above or below the body: exact contact on a curved obstacle (fem.indentation) --

@@ -380,7 +380,8 @@ class SpheroidResult:
     [m], ``contact_radius_node`` (the outermost node in contact) [m], ``min_gap`` (smallest plate gap
     of the surface nodes, >= 0 to round-off) [m], ``min_contact_force`` (smallest nodal contact force of
     the active nodes, >= 0 to round-off) [N], ``newton_iterations`` and ``contact_passes`` (active-set passes) per step,
-    ``wall_time`` [s] per step. ``fields``: SpheroidField at the requested ``field_times`` and the end.
+    ``wall_time`` [s] per step, ``in_contact`` (bool per step: False where the plates have lost the ball, force 0).
+    ``fields``: SpheroidField at the requested ``field_times`` and the end.
     """
 
     time: np.ndarray
@@ -403,6 +404,7 @@ class SpheroidResult:
     static: bool = False
     parameters: dict | None = None
     gradient: dict | None = None  # compress(gradient=True): {"C": {"force": dF/dC [N/Pa], ...}, "alpha": ..., ...}
+    in_contact: np.ndarray | None = None  # bool per step: the plate touches the ball (False: force 0, contact lost)
 
     def field_at(self, time: float | None = None) -> SpheroidField:
         """The stored field closest to ``time`` (s; None: the last)."""

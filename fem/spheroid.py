@@ -13,8 +13,9 @@ contact-edge-fitted meshes are ``fem.mesh.fitted_mesh`` (``LEVELS``), the edge s
 from __future__ import annotations
 
 import logging
+import warnings
 from collections.abc import Callable, Sequence
-from typing import NamedTuple
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 import scipy.sparse as sp
@@ -33,9 +34,13 @@ from tissuemech.fem.contact import (
     PlateStep,
     RigidPlane,
     contact_treatment,
+    first_state,
+    fitted_stepper,
     nodal_step,
+    plate_force,
     static_fitted,
     timed_fitted,
+    top_approach,
 )
 from tissuemech.fem.forms import Material
 from tissuemech.fem.kinematics import invariants
@@ -43,9 +48,10 @@ from tissuemech.fem.linalg import Reuse, Symmetric
 from tissuemech.fem.mesh import FITTED_LEVELS, FITTED_SPLIT, AxiMesh, fitted_mesh
 from tissuemech.fem.output import SpheroidField, SpheroidResult
 from tissuemech.fem.problem import SPHEROID_MARGIN, SceneProblem, check_mesh, mesh_spec, roundoff_floor, secant
+from tissuemech.fem.protocols import Record, force_controlled, record_schedule
 from tissuemech.fem.stepping import Adaptive, Fixed, Step, TimedState
 from tissuemech.fem.surface import SurfaceTension
-from tissuemech.fem.timestepping import march
+from tissuemech.fem.timestepping import march, ramp_hold_schedule
 from tissuemech.reduced.material import (
     hertz_plate_f,
     validate_branches,
@@ -63,6 +69,10 @@ __all__ = [
     "MESHES",
     "LEVELS",
     "hertz_force",
+    "SmallApproachWarning",
+    "small_approach_error",
+    "warn_small_approach",
+    "SMALL_APPROACH_ERRORS",
     "FittedEdge",
     "NodalContact",
     "Observation",
@@ -78,11 +88,60 @@ LEVELS = FITTED_LEVELS
 MESHES = {"coarse": 0, "default": 1, "fine": 2}
 FORCE_CHECK = 1e-6  # |F_contact - F_reaction| / F
 SPLIT = FITTED_SPLIT  # the pole block's arc (55 deg); EDGE_TOL, EDGE_MIN, EDGE_MAX, AFFINE_MAX_ITER: fem.contact
-__all__ += ["EDGE_TOL", "EDGE_MIN", "EDGE_MAX", "AFFINE_MAX_ITER", "SPLIT", "X_MIN"]
+__all__ += ["EDGE_TOL", "EDGE_MIN", "EDGE_MAX", "AFFINE_MAX_ITER", "SPLIT", "X_MIN", "PROTOCOL_HOLD"]
 # smallest final approach delta/(2 a0) of a run (issue 14 audit): the first static state (1/8 of it) is then
 # x >= 1.25e-7, which every level converges at; at 1e-7 the coarse level's first state did not (its residual stuck
 # at round-off), and at x = 1e-6 F_FE / F_table is already 1.43 / 1.016 (coarse / default)
 X_MIN = 1e-6
+# force control and measured histories: a step moving the plate by at most this fraction of the approach counts as
+# held (``fem.contact.fitted_stepper``: the Maxwell history carried to the step's mesh, not replayed from t = 0). The
+# replay's smoothed history drifts over long steps: the Fig. 10 creep (coarse) ends 4.3e-4 off the reduced approach
+# with replay in the creep, 6e-5 with it carried (python -m tissuemech.compare.bench.fem_protocols)
+PROTOCOL_HOLD = 0.05
+
+
+class SmallApproachWarning(UserWarning):
+    """The approach is below the design range of the mesh level: the contact zone holds too few elements there and the
+    force is too high (``SMALL_APPROACH_ERRORS``)."""
+
+
+# F_FE / F_table - 1 of a static state at x = delta / (2 a0) per level (alpha = 0.2; the table is the Richardson-
+# converged FE, within 3e-4 of Hertz at x <= 1e-5); measured on levels 0-2 (issue 41): the coarse level is 43 % too
+# stiff at x = 1e-6, the default 1.6 %; level 2 stays within 1e-3 down to X_MIN, levels 3-4 finer still
+SMALL_APPROACH_ERRORS: dict[int, tuple[tuple[float, float], ...]] = {
+    0: ((1e-6, 0.43), (1e-5, 0.20), (1e-4, 8.5e-2), (1e-3, 2.7e-2), (3e-3, 1.2e-2), (1e-2, 3.6e-3), (3e-2, 5.4e-4)),
+    1: ((1e-6, 1.6e-2), (1e-5, 8.1e-3), (1e-4, 3.3e-3), (1e-3, 1.0e-3), (3e-3, 4.0e-4), (1e-2, 9.0e-5)),
+    2: ((1e-6, 9.4e-4), (1e-5, 4.9e-4), (1e-4, 2.0e-4)),
+}
+DESIGN_ERROR = 1e-3  # a level's design range: the approaches whose force error (above) is at most this
+
+
+def small_approach_error(x: float, level: int) -> float:
+    """The expected relative force error (F_FE / F_converged - 1, interpolated in log-log from
+    ``SMALL_APPROACH_ERRORS``; 0 past the measured range) of level ``level`` at x = delta / (2 a0)."""
+    table = SMALL_APPROACH_ERRORS.get(level)
+    if table is None or x >= table[-1][0]:
+        return 0.0
+    xs, es = (np.log([p[i] for p in table]) for i in (0, 1))
+    return float(np.exp(np.interp(np.log(max(x, 1e-300)), xs, es)))
+
+
+def warn_small_approach(x: float, level: int | None) -> None:
+    """A ``SmallApproachWarning`` when the largest approach x = delta / (2 a0) of a run on a level lies below the
+    level's design range (its expected force error above ``DESIGN_ERROR``); a mesh object is the caller's choice."""
+    if level is None:
+        return
+    err = small_approach_error(x, level)
+    if err > DESIGN_ERROR:
+        lo = next((p[0] for p in SMALL_APPROACH_ERRORS[level] if p[1] <= DESIGN_ERROR), None)
+        warnings.warn(
+            f"the approach delta/(2 a0) = {x:.3g} is below the design range of mesh level {level} "
+            f"(x >= {lo if lo is not None else 3e-2:g}: force error <= {DESIGN_ERROR:g}); expect the FE force about "
+            f"{100 * err:.2g} % too high there (the contact zone spans too few elements). Use a finer level "
+            "(mesh=2: <= 0.1 % down to x = 1e-6) or tissuemech.reduced.spheroid",
+            SmallApproachWarning,
+            stacklevel=3,
+        )
 
 
 def hertz_force(approach, radius: float, C: float):
@@ -201,7 +260,7 @@ class BallProblem(SceneProblem):
         dt [s] (None: static), predicted by the secant through ``prev`` (a ``PlateState`` or None)."""
         iso_scale, extra = self.maxwell_factors(s0.visco, dt)
         guess = s0.x
-        if prev is not None and abs(s0.delta - prev.delta) > 1e-14:
+        if prev is not None and abs(s0.delta - prev.delta) > max(1e-14, 0.1 * abs(d1 - s0.delta)):
             guess = secant(s0.x, prev.x, d1 - s0.delta, s0.delta - prev.delta)
         sol = self.solve(s0, d1, iso_scale, extra, guess, load)
         visco = self.maxwell_update(s0.visco, dt, sol.x)
@@ -293,9 +352,10 @@ def compress(
     C: float,
     alpha: float,
     branches: Sequence = (),
-    displacement: float | Callable[[float], float],
-    ramp_time: float,
-    end_time: float,
+    displacement: float | Callable[[float], float] | tuple | None = None,
+    ramp_time: float | None = None,
+    end_time: float | None = None,
+    force: float | Callable[[float], float] | tuple | None = None,
     kappa: float = 2.2e9,
     mesh: str | int | AxiMesh = "default",
     contact: str | FittedEdge | NodalContact | None = None,
@@ -325,9 +385,33 @@ def compress(
             diameter the contact force nears round-off) of the two plates, reached at ``ramp_time`` by a linear
             ramp and then held to ``end_time``; or a callable delta(t) (m, t in s, delta(0) = 0): ``ramp_time`` is
             then the time scale of the fine initial steps and each step moves the plate by at most the ramp's step
-            (steps are halved until it does).
-        ramp_time: end of the ramp (s, 0 < ramp_time <= end_time; ignored when ``static``).
-        end_time: end of the hold (s; ignored when ``static``).
+            (steps are halved until it does); or a measured history ``(times, approaches)`` (arrays in s and m,
+            times strictly increasing from 0, approaches >= 0 from 0): linear between the samples, held after the
+            last. Its steps (``fem.protocols.record_schedule``) land on the kinks that matter (the record simplified
+            to 1e-3 of the step cap, at most 400 kinks: a dense record of 10^5 samples of a few straight pieces gives
+            a few dozen steps), move the plate by at most max(approach) / n_ramp, and grow by 1.5 from the shortest
+            such step after every kink (``ramp_time`` given: from ramp_time / n_ramp; ``end_time`` defaults to the
+            last sample). The plates may move apart: when they retract faster than the ball recovers the contact is
+            lost (force exactly 0, never negative; ``in_contact`` False, ``parameters["contact"]`` "none", the times
+            in ``parameters["contact_lost"]`` / ``["contact_regained"]``); the free ball recovers with its Maxwell
+            history and the contact comes back when the plates reach its top (node by node on the last fitted mesh
+            while it is too small for a fitted edge, fitted again from the next step).
+        force: instead of ``displacement`` (exactly one of them; N): force control. A number F: the plate force ramped
+            linearly to F at ``ramp_time`` and held to ``end_time`` (creep); a callable F(t) (N, F(0) = 0, >= 0;
+            steps change the force by at most the ramp's largest step) or ``(times, forces)`` (as a measured history
+            above), which may remove the force (recovery: at F = 0 the plates leave the ball, whose approach is then
+            the plate touching its recovering top, ``in_contact`` False). Every step solves for the approach whose
+            plate force is F(t) to 1e-7 (``fem.protocols.force_controlled``: a secant / regula falsi iteration on
+            the approach around the displacement-controlled step, each trial a full step with its fitted edge; a
+            failure names the step's time (s) and force). ``approach`` (m) is then the observable, ``force`` F(t).
+            ``n_hold`` defaults to 40 here (the creep moves the plate through the hold: the time error is 2nd
+            order, on the Fig. 10 creep 4.5e-4 of the approach at 20 hold steps, 1.0e-4 at 40).
+            On a level, steps that move the plate by < 5 % of the approach (``PROTOCOL_HOLD``: creep) carry the Maxwell
+            history to the step's mesh instead of replaying it (the replay drifts over long steps). Accuracy
+            (``python -m tissuemech.compare.bench.fem_protocols``): see docs/validation.md.
+        ramp_time: end of the ramp (s, 0 < ramp_time <= end_time; ignored when ``static``; optional for a measured
+            history).
+        end_time: end of the hold (s; ignored when ``static``; for a measured history default its last time).
         mesh: "coarse", "default", "fine" or a level 0..4 (0 = coarse, 1 = default, 2 = fine; ``LEVELS``
             gives (n_core, n_radial, surface grading, n_contact, n_equator) of :func:`fitted_mesh`):
             CONTACT-EDGE-FITTED meshes. Static runs solve every state on its own mesh whose surface node
@@ -398,10 +482,13 @@ def compress(
         runs on a level the edge node; else an edge estimate between the outermost active node and the
         next from the gaps of the first free nodes), ``contact_radius_node`` (the outermost active node,
         m), ``min_gap`` (m), ``min_contact_force`` (N), ``newton_iterations``, ``contact_passes``,
-        ``wall_time`` (s); ``fields`` (``SpheroidField``), ``mesh``, ``static``, ``parameters``.
+        ``wall_time`` (s), ``in_contact`` (bool); ``fields`` (``SpheroidField``), ``mesh``, ``static``,
+        ``parameters`` (with force= or a measured history also ``control`` ("force" / "displacement"),
+        ``contact_lost`` and ``contact_regained``: the times in s of the first step without / with contact again).
 
     Raises:
-        ValueError: an input out of range (the message names the quantity and its unit).
+        ValueError: an input out of range (the message names the quantity and its unit), both or neither of
+            ``displacement`` and ``force``.
         NewtonError: a step did not converge after its cut-backs (``ContactError``: the active set or the
             fitted contact edge did not settle); the message names the step's time or approach.
         RuntimeError: the plate force and the midplane reaction differ by more than 1e-6 (relative): the
@@ -416,14 +503,35 @@ def compress(
     beta = np.array([float(b) for b, _ in br])
     tau = np.array([float(t) for _, t in br])
     a0, C = float(radius), float(C)
-    if callable(displacement):
+    if (displacement is None) == (force is None):
+        raise ValueError(
+            "give exactly one of displacement= (the plate approach: m, a function of t or (times, approaches)) and "
+            "force= (the plate force: N, a function of t or (times, forces)); got "
+            + ("both" if force is not None else "neither")
+        )
+    proto = None  # force control or a measured history (fem.protocols)
+    delta_fn: Any = None
+    if force is not None or isinstance(displacement, (tuple, list)):
+        if static:
+            raise ValueError(
+                "static=True needs the final approach as a number (m) in displacement=, not a force or a history"
+            )
+        proto = _protocol(displacement, force, ramp_time, end_time, a0, n_ramp or 6)
+        ramp_time, end_time = proto.ramp_time, proto.end_time
+        delta_fn, d_max = proto.value, None
+    elif not static and (ramp_time is None or end_time is None):
+        raise ValueError(
+            "ramp_time and end_time (s) are needed with a displacement number or function (they are optional only "
+            "for a measured history displacement=(times, approaches) or with force=)"
+        )
+    elif callable(displacement):
         if static:
             raise ValueError("static=True needs the final approach as a number (m), not a function of time")
         delta_fn = displacement
         d_max = None
     else:
         validate_positive("displacement (the total approach of the plates)", displacement, "m")
-        d_max = float(displacement)
+        d_max = float(cast(float, displacement))
         if d_max < X_MIN * 2 * a0:
             raise ValueError(
                 f"displacement {d_max:g} m is delta/(2 a0) = {d_max / (2 * a0):.2g} of the diameter, below the "
@@ -437,6 +545,7 @@ def compress(
                 "than 20 % of its height; the model is not meant for that"
             )
     if not static:
+        assert ramp_time is not None and end_time is not None  # refused above
         validate_positive("ramp_time", ramp_time, "s")
         validate_positive("end_time", end_time, "s")
         if end_time < ramp_time:
@@ -444,6 +553,8 @@ def compress(
         if d_max is not None:
             tr = float(ramp_time)
             delta_fn = lambda t: d_max * min(float(t) / tr, 1.0)
+    ramp_time = 0.0 if ramp_time is None else float(ramp_time)  # None only for static runs (unused there)
+    end_time = 0.0 if end_time is None else float(end_time)
     store_all = isinstance(field_times, str) and field_times == "all"
     if isinstance(field_times, str) and not store_all:
         raise ValueError(f"field_times must be times in s or 'all', got {field_times!r}")
@@ -459,7 +570,13 @@ def compress(
         )
 
     level = _level(mesh)
+    warn_small_approach(_largest_x(proto, d_max, displacement, ramp_time, a0, C), level)
     treat = contact_treatment(contact if contact is not None else ("fitted" if level is not None else "nodal"))
+    if gradient and force is not None:
+        raise ValueError(
+            "gradient=True under force control is not carried yet (the approach moves with the parameters): use a "
+            "displacement-controlled run (a number, a function of t or a measured history (times, approaches))"
+        )
     if gradient and not static and isinstance(treat, FittedEdge):
         raise ValueError(
             "gradient=True in a time run needs contact='nodal' (one fixed mesh): the sensitivity of the Maxwell "
@@ -480,6 +597,7 @@ def compress(
             if gradient
             else EdgeSearch(a0, level, make, rtol, tol=treat.tol)
         )
+    stepper: Fixed | Adaptive | None = None  # the step strategy of a displacement-controlled time run
     if static:
         assert d_max is not None  # static=True rejects a callable displacement above
         # fitted levels: every state is solved on its own mesh, states 0.02 apart in x suffice
@@ -487,6 +605,11 @@ def compress(
         times = np.linspace(0.0, 1.0, n + 1)[1:]
         dfun = lambda t: d_max * t
         too_large = None
+    elif proto is not None:
+        # force control: 40 hold steps by default (the creep moves the plate through the hold: its time error is
+        # 2nd order, Fig. 10 creep on level 0 4.5e-4 of the approach at 20 steps, 1.0e-4 at 40)
+        times = proto.schedule(n_hold or (40 if proto.kind == "force" else 20), list(ft))
+        dfun, too_large = delta_fn, proto.too_large
     else:
         stepper = time_steps(stepping, n_ramp, n_hold)
         times = stepper.schedule(
@@ -515,33 +638,37 @@ def compress(
         return d / (2 * a0)
 
     def load_of(t1):
+        if proto is not None and proto.kind == "force":
+            return f"t = {t1:.6g} s, F = {proto.target(t1) * 1e6:.6g} uN"
         return f"delta = {dfun(t1) * 1e6:.4g} um" if static else f"t = {t1:.6g} s, delta = {dfun(t1) * 1e6:.4g} um"
 
     steps: list[Step[PlateStep[BallProblem]]]
-    if fit is not None:  # every state / step on its own fitted mesh
+    if proto is not None and proto.kind == "force":  # an outer iteration on the approach per step (fem.protocols)
+        steps = _force_steps(
+            fit, treat, lambda: _nodal_start(mesh, a0, mat, beta, tau, rtol, gam), beta, tau,
+            lambda t: proto.target(t) / (C * a0**2), times, too_large, load_of,
+        )  # fmt: skip
+    elif fit is not None:  # every state / step on its own fitted mesh
         if static:
             steps = static_fitted(fit, dscaled, times, load_of)
         else:  # the Maxwell history carried between the steps' meshes (FittedEdge.history)
             assert isinstance(treat, FittedEdge)  # fit is made for a FittedEdge only
             steps = timed_fitted(
-                fit, beta, tau, dscaled, times, load_of, too_large, history=treat.history, remesh=treat.remesh
-            )
+                fit, beta, tau, dscaled, times, load_of, too_large, history=treat.history, remesh=treat.remesh,
+                **({"hold": PROTOCOL_HOLD} if proto is not None else {}),
+            )  # fmt: skip
     else:
-        m0 = make_mesh(mesh, a0)
-        prob = BallProblem(m0, mat, beta, tau, rtol, gam)
-        n0 = prob.asm.ndof
-        pole = np.argmin(np.hypot(prob.plane.R, prob.plane.Z - 1.0))
-        active0 = np.zeros(prob.plane.nodes.size, bool)
-        active0[pole] = True
-        s0 = PlateState(np.zeros(n0), active0, prob.maxwell_initial(), 0.0, np.zeros(n0), 1.0, None, 0)
+        start = _nodal_start(mesh, a0, mat, beta, tau, rtol, gam)
 
         def step(
             t0: float, old: PlateStep[BallProblem], t1: float, prev: TimedState[PlateStep[BallProblem]] | None
         ) -> tuple[PlateStep[BallProblem], int]:
             return nodal_step(old, prev, dscaled(t1), None if static else t1 - t0, load_of(t1))
 
-        steps = march(step, PlateStep(s0, prob, float("nan")), times, too_large=too_large)
-    modes = tuple("fitted" if np.isfinite(st.state.edge) else "nodal" for st in steps)
+        steps = march(step, start, times, too_large=too_large)
+    modes = tuple(
+        ("fitted" if np.isfinite(st.state.edge) else "nodal") if st.state.state.active.any() else "none" for st in steps
+    )
     m = steps[-1].state.problem.m
     L2 = C * a0**2
     rows: list[_Row] = []
@@ -614,6 +741,7 @@ def compress(
             per_state.append(done)
     if gradient:
         grad = _gradients(per_state, col, a0, C, float(kappa), float(surface_tension), beta.size)
+    touching = np.array([m_ != "none" for m_ in modes])
     return SpheroidResult(
         **col,
         midplane_area=area,
@@ -632,9 +760,11 @@ def compress(
             end_time=None if static else float(end_time),
             contact=modes,
             n_steps=len(steps),
-            **({} if static else {"stepping": stepper}),
+            **({"stepping": stepper} if stepper is not None else {}),
             **({"surface_tension": float(surface_tension)} if surface_tension else {}),
+            **(_protocol_parameters(proto, col["time"], touching) if proto is not None else {}),
         ),
+        in_contact=touching,
     )
 
 
@@ -804,6 +934,140 @@ def time_steps(stepping: Fixed | Adaptive | None, n_ramp: int | None, n_hold: in
     if n_ramp is None and n_hold is None:
         return Adaptive()
     return Fixed(n_ramp=n_ramp or 6, n_hold=n_hold or 20)  # 0 / None: the default (release 0.1's `or`)
+
+
+class _Protocol(NamedTuple):
+    """Force control or a measured history of :func:`compress` (SI: s, m, N)."""
+
+    kind: str  # "displacement" or "force"
+    value: Callable[[float], float] | None  # the approach delta(t) (m); None under force control
+    target: Callable[[float], float]  # the prescribed quantity of t (m or N)
+    ramp_time: float  # s (the time scale of the first steps)
+    end_time: float  # s
+    schedule: Callable[[int, list], np.ndarray]  # (n_hold, output times) -> step end times (s)
+    too_large: Callable[[float, float], bool] | None
+
+
+def _protocol(displacement, force, ramp_time, end_time, a0: float, n_ramp: int) -> _Protocol:
+    """Validate a force control (``force=`` a number, a callable or (times, forces)) or a measured history
+    (``displacement=(times, approaches)``) and give its schedule (``fem.protocols``)."""
+    kind = "force" if force is not None else "displacement"
+    spec = force if force is not None else displacement
+    unit = "N" if kind == "force" else "m"
+    if isinstance(spec, (tuple, list)):
+        if len(spec) != 2:
+            raise ValueError(f"{kind} as a tuple must be (times, {kind}s): two arrays in s and {unit}")
+        rec = Record(spec[0], spec[1], "approach" if kind == "displacement" else "force", unit)
+        if kind == "displacement" and np.max(rec.values) >= 1.6 * a0:
+            raise ValueError(
+                f"the approach history reaches {np.max(rec.values):g} m: it would squeeze the ball (diameter "
+                f"{2 * a0:g} m) to less than 20 % of its height; the model is not meant for that"
+            )
+        if not np.max(rec.values) > 0:
+            raise ValueError(f"the {kind} history (times, {kind}s) is 0 throughout: nothing presses the ball")
+        end = float(rec.times[-1]) if end_time is None else float(end_time)
+        validate_positive("end_time", end, "s")
+        tr = None if ramp_time is None else float(ramp_time)
+        if tr is not None:
+            validate_positive("ramp_time (the time scale of the first steps)", tr, "s")
+        cap = float(np.max(rec.values)) / n_ramp
+        first = None if tr is None else tr / n_ramp
+        # force control: the hold steps grow by 1.25, not 1.5 (the creep moves the plate through the hold)
+        growth = 1.25 if kind == "force" else 1.5
+        sched = lambda n_hold, breaks: record_schedule(
+            rec, end, cap=cap, first=first, breakpoints=breaks, growth=growth
+        )
+        # the ramp time reported: the first time the record reaches its largest value
+        ramp = min(tr if tr is not None else float(rec.times[int(np.argmax(rec.values))]), end)
+        return _Protocol(kind, rec if kind == "displacement" else None, rec, ramp, end, sched, None)
+    if ramp_time is None or end_time is None:
+        raise ValueError(f"ramp_time and end_time (s) are needed with {kind}= a number or a function of time")
+    validate_positive("ramp_time", ramp_time, "s")
+    validate_positive("end_time", end_time, "s")
+    tr, end = float(ramp_time), float(end_time)
+    if end < tr:
+        raise ValueError(f"end_time ({end} s) must be >= ramp_time ({tr} s)")
+    sched = lambda n_hold, breaks: ramp_hold_schedule(tr, end, n_ramp=n_ramp, n_hold=n_hold, breakpoints=breaks)
+    if callable(spec):  # a force history F(t) (a displacement callable takes compress's own path)
+        f0 = float(spec(0.0))
+        if f0 != 0.0:
+            raise ValueError(f"the force history must start at 0 N at t = 0 (first contact); F(0) = {f0:g} N")
+
+        def target(t: float) -> float:
+            f = float(spec(t))
+            if not np.isfinite(f) or f < 0:
+                raise ValueError(f"the force F(t = {t:g} s) = {f!r} N must be finite and >= 0 (the plates only push)")
+            return f
+
+        # the ramp's step: the largest change of the force over n_ramp equal steps of the ramp
+        cap = float(np.max(np.abs(np.diff([target(t) for t in np.linspace(0, tr, n_ramp + 1)])))) * (1 + 1e-9)
+        if not cap > 0:
+            raise ValueError("the force history is 0 over the ramp (0 <= t <= ramp_time): nothing presses the ball")
+        too_large = lambda t0, t1: abs(target(t1) - target(t0)) > cap
+        return _Protocol(kind, None, target, tr, end, sched, too_large)
+    validate_positive("force (the held plate force)", spec, "N")
+    F = float(spec)
+    return _Protocol(kind, None, lambda t: F * min(float(t) / tr, 1.0), tr, end, sched, None)
+
+
+def _largest_x(proto: _Protocol | None, d_max: float | None, delta_fn, ramp_time, a0: float, C: float) -> float:
+    """The run's largest approach x = delta / (2 a0) (a force: its relaxed Hertz approach) for the design-range check."""
+    if proto is None:
+        d = d_max if d_max is not None else max(float(delta_fn(t)) for t in np.linspace(0, float(ramp_time), 7))
+        return d / (2 * a0)
+    rec = proto.target
+    top = (
+        float(np.max(rec.values))
+        if isinstance(rec, Record)
+        else max(rec(t) for t in np.linspace(0, proto.ramp_time, 7))
+    )
+    if proto.kind == "displacement":
+        return top / (2 * a0)
+    return (3.0 * top / (32.0 * C * a0**2)) ** (2.0 / 3.0)
+
+
+def _protocol_parameters(proto: _Protocol, times: np.ndarray, touching: np.ndarray) -> dict:
+    """``parameters`` entries of a force control or measured history: the control, the times (s) where the plates
+    lost the ball (contact_lost: the first step without contact) and touched it again (contact_regained)."""
+    lost = [float(times[k]) for k in range(1, times.size) if touching[k - 1] and not touching[k]]
+    regained = [float(times[k]) for k in range(1, times.size) if touching[k] and not touching[k - 1]]
+    return dict(control=proto.kind, contact_lost=tuple(lost), contact_regained=tuple(regained))
+
+
+def _nodal_start(mesh, a0: float, mat: Material, beta, tau, rtol: float, gam: float) -> PlateStep[BallProblem]:
+    """The reference state of node-by-node contact on one fixed mesh (the pole node active)."""
+    m0 = make_mesh(mesh, a0)
+    prob = BallProblem(m0, mat, beta, tau, rtol, gam)
+    n0 = prob.asm.ndof
+    pole = np.argmin(np.hypot(prob.plane.R, prob.plane.Z - 1.0))
+    active0 = np.zeros(prob.plane.nodes.size, bool)
+    active0[pole] = True
+    s0 = PlateState(np.zeros(n0), active0, prob.maxwell_initial(), 0.0, np.zeros(n0), 1.0, None, 0)
+    return PlateStep(s0, prob, float("nan"))
+
+
+def _force_steps(fit, treat, nodal_start, beta, tau, f_of_t, times, too_large, load_of):
+    """The march under the prescribed (scaled) plate force f_of_t(t): every step an outer iteration on the approach
+    around the displacement-controlled step (``fem.protocols.force_controlled``), on fitted meshes or node by node."""
+    if fit is not None:
+        assert isinstance(treat, FittedEdge)
+        step_to = fitted_stepper(
+            fit, beta, tau, load_of, history=treat.history, remesh=treat.remesh, hold=PROTOCOL_HOLD
+        )
+        start = first_state(fit, beta.size)
+    else:
+        start = nodal_start()
+        step_to = lambda t0, old, t1, prev, d1: nodal_step(old, prev, d1, t1 - t0, load_of(t1))
+    step = force_controlled(
+        step_to,
+        plate_force,
+        lambda st: st.state.delta,
+        top_approach,
+        f_of_t,
+        load_of,
+        stiffness=1.0 + float(np.sum(beta)),
+    )
+    return march(step, start, times, too_large=too_large)
 
 
 # the names of release 0.1 (compare.bench.fem_perf reaches into them)

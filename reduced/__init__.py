@@ -11,6 +11,7 @@ blastula   exact thick incompressible shell: p(lambda_a), inverse, limit point, 
 viscoshell the shell with generalized-Maxwell branches: inflation history under p(t)
 spheroid   lumped generalized-Maxwell plate force of a compressed ball
 indentation the same for a spherical probe on a ball resting on a plate (AFM)
+oscillation the spheroid's dynamic stiffness (storage, loss) under a small sinusoidal approach
 drop       the Young-Laplace liquid drop between plates (scipy, not JAX: one small solve per approach)
 """
 

@@ -15,12 +15,13 @@ SUITES = {
     "fem-time": "tissuemech.compare.bench.fem_time",
     "fem-gradient": "tissuemech.compare.bench.fem_gradient",
     "fem-indentation": "tissuemech.compare.bench.fem_indentation",
+    "fem-protocols": "tissuemech.compare.bench.fem_protocols",
     # checks run one by one (not part of "all")
     "acceptance": "tissuemech.compare.bench.acceptance",
     "stiff-kernel": "tissuemech.compare.bench.stiff_kernel",
 }
 
-SEPARATE = ("acceptance", "stiff-kernel", "fem-time", "fem-indentation", "fem-gradient")  # not part of "all"
+SEPARATE = ("acceptance", "stiff-kernel", "fem-time", "fem-indentation", "fem-gradient", "fem-protocols")  # not part of "all"
 
 
 def main(argv: list[str] | None = None) -> int:
