@@ -438,3 +438,22 @@ def test_auto_model_error_grows_for_a_tau_near_the_ramp():
     )
     assert res.model_error > 1e-3
     assert any("near the ramp" in f for f in res.flags)
+
+
+def test_auto_model_error_is_raised_in_the_tables_last_intervals():
+    """Records reaching beyond x = 0.32, where the table is up to 1.6x its stated accuracy off between its nodes
+    (issue 35), are fitted with the larger measured model error; below, the metadata's."""
+    from tissuemech.compare.fit import model_error_of
+    from tissuemech.compare.fit.model import TABLE_EDGE_MODEL_ERROR
+    from tissuemech.reduced import spheroid as sph
+
+    rng = np.random.default_rng(3)
+    t = np.concatenate([np.linspace(0.02, 0.2, 10), np.geomspace(0.3, 600.0, 40)])
+    kw = dict(radius=250e-6, C=150.0, alpha=0.4, branches=[(0.5, 60.0)], ramp_time=0.2)
+    out = {}
+    for d in (0.1 * 500e-6, 0.34 * 500e-6):
+        y = np.asarray(sph.nominal_stress(t, **kw, displacement=d))
+        rec = (t, y * (1 + 0.003 * rng.standard_normal(t.size)), d)
+        out[d] = fit.relaxation([rec], radius=250e-6, ramp_time=0.2, intervals="wald").model_error
+    assert out[0.1 * 500e-6] == pytest.approx(model_error_of("fem"))
+    assert out[0.34 * 500e-6] == pytest.approx(TABLE_EDGE_MODEL_ERROR)

@@ -21,7 +21,14 @@ SUITES = {
     "stiff-kernel": "tissuemech.compare.bench.stiff_kernel",
 }
 
-SEPARATE = ("acceptance", "stiff-kernel", "fem-time", "fem-indentation", "fem-gradient", "fem-protocols")  # not part of "all"
+SEPARATE = (
+    "acceptance",
+    "stiff-kernel",
+    "fem-time",
+    "fem-indentation",
+    "fem-gradient",
+    "fem-protocols",
+)  # not part of "all"
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -16,6 +16,8 @@ from tissuemech.compare.fit.diagnostics import ERROR_MODELS, residual_diagnostic
 from tissuemech.compare.fit.intervals import LOG_SPAN, Profiler, exp_or_inf, identifiability, inverse_eigenvalues
 from tissuemech.compare.fit.model import (
     BETA_BOUNDS,
+    TABLE_EDGE_MODEL_ERROR,
+    TABLE_EDGE_X,
     default_model,
     initial_guess,
     model_error_of,
@@ -156,6 +158,8 @@ def relaxation(
     if isinstance(equilibrium, str) and equilibrium == "hertz":
         hertz_range(x)
     eps = model_error_value(model_error, equilibrium)
+    if isinstance(model_error, str) and table_of(equilibrium) is not None and x > TABLE_EDGE_X:
+        eps = max(eps, TABLE_EDGE_MODEL_ERROR)  # the table's last x intervals (issue 35): measured between nodes
     model = default_model() if model is None else model
     p0 = starting_point(initial, names, lambda: initial_guess(recs, radius, ramp_time, n_branches))
     res_fn, jac_fn, scale = residual_builder(recs, float(radius), float(ramp_time), n_branches, equilibrium, model)
