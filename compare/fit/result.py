@@ -39,6 +39,7 @@ class FitResult:
     discrepancy   estimated relative RMS size of each record's smooth discrepancy term (0: none found)
     correlation   per record: the residuals' lag-1 autocorrelation used for prewhitening (0 .. 0.97)
     wald_by_error_model  the Wald 95 % interval of each parameter under each error model (comparison studies)
+    bins          per record: the number of bins it was fitted in (``compress=``; 0: sample by sample)
     success       True when the optimizer converged AND the intervals are usable (no flag below)
     flags         warnings that make intervals unusable or one-sided, in words
     message       optimizer message (and flags); ``nfev`` model evaluations of the final pass
@@ -66,6 +67,7 @@ class FitResult:
     covariances: dict[str, np.ndarray] = field(default_factory=dict)
     correlation: tuple[float, ...] = field(default=())
     wald_by_error_model: dict[str, dict[str, tuple[float, float]]] = field(default_factory=dict)
+    bins: tuple[int, ...] = field(default=())
 
     @property
     def report(self) -> str:
@@ -117,7 +119,8 @@ class FitResult:
             lines.append(f"intervals: error model {self.errors!r}")
         for j, dg in enumerate(self.diagnostics):
             tag = "  <- not white noise" if dg.correlated else ""
-            lines.append(f"residuals of record {j + 1}: {dg.text()}{tag}")
+            of = f" ({self.bins[j]} bin means)" if j < len(self.bins) and self.bins[j] else ""
+            lines.append(f"residuals of record {j + 1}{of}: {dg.text()}{tag}")
         for f in self.flags:
             lines.append(f"WARNING: {f}")
         return "\n".join(lines) + "\n" + self.report
@@ -161,6 +164,7 @@ class FitResult:
             },
             "covariance_log": [[num(v) for v in row] for row in np.asarray(self.covariance)],
             "dof": int(self.dof),
+            "bins": list(self.bins),
             "success": bool(self.success),
             "flags": list(self.flags),
             "message": self.message,
