@@ -13,6 +13,7 @@ SUITES = {
     "fem-perf": "tissuemech.compare.bench.fem_perf",
     "felupe": "tissuemech.compare.bench.felupe_side",
     "fem-time": "tissuemech.compare.bench.fem_time",
+    "fit-dense": "tissuemech.compare.bench.fit_dense",
     # checks run one by one (not part of "all")
     "acceptance": "tissuemech.compare.bench.acceptance",
     "stiff-kernel": "tissuemech.compare.bench.stiff_kernel",
@@ -25,7 +26,7 @@ def main(argv: list[str] | None = None) -> int:
         print("usage: python -m tissuemech.compare.bench {" + ",".join(SUITES) + ",all} [options]")
         return 0
     name, rest = argv[0], argv[1:]
-    names = [n for n in SUITES if n not in ("acceptance", "stiff-kernel", "fem-time")] if name == "all" else [name]
+    names = [n for n in SUITES if n not in ("acceptance", "stiff-kernel", "fem-time", "fit-dense")] if name == "all" else [name]
     for n in names:
         if n not in SUITES:
             print(f"error: unknown benchmark {n!r}; choose from {', '.join(SUITES)} or all", file=sys.stderr)
