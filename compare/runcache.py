@@ -1,7 +1,7 @@
 r"""A content-addressed on-disk cache of FE runs: what does not change between two ``tissuemech report`` runs is
 computed once.
 
-:func:`call` ``(fn, **kwargs)`` runs ``fn(**kwargs)`` and keeps its result (pickled) with the wall time the run
+:func:`call` ``(fn, kwargs)`` runs ``fn(**kwargs)`` and keeps its result (pickled) with the wall time the run
 took, under a key made of everything the result depends on: the function's module and name, every keyword (numbers,
 strings, tuples, NumPy arrays by their bytes), the package version and a digest of the source of the FE package
 (``tissuemech/fem``) and of the function's own module. A later call with the same key returns the stored result
@@ -39,11 +39,16 @@ _STATE: dict[str, Any] = {"dir": None, "enabled": None}  # None: from the enviro
 
 @dataclass(frozen=True)
 class Timed:
-    """A run's ``result``, the ``wall`` seconds it took when it was computed, and whether it came from the cache."""
+    """A run's ``result`` (of the last repeat), the wall seconds of each repeat (``walls``) when it was computed,
+    and whether it came from the cache (``cached``); ``wall`` is the first repeat's."""
 
     result: Any
-    wall: float
+    walls: tuple[float, ...]
     cached: bool
+
+    @property
+    def wall(self) -> float:
+        return self.walls[0]
 
 
 def default_dir() -> Path:
@@ -97,7 +102,8 @@ def code_digest(module: str = "") -> str:
 
     import tissuemech
 
-    return _digest(tissuemech.__version__, module, str(Path(importlib.import_module("tissuemech.fem").__file__).parent))
+    fem_file = importlib.import_module("tissuemech.fem").__file__ or ""
+    return _digest(tissuemech.__version__, module, str(Path(fem_file).parent))
 
 
 _DIGESTS: dict[tuple, str] = {}
@@ -158,36 +164,40 @@ def key(fn: Callable, kwargs: dict[str, Any]) -> str:
     return hashlib.sha256(repr(parts).encode()).hexdigest()
 
 
-def call(fn: Callable, /, **kwargs: Any) -> Timed:
-    """``fn(**kwargs)`` through the cache (module doc); the wall time is the run's, measured when it ran."""
+def call(fn: Callable, kwargs: dict[str, Any], *, repeats: int = 1) -> Timed:
+    """``fn(**kwargs)`` through the cache (module doc), run ``repeats`` times when computed (timing studies keep the
+    fastest); the wall times are the runs', measured when they ran."""
+    repeats = max(int(repeats), 1)
     k = None
     if _enabled():
         try:
-            k = key(fn, kwargs)
+            k = key(fn, {"kwargs": kwargs, "repeats": repeats})
         except ValueError:
             k = None
     path = _folder() / k[:2] / f"{k}.pkl" if k else None
     if path is not None and path.exists():
         try:
             with open(path, "rb") as f:
-                result, wall = pickle.load(f)
-            return Timed(result, float(wall), True)
+                result, walls = pickle.load(f)
+            return Timed(result, tuple(float(w) for w in walls), True)
         except Exception:  # a damaged or foreign entry: recompute and overwrite
             pass
-    t0 = time.perf_counter()
-    result = fn(**kwargs)
-    wall = time.perf_counter() - t0
+    walls = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        result = fn(**kwargs)
+        walls.append(time.perf_counter() - t0)
     if path is not None:
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_suffix(f".{os.getpid()}.tmp")
             with open(tmp, "wb") as f:
-                pickle.dump((result, wall), f, protocol=pickle.HIGHEST_PROTOCOL)
+                pickle.dump((result, walls), f, protocol=pickle.HIGHEST_PROTOCOL)
             os.replace(tmp, path)
         except Exception:  # unpicklable result, read-only or full disk: the run stands, uncached
             with contextlib.suppress(OSError):
                 tmp.unlink()
-    return Timed(result, wall, False)
+    return Timed(result, tuple(walls), False)
 
 
 def clear(folder: str | Path | None = None) -> int:

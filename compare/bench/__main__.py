@@ -26,7 +26,11 @@ def main(argv: list[str] | None = None) -> int:
         print("usage: python -m tissuemech.compare.bench {" + ",".join(SUITES) + ",all} [options]")
         return 0
     name, rest = argv[0], argv[1:]
-    names = [n for n in SUITES if n not in ("acceptance", "stiff-kernel", "fem-time", "fit-dense")] if name == "all" else [name]
+    names = (
+        [n for n in SUITES if n not in ("acceptance", "stiff-kernel", "fem-time", "fit-dense")]
+        if name == "all"
+        else [name]
+    )
     for n in names:
         if n not in SUITES:
             print(f"error: unknown benchmark {n!r}; choose from {', '.join(SUITES)} or all", file=sys.stderr)

@@ -121,7 +121,9 @@ def cli_time(samples: int) -> dict:
 def main(argv: Sequence[str] | None = None) -> int:
     from tissuemech.compare.bench.common import machine_line, print_rows
 
-    ap = argparse.ArgumentParser(prog="python -m tissuemech.compare.bench fit-dense", description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(
+        prog="python -m tissuemech.compare.bench fit-dense", description=__doc__.split("\n")[0]
+    )
     ap.add_argument("--samples", type=float, default=1e5, help="samples of the binned-vs-full record (default 1e5)")
     ap.add_argument("--rho", type=float, default=0.0, help="AR(1) coefficient of the noise (default 0: white)")
     ap.add_argument("--big", type=float, default=1e6, help="samples of the end-to-end record (default 1e6)")

@@ -19,8 +19,9 @@ def fit_figure(
     records: Sequence[tuple], result: Any, *, radius: float, ramp_time: float, equilibrium: Any, midplane: Any
 ):
     """Data and model (top, symlog time axis) and residuals (bottom) of a fit; ``records`` as fitted (time s,
-    nominal stress Pa, displacement m; records longer than :data:`DISPLAY_SAMPLES` are drawn as bin means), ``result`` its :class:`~tissuemech.compare.fit.FitResult`, the keywords
-    those of the model (SI). Returns the figure (nothing is shown or saved here)."""
+    nominal stress Pa, displacement m; records longer than :data:`DISPLAY_SAMPLES` are drawn as bin means),
+    ``result`` its :class:`~tissuemech.compare.fit.FitResult`, the keywords those of the model (SI). Returns the
+    figure (nothing is shown or saved here)."""
     from tissuemech.reduced import spheroid
 
     plt = _plt()
