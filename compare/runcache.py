@@ -30,11 +30,26 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["Timed", "call", "key", "default_dir", "configure", "settings", "clear", "code_digest", "CACHE_ENV"]
+__all__ = [
+    "Timed",
+    "Job",
+    "call",
+    "prefetch",
+    "cancel_pending",
+    "key",
+    "default_dir",
+    "configure",
+    "settings",
+    "clear",
+    "code_digest",
+    "CACHE_ENV",
+]
 
 CACHE_ENV = "TISSUEMECH_CACHE_DIR"
 NO_CACHE_ENV = "TISSUEMECH_NO_CACHE"
 _STATE: dict[str, Any] = {"dir": None, "enabled": None}  # None: from the environment
+_PENDING: dict[str, Any] = {}  # key -> future of a prefetched run (prefetch)
+Job = tuple  # (fn, kwargs, repeats): one run for prefetch
 
 
 @dataclass(frozen=True)
@@ -164,16 +179,27 @@ def key(fn: Callable, kwargs: dict[str, Any]) -> str:
     return hashlib.sha256(repr(parts).encode()).hexdigest()
 
 
+def _job_key(fn: Callable, kwargs: dict[str, Any], repeats: int) -> str | None:
+    try:
+        return key(fn, {"kwargs": kwargs, "repeats": repeats})
+    except ValueError:
+        return None
+
+
 def call(fn: Callable, kwargs: dict[str, Any], *, repeats: int = 1) -> Timed:
     """``fn(**kwargs)`` through the cache (module doc), run ``repeats`` times when computed (timing studies keep the
-    fastest); the wall times are the runs', measured when they ran."""
+    fastest); the wall times are the runs', measured when they ran. A run :func:`prefetch` started in another
+    process is waited for (or, not yet started there, taken back and run here)."""
     repeats = max(int(repeats), 1)
-    k = None
-    if _enabled():
+    k = _job_key(fn, kwargs, repeats) if (_enabled() or _PENDING) else None
+    fut = _PENDING.pop(k, None) if k else None
+    if fut is not None and not fut.cancel():
         try:
-            k = key(fn, {"kwargs": kwargs, "repeats": repeats})
-        except ValueError:
-            k = None
+            return fut.result()
+        except Exception:  # the run failed over there: run it here, where its error reaches the caller
+            pass
+    if not _enabled():
+        k = None
     path = _folder() / k[:2] / f"{k}.pkl" if k else None
     if path is not None and path.exists():
         try:
@@ -198,6 +224,29 @@ def call(fn: Callable, kwargs: dict[str, Any], *, repeats: int = 1) -> Timed:
             with contextlib.suppress(OSError):
                 tmp.unlink()
     return Timed(result, tuple(walls), False)
+
+
+def prefetch(executor: Any, jobs: list[Job]) -> int:
+    """Start ``jobs`` (``(fn, kwargs, repeats)``, in the order they will be asked for) on ``executor`` (e.g. one
+    worker process on the second core: ``compare.batch.pool.process_pool(1)``) unless the cache holds them; a later
+    :func:`call` of the same run collects it. Returns the number started."""
+    n = 0
+    for fn, kwargs, repeats in jobs:
+        k = _job_key(fn, kwargs, max(int(repeats), 1))
+        if k is None or k in _PENDING:
+            continue
+        if _enabled() and (_folder() / k[:2] / f"{k}.pkl").exists():
+            continue
+        _PENDING[k] = executor.submit(call, fn, kwargs, repeats=repeats)
+        n += 1
+    return n
+
+
+def cancel_pending() -> None:
+    """Forget the prefetched runs nobody asked for (cancelling those not started)."""
+    for fut in _PENDING.values():
+        fut.cancel()
+    _PENDING.clear()
 
 
 def clear(folder: str | Path | None = None) -> int:

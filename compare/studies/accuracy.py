@@ -52,7 +52,16 @@ ODE_RTOLS = (1e-3, 1e-4, 1e-6, 1e-8, 1e-10)
 FE_MESHES = ((2, 4), (4, 8), (8, 16), (16, 32))
 FE_MESHES_QUICK = ((1, 2), (2, 4), (4, 8), (8, 16))
 
-__all__ = ["blastula_accuracy", "spheroid_accuracy", "pareto", "timed", "timed_stats", "FE_MESHES", "FE_MESHES_QUICK"]
+__all__ = [
+    "blastula_accuracy",
+    "spheroid_accuracy",
+    "spheroid_fe_jobs",
+    "pareto",
+    "timed",
+    "timed_stats",
+    "FE_MESHES",
+    "FE_MESHES_QUICK",
+]
 
 
 _T = TypeVar("_T")
@@ -221,6 +230,15 @@ def spheroid_available() -> str | None:
     return None
 
 
+def spheroid_fe_jobs(meshes: Sequence, fe_repeats: int) -> list[tuple[Callable, dict, int]]:
+    """The FE runs of :func:`spheroid_accuracy` as ``(function, keywords, repeats)``, one per mesh level (what
+    ``compare.runcache.prefetch`` can start ahead)."""
+    from tissuemech.fem import spheroid as fes
+
+    end = float(np.asarray(SPHEROID_TIMES)[-1])
+    return [(fes.compress, dict(**FIG10, end_time=end, mesh=m), int(fe_repeats)) for m in meshes]
+
+
 def spheroid_accuracy(
     quick: bool = False,
     meshes: Sequence | None = None,
@@ -254,10 +272,10 @@ def spheroid_accuracy(
     settings = settings or {}
     ts = np.asarray(SPHEROID_TIMES)
     fe: dict[Any, tuple[dict, Any]] = {}
-    for m in meshes:
+    for m, (fn, kwargs, repeats) in zip(meshes, spheroid_fe_jobs(meshes, fe_repeats)):
         # every run includes its mesh set-up: the fastest is the least disturbed; through the run cache
         # (compare.runcache): a later report reuses the runs and the times they took
-        runs = runcache.call(fes.compress, dict(**FIG10, end_time=ts[-1], mesh=m), repeats=int(fe_repeats))
+        runs = runcache.call(fn, kwargs, repeats=repeats)
         fe[m] = (_wall_columns(runs.walls[0], np.asarray(runs.walls, float)), runs.result)
     sig = {m: np.interp(ts, r.time, r.nominal_stress) for m, (_, r) in fe.items()}
     h = [1.0 / fes.LEVELS[m][0] for m in meshes[-3:]]
