@@ -14,6 +14,7 @@ SUITES = {
     "felupe": "tissuemech.compare.bench.felupe_side",
     "fem-time": "tissuemech.compare.bench.fem_time",
     "fit-dense": "tissuemech.compare.bench.fit_dense",
+    "scan-kernel": "tissuemech.compare.bench.scan_kernel",
     # checks run one by one (not part of "all")
     "acceptance": "tissuemech.compare.bench.acceptance",
     "stiff-kernel": "tissuemech.compare.bench.stiff_kernel",
@@ -27,7 +28,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     name, rest = argv[0], argv[1:]
     names = (
-        [n for n in SUITES if n not in ("acceptance", "stiff-kernel", "fem-time", "fit-dense")]
+        [n for n in SUITES if n not in ("acceptance", "stiff-kernel", "fem-time", "fit-dense", "scan-kernel")]
         if name == "all"
         else [name]
     )
