@@ -82,3 +82,22 @@ def test_binned_fit_matches_the_full_fit():
         assert abs(binned.params[n] - full.params[n]) < 0.1 * (hi - lo), n
         assert (bhi - blo) == pytest.approx(hi - lo, rel=0.05), n
     assert "bin means" in binned.summary()
+
+
+def test_correlated_noise_gets_longer_bins():
+    """AR(1) noise of lag-1 correlation 0.9: bins hold at least ~2 integrated correlation times (38 samples), so
+    bin means are nearly independent; white noise keeps single-sample bins where the log-time bins are narrow."""
+    from scipy.signal import lfilter
+
+    from tissuemech.compare.fit.compress import min_samples, noise_correlation
+
+    rng = np.random.default_rng(0)
+    t = np.linspace(0.002, 200.0, 100_000)
+    signal = 75.0 * np.minimum(t / 2.0, 1.0) ** 1.5
+    white = signal + 0.75 * rng.standard_normal(t.size)
+    ar = signal + 0.75 * lfilter([np.sqrt(1 - 0.81)], [1.0, -0.9], rng.standard_normal(t.size))
+    assert noise_correlation(white) < 0.05 and min_samples(white) == 1
+    assert noise_correlation(ar) == pytest.approx(0.9, abs=0.02)
+    b = bin_record(t, ar, ramp_time=2.0)
+    assert b.count.min() >= min_samples(ar) >= 30 and b.count.sum() == t.size
+    assert bin_record(t, white, ramp_time=2.0).count.min() == 1
