@@ -113,14 +113,11 @@ def build(
 
     with contextlib.ExitStack() as stack:
         if workers > 1 and _spheroid_reason() is None:
-            from threadpoolctl import threadpool_limits
-
             from tissuemech.compare.batch.pool import process_pool
             from tissuemech.compare.report.spheroid import fe_jobs
 
             pool = stack.enter_context(process_pool(workers - 1))
             stack.callback(runcache.cancel_pending)  # before the pool's shutdown: nothing left queued
-            stack.enter_context(threadpool_limits(limits=1, user_api="blas"))  # one core each
             runcache.prefetch(pool, fe_jobs(quick))
         return _build(out_dir, quick=quick, progress=progress)
 
