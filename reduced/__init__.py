@@ -15,8 +15,25 @@ oscillation the spheroid's dynamic stiffness (storage, loss) under a small sinus
 drop       the Young-Laplace liquid drop between plates (scipy, not JAX: one small solve per approach)
 """
 
-import jax
+from __future__ import annotations
 
-jax.config.update("jax_enable_x64", True)
+import importlib
+import os
+import sys
+from typing import Any
 
-__all__ = ["material"]
+# 64-bit floats in JAX, without importing JAX here (it costs ~1-3 s; a command that never evaluates a JAX model
+# should not pay it): JAX reads JAX_ENABLE_X64 when it is first imported; if it is already imported, it is switched
+if "jax" in sys.modules:
+    sys.modules["jax"].config.update("jax_enable_x64", True)
+else:
+    os.environ["JAX_ENABLE_X64"] = "1"
+
+__all__ = ["material", "validation", "blastula", "viscoshell", "spheroid", "indentation", "drop", "interp"]
+
+
+def __getattr__(name: str) -> Any:
+    """The modules on first use (``tissuemech.reduced.spheroid`` after ``import tissuemech.reduced``)."""
+    if name in __all__:
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

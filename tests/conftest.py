@@ -17,6 +17,8 @@ import pytest
 from tissuemech.compare import cases as _cases
 
 os.environ.setdefault("MPLBACKEND", "Agg")
+# tests run every FE computation (compare.runcache) and leave no cache behind
+os.environ.setdefault("TISSUEMECH_NO_CACHE", "1")
 _ROOT = Path(__file__).resolve().parents[1]
 sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != _ROOT]
 

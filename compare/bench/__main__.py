@@ -16,6 +16,8 @@ SUITES = {
     "fem-gradient": "tissuemech.compare.bench.fem_gradient",
     "fem-indentation": "tissuemech.compare.bench.fem_indentation",
     "fem-protocols": "tissuemech.compare.bench.fem_protocols",
+    "fit-dense": "tissuemech.compare.bench.fit_dense",
+    "scan-kernel": "tissuemech.compare.bench.scan_kernel",
     # checks run one by one (not part of "all")
     "acceptance": "tissuemech.compare.bench.acceptance",
     "stiff-kernel": "tissuemech.compare.bench.stiff_kernel",

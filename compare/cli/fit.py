@@ -106,7 +106,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> None:
     """Carry out ``tissuemech fit`` (errors: ValueError with a one-line message)."""
     from tissuemech.compare import fit
+    from tissuemech.compare.cli.blastula import enable_jit_cache
 
+    enable_jit_cache()  # compiled residuals kept between runs (the compile is most of a dense record's time)
     if args.branches < 1:
         raise ValueError(f"--branches must be at least 1; got {args.branches}")
     output_folder("--out", args.out)  # before the fit

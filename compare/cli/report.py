@@ -24,14 +24,34 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     )
     r.add_argument("--out", default="tissuemech-report", help="output folder (default: %(default)s)")
     r.add_argument("--quick", action="store_true", help="coarse meshes, fewer levels (under 3 minutes)")
+    r.add_argument(
+        "--cache-dir",
+        default=None,
+        help="folder of the FE run cache (default: $TISSUEMECH_CACHE_DIR, else $XDG_CACHE_HOME/tissuemech/runs, "
+        "i.e. ~/.cache/tissuemech/runs): FE runs whose inputs and code did not change are reused with their times",
+    )
+    r.add_argument(
+        "--no-cache",
+        action="store_true",
+        help="run every FE computation anew and compile every JAX program (read and write no cache)",
+    )
+    r.add_argument("--clear-cache", action="store_true", help="empty the FE run cache first")
     return r
 
 
 def run(args: argparse.Namespace) -> None:
     """``tissuemech report``: check the folder, build it and print where it went."""
+    from tissuemech.compare import runcache
     from tissuemech.compare.cli.common import output_folder
 
     output_folder("--out", args.out)
+    runcache.configure(getattr(args, "cache_dir", None), False if getattr(args, "no_cache", False) else None)
+    if not getattr(args, "no_cache", False):
+        from tissuemech.compare.cli.blastula import enable_jit_cache
+
+        enable_jit_cache()  # JAX's compiled programs too (a cold report spends ~1/4 of its time compiling)
+    if getattr(args, "clear_cache", False):
+        print(f"cleared {runcache.clear()} cached FE runs")
     summary = build(args.out, quick=args.quick)
     out = Path(args.out).resolve()
     print(

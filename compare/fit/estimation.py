@@ -12,6 +12,7 @@ from typing import Any
 import jax.numpy as jnp
 import numpy as np
 
+from tissuemech.compare.fit.compress import bin_record, bins_for
 from tissuemech.compare.fit.diagnostics import ERROR_MODELS, residual_diagnostics, robust_covariance
 from tissuemech.compare.fit.intervals import LOG_SPAN, Profiler, exp_or_inf, identifiability, inverse_eigenvalues
 from tissuemech.compare.fit.model import (
@@ -97,6 +98,7 @@ def relaxation(
     intervals: str = "profile",
     errors: str = "robust",
     misfit: float = 0.0,
+    compress: bool | int | str | None = "auto",
 ) -> FitResult:
     r"""Fit ``(C, alpha, beta_m, tau_m)`` to compression-relaxation records (module doc: the statistics).
 
@@ -119,6 +121,10 @@ def relaxation(
                  the residuals, so what is known of the model's accuracy must be given (default 0: none).
     intervals    "profile" (Wald checked against, and where poor replaced by, the profile likelihood)
                  or "wald" (Gauss-Newton ellipse only; fast, for large studies of well-posed problems).
+    compress     dense records fitted as bin means (:mod:`tissuemech.compare.fit.compress`: the ramp in equal
+                 bins, the hold in log-time bins, each weighted by its sample count, the noise estimated from
+                 all samples): "auto" (default: records of more than 20000 samples, in 2000 bins), True (every
+                 record), a number of bins per record, or False (sample by sample).
 
     Returns a :class:`FitResult` (95 % intervals, flags and the identifiability report).
     Raises ValueError for malformed or uninformative records (fewer points than parameters, constant
@@ -133,6 +139,9 @@ def relaxation(
     check_information(recs, names)
     for k, rec in enumerate(recs):
         check_ramp(rec.time, rec.nominal_stress, float(ramp_time), f"record {k}")
+    n_bins = [bins_for(compress, r.time.size) for r in recs]
+    binned = [bin_record(r.time, r.nominal_stress, float(ramp_time), b) if b else None for r, b in zip(recs, n_bins)]
+    fitted = [r if b is None else Record(b.time, b.stress, r.displacement) for r, b in zip(recs, binned)]
     if intervals not in ("profile", "wald"):
         raise ValueError(f"intervals must be 'profile' or 'wald'; got {intervals!r}")
     if not (math.isfinite(misfit) and misfit >= 0):
@@ -162,9 +171,9 @@ def relaxation(
         eps = max(eps, TABLE_EDGE_MODEL_ERROR)  # the table's last x intervals (issue 35): measured between nodes
     model = default_model() if model is None else model
     p0 = starting_point(initial, names, lambda: initial_guess(recs, radius, ramp_time, n_branches))
-    res_fn, jac_fn, scale = residual_builder(recs, float(radius), float(ramp_time), n_branches, equilibrium, model)
+    res_fn, jac_fn, scale = residual_builder(fitted, float(radius), float(ramp_time), n_branches, equilibrium, model)
     res = estimate(
-        recs,
+        fitted,
         res_fn,
         jac_fn,
         scale,
@@ -178,6 +187,7 @@ def relaxation(
         intervals=intervals,
         errors=errors,
         misfit=misfit,
+        binned=binned,
     )
     if isinstance(model_error, str):  # "auto": the lumped model's ramp error for the fitted branches (issue 35)
         ramp_eps = ramp_model_error(dict(res.params), n_branches, float(ramp_time), x)
@@ -245,14 +255,17 @@ def estimate(
     intervals: str,
     errors: str,
     misfit: float,
+    binned: Sequence[Any] | None = None,
 ) -> FitResult:
     """The fit behind :func:`relaxation` and :func:`tissuemech.compare.fit.protocols.records_fit`: weighted least
     squares from ``p0`` of the residual ``res_fn`` (log-parameters -> (model - data) / ``scale``, its Jacobian
     ``jac_fn``) against the records' observed values (``recs[j].nominal_stress``, the observable of each record in
     the units of ``scale``), per-record noise, the model-error factors ``eps``, the error model and the 95 % intervals
     (module doc of :mod:`tissuemech.compare.fit`). ``ramp_time`` (s) sets the relaxation times' lower search bound and
-    the discrepancy's log-time axis."""
+    the discrepancy's log-time axis. ``binned``: per record its bins (:mod:`tissuemech.compare.fit.compress`) when
+    ``recs[j]`` holds bin means, else None."""
     P, R = len(names), len(recs)
+    binned = list(binned) if binned is not None else [None] * R
     lo_t, hi_t = search_bounds(
         names, n_branches, equilibrium, float(ramp_time), max(float(np.max(r.time)) for r in recs)
     )
@@ -262,7 +275,7 @@ def estimate(
             f"the model returned NaN/inf at the starting point {dict(zip(names, p0))}. "
             "Hint: give initial=... closer to the data, or check units (m, Pa, s)."
         )
-    prob = Problem(recs, res_fn, jac_fn, scale, P, eps)
+    prob = Problem(recs, res_fn, jac_fn, scale, P, eps, binned)
     extra = prob.nz - P
     lo = np.concatenate([lo_t, np.full(extra, -np.inf)])
     hi = np.concatenate([hi_t, np.full(extra, np.inf)])
@@ -272,7 +285,7 @@ def estimate(
     jac = lambda z: np.nan_to_num(prob.jac(z), nan=0.0, posinf=0.0, neginf=0.0)
 
     # pass 1: common weights; noise estimate per record; pass 2: weighted by each record's noise
-    prob.sig = np.full(prob.y.size, 0.01 * scale)
+    prob.sig = prob.point_sd(0.01 * scale)
     z0 = np.concatenate([theta0, np.zeros(extra)])
     # a parameter the model does not depend on (alpha with the Hertz law) is held at its start value
     norm0 = np.linalg.norm(jac(z0)[: prob.y.size, :P], axis=0)
@@ -289,7 +302,7 @@ def estimate(
             noise_prev, noise = noise, prob.set_noise(sol.x, floor)
             if np.all(np.abs(noise - noise_prev) <= 0.01 * noise_prev):
                 break
-        prob.sig = np.maximum(noise_prev, floor)[prob.idx]  # the weights z is the optimum for
+        prob.sig = prob.point_sd(np.maximum(noise_prev, floor))  # the weights z is the optimum for
     z = sol.x
     flags: list[str] = []
     noise_free = bool(np.any(noise < NOISE_FREE_REL * peaks))
@@ -305,7 +318,7 @@ def estimate(
         flags.append("the model's sensitivities are not finite at the estimate: the intervals cannot be trusted")
         Jz = np.nan_to_num(Jz, nan=0.0, posinf=0.0, neginf=0.0)
     N = prob.y.size
-    dof = N - P
+    dof = prob.samples - P  # samples, not bins, on compressed records
     from scipy.stats import t as student_t
 
     tq = float(student_t.ppf(0.975, dof))
@@ -443,7 +456,9 @@ def estimate(
     return FitResult(
         params={nm: float(v) for nm, v in zip(names, p)},
         intervals=ivals,
-        residual=float(np.sqrt(np.mean(rdata**2))),
+        residual=float(np.sqrt(np.mean(rdata**2)))
+        if not any(binned)
+        else math.sqrt(_binned_rss(prob, rdata, noise) / prob.samples),
         identifiability=ident,
         covariance=cov_used,
         success=success,
@@ -463,7 +478,16 @@ def estimate(
         covariances=dict(emf.covariances) if emf is not None else {"white": cov},
         correlation=tuple(emf.rho) if emf is not None else (),
         wald_by_error_model=wald_by_model,
+        bins=tuple(0 if b is None else int(b.count.size) for b in binned),
     )
+
+
+def _binned_rss(prob: Problem, rdata: np.ndarray, noise: np.ndarray) -> float:
+    """The residual sum of squares of all samples (Pa^2) on compressed records: the bins' weighted residuals, the
+    scatter inside the bins about their lines, and the one degree of freedom per bin (of 2 samples or more) the
+    line takes beyond the model's own shape, at the noise's level."""
+    lost = np.array([np.sum(prob.count[prob.idx == j] >= 2) for j in range(prob.R)])
+    return float(rdata @ (rdata * prob.count)) + float(np.sum(prob.within[:, 0])) + float(np.sum(lost * noise**2))
 
 
 def _quantiles(emf: Any, errors: str, P: int, dof: int) -> np.ndarray:

@@ -13,13 +13,27 @@ __all__ = ["Problem", "least_squares_in_bounds", "masked_solver", "safe"]
 class Problem:
     """Weighted residuals of the statistical model in z = (theta (P), eta (R, model-error factors))."""
 
-    def __init__(self, recs, res_fn, jac_fn, scale, P, eps):
+    def __init__(self, recs, res_fn, jac_fn, scale, P, eps, binned=None):
         self.res_fn, self.jac_fn, self.scale = res_fn, jac_fn, scale
         self.y = np.concatenate([r.nominal_stress for r in recs])
         self.idx = np.concatenate([np.full(r.time.size, j) for j, r in enumerate(recs)])
         self.R, self.P, self.eps = len(recs), P, float(eps)
         self.nz = P + (self.R if self.eps > 0 else 0)
+        # compressed records (``binned``: per record a compare.fit.compress.Binned or None): each point a bin mean
+        # of ``count`` samples (noise sd s / sqrt(count)); the scatter inside the bins joins the noise estimate
+        self.count = np.ones(self.y.size)
+        self.within = np.zeros((self.R, 2))  # per record: sum of squares inside the bins (Pa^2), its dof
+        for j, b in enumerate(binned or ()):
+            if b is not None:
+                self.count[self.idx == j] = b.count
+                self.within[j] = (b.ss_within, b.dof_within)
+        self.samples = int(round(float(np.sum(self.count))))
         self.sig = np.full(self.y.size, scale)  # per-point noise sd (Pa), set by set_noise
+
+    def point_sd(self, s: np.ndarray | float) -> np.ndarray:
+        """Per-point noise sd (Pa) from the per-sample sd of each record (``s``: per record or one value)."""
+        s_pts = np.asarray(s, dtype=float)[self.idx] if np.ndim(s) else np.full(self.y.size, float(s))
+        return s_pts / np.sqrt(self.count)
 
     def model(self, th: np.ndarray) -> np.ndarray:
         return np.asarray(self.res_fn(jnp.asarray(th))) * self.scale + self.y
@@ -55,10 +69,11 @@ class Problem:
         n = self.y.size
         s = np.empty(self.R)
         for j in range(self.R):
-            rj = r[self.idx == j]
-            dof = max(rj.size * (1.0 - self.P / n), 1.0)
-            s[j] = math.sqrt(float(rj @ rj) / dof)
-        self.sig = np.maximum(s, floor)[self.idx]
+            m = self.idx == j
+            rj = r[m]
+            dof = max(rj.size * (1.0 - self.P / n), 1.0) + self.within[j, 1]
+            s[j] = math.sqrt((float(rj @ (rj * self.count[m])) + self.within[j, 0]) / dof)
+        self.sig = self.point_sd(np.maximum(s, floor))
         return s
 
 

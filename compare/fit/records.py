@@ -49,6 +49,7 @@ __all__ = [
     "check_ramp",
     "Table",
     "read_table",
+    "read_table_fast",
     "read_csv",
     "load_records",
     "COLUMN_UNITS",
@@ -335,10 +336,79 @@ def _plain_table(path: str, text: str) -> Table | None:
     return Table(path, header, values, meta, tuple(lines))
 
 
+_ODD_CHARS = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\x7f-\x9f\u2028\u2029]")  # control chars, odd line breaks
+_BLANK_OR_COMMENT = re.compile(r"\n[ \t]*(?:#|\n)")
+# a space-separated token like ',5' or '1,5' (read line by line as a decimal comma: '1 ,5', '1,5 2'); wider than
+# the line-by-line test (a match only sends the file to the line-by-line reader)
+_SPACED_DECIMAL_COMMA = (re.compile(r" [+-]?\d*,\d"), re.compile(r"^[+-]?\d*,\d+(?:[eE][+-]?\d+)? ", re.MULTILINE))
+_PLAIN_BYTES = bytes(range(0x20, 0x7F)) + b"\t\n\r"
+
+
+def read_table_fast(path: str | Path) -> Table | None:
+    """:func:`read_table`'s result for a plain, regular table, parsed in C (``numpy.loadtxt``: ~0.4 s for 1e6 rows
+    where the line-by-line reader takes ~7 s), or None where the file is anything else (comments or blank lines
+    among the rows, mixed separators, decimal commas, a malformed or non-finite field, an odd character): then
+    :func:`read_table` reads it line by line and gives its one-line errors. Where it returns a table, the table is
+    the one :func:`read_table` returns (the same header, values, meta and line numbers)."""
+    try:
+        text = read_text(path)  # bounded: a regular file within MAX_TABLE_BYTES (else the reader below says why)
+    except ValueError:
+        return None
+    raw = text.encode("utf-8")
+    rest = raw.translate(None, _PLAIN_BYTES)  # what is not printable ASCII or a tab / line break
+    if rest and (rest.translate(None, bytes(range(0x80, 0x100))) or _ODD_CHARS.search(text)):
+        return None
+    if "\r" in text:
+        text = text.replace("\r\n", "\n").replace("\r", "\n")
+    meta: dict[str, str] = {}
+    header: tuple[str, ...] = ()
+    pos, no = 0, 0
+    while pos < len(text):  # the preamble: blank and comment lines, the header; stops at the first data row
+        end = text.find("\n", pos)
+        end = len(text) if end < 0 else end
+        s = text[pos:end].strip()
+        if s and not s.startswith("#"):
+            fields = _split(s)
+            if header or all(_number(f) is not None for f in fields):
+                break
+            if not all(_number(f) is None and f for f in fields):
+                return None  # text among the numbers of the first row: the line-by-line reader says where
+            header = tuple(_header_fields(s))
+        elif s:
+            m = _META.match(s)
+            if m:
+                meta[m.group(1).strip().lower().replace(" ", "_")] = m.group(2)
+        pos, no = end + 1, no + 1
+    body = text[pos:].rstrip()
+    if not body or not body.isascii() or _BLANK_OR_COMMENT.search(body):
+        return None
+    first = body[: body.find("\n")] if "\n" in body else body
+    sep = next((c for c in (",", ";", "\t") if c in first), None)
+    others = {",": ";\t", ";": ",", "\t": ",;", None: ",;\t"}[sep]
+    if any(c in body for c in others):
+        return None
+    if sep == "," and " " in body and any(p.search(body) for p in _SPACED_DECIMAL_COMMA):
+        return None
+    import io
+
+    try:
+        values = np.loadtxt(io.StringIO(body), delimiter=sep, comments=None, ndmin=2, dtype=float)
+    except ValueError:
+        return None
+    ncol = len(header) if header else values.shape[1]
+    if values.shape[1] != ncol or ncol < 2 or not np.all(np.isfinite(values)):
+        return None
+    rows = values.shape[0]
+    return Table(str(path), header, values, meta, tuple(range(no + 1, no + 1 + rows)))
+
+
 def read_table(path: str | Path) -> Table:
     """Read a CSV-like numeric table (module doc: the format). Raises ValueError with one line naming
     the file and, where it applies, the line: missing, not a regular file, beyond :data:`MAX_TABLE_BYTES`, empty,
     binary, ragged, one column, text in numbers, decimal commas."""
+    fast = read_table_fast(path)  # plain regular tables in C (bounded like read_text); anything else below
+    if fast is not None:
+        return fast
     path = str(path)
     text = read_text(path)
     fast = _plain_table(path, text)

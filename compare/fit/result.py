@@ -41,6 +41,7 @@ class FitResult:
     wald_by_error_model  the Wald 95 % interval of each parameter under each error model (comparison studies)
     protocols, units  per record of :func:`~tissuemech.compare.fit.protocols.records_fit`: "relaxation", "creep" or
                   "history", and the unit of its observable and noise (Pa, m, N); empty: all relaxation (Pa)
+    bins          per record: the number of bins it was fitted in (``compress=``; 0: sample by sample)
     success       True when the optimizer converged AND the intervals are usable (no flag below)
     flags         warnings that make intervals unusable or one-sided, in words
     message       optimizer message (and flags); ``nfev`` model evaluations of the final pass
@@ -70,6 +71,7 @@ class FitResult:
     wald_by_error_model: dict[str, dict[str, tuple[float, float]]] = field(default_factory=dict)
     units: tuple[str, ...] = field(default=())
     protocols: tuple[str, ...] = field(default=())
+    bins: tuple[int, ...] = field(default=())
 
     @property
     def report(self) -> str:
@@ -128,7 +130,8 @@ class FitResult:
             lines.append(f"intervals: error model {self.errors!r}")
         for j, dg in enumerate(self.diagnostics):
             tag = "  <- not white noise" if dg.correlated else ""
-            lines.append(f"residuals of record {j + 1}: {dg.text()}{tag}")
+            of = f" ({self.bins[j]} bin means)" if j < len(self.bins) and self.bins[j] else ""
+            lines.append(f"residuals of record {j + 1}{of}: {dg.text()}{tag}")
         for f in self.flags:
             lines.append(f"WARNING: {f}")
         return "\n".join(lines) + "\n" + self.report
@@ -180,6 +183,7 @@ class FitResult:
             },
             "covariance_log": [[num(v) for v in row] for row in np.asarray(self.covariance)],
             "dof": int(self.dof),
+            "bins": list(self.bins),
             "success": bool(self.success),
             "flags": list(self.flags),
             "message": self.message,

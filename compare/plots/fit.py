@@ -12,14 +12,16 @@ from tissuemech.compare.plots import pyplot as _plt
 __all__ = ["fit_figure", "protocol_figure"]
 
 UM = 1e-6
+DISPLAY_SAMPLES = 4000  # records longer than this are drawn as bin means (compare.fit.compress.bin_record)
 
 
 def fit_figure(
     records: Sequence[tuple], result: Any, *, radius: float, ramp_time: float, equilibrium: Any, midplane: Any
 ):
     """Data and model (top, symlog time axis) and residuals (bottom) of a fit; ``records`` as fitted (time s,
-    nominal stress Pa, displacement m), ``result`` its :class:`~tissuemech.compare.fit.FitResult`, the keywords
-    those of the model (SI). Returns the figure (nothing is shown or saved here)."""
+    nominal stress Pa, displacement m; records longer than :data:`DISPLAY_SAMPLES` are drawn as bin means),
+    ``result`` its :class:`~tissuemech.compare.fit.FitResult`, the keywords those of the model (SI). Returns the
+    figure (nothing is shown or saved here)."""
     from tissuemech.reduced import spheroid
 
     plt = _plt()
@@ -29,15 +31,21 @@ def fit_figure(
     branches = [(p[b], p[t]) for b, t in zip(bn, tn)]
     fig, (ax, axr) = plt.subplots(2, 1, figsize=(7, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
     for j, (t, y, d) in enumerate(records):
+        what = "data"
+        if np.size(t) > DISPLAY_SAMPLES:  # a dense record: its bin means (cheap to draw, the noise averaged)
+            from tissuemech.compare.fit.compress import bin_record
+
+            b = bin_record(t, y, ramp_time, DISPLAY_SAMPLES // 2)
+            t, y, what = b.time, b.stress, f"data ({b.count.size} bin means)"
         kw = dict(radius=radius, C=p["C"], alpha=p["alpha"], branches=branches, displacement=d)
         kw.update(ramp_time=ramp_time, equilibrium=equilibrium, midplane=midplane)
         tt = np.unique(np.concatenate([np.linspace(0, max(t.max(), 1e-9), 400), t]))
-        m_dense = np.asarray(spheroid.nominal_stress(tt, **kw))
-        m = np.asarray(spheroid.nominal_stress(t, **kw))
+        m_dense = np.asarray(spheroid.nominal_stress(tt, **kw))  # one evaluation (one compiled shape): t is in tt
+        m = m_dense[np.searchsorted(tt, t)]
         if result.model_error_factors:
             m_dense = m_dense * result.model_error_factors[j]
             m = m * result.model_error_factors[j]
-        line = ax.plot(t, y, ".", ms=3, label=f"data, {d / UM:.4g} um")[0]
+        line = ax.plot(t, y, ".", ms=3, label=f"{what}, {d / UM:.4g} um")[0]
         ax.plot(tt, m_dense, "-", color=line.get_color(), lw=1.2, label=f"model, {d / UM:.4g} um")
         axr.plot(t, y - m, ".", ms=3, color=line.get_color())
     ax.set_xscale("symlog", linthresh=max(ramp_time, 1e-6))

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from tissuemech.compare import cases
+from tissuemech.compare import cases, runcache
 from tissuemech.compare.cases import UM
 from tissuemech.compare.report.common import Section, md_table
 
@@ -22,28 +21,13 @@ def _blastula_set(alpha: float, B: float, mesh, max_pressure: float = 1000.0, n:
     from tissuemech.reduced import blastula as bl
 
     lim = bl.limit_point(inner_radius=A, outer_radius=B, C=C_BL, alpha=alpha)
-    t0 = time.perf_counter()
+    kw: dict[str, Any] = dict(inner_radius=A, outer_radius=B, C=C_BL, alpha=alpha, mesh=mesh)
     if lim is not None and float(lim.pressure) < max_pressure:
-        fe = inflate(
-            inner_radius=A,
-            outer_radius=B,
-            C=C_BL,
-            alpha=alpha,
-            pressures=None,
-            method="arclength",
-            max_inner_stretch=1.3 * float(lim.inner_stretch),
-            mesh=mesh,
-        )
+        kw.update(pressures=None, method="arclength", max_inner_stretch=1.3 * float(lim.inner_stretch))
     else:
-        fe = inflate(
-            inner_radius=A,
-            outer_radius=B,
-            C=C_BL,
-            alpha=alpha,
-            pressures=np.linspace(max_pressure / n, max_pressure, n),
-            mesh=mesh,
-        )
-    wall = time.perf_counter() - t0
+        kw.update(pressures=np.linspace(max_pressure / n, max_pressure, n))
+    run = runcache.call(inflate, kw)  # reused between reports (compare.runcache), with the time it took
+    fe, wall = run.result, run.wall
     la = np.linspace(1.0, float(fe.inner_stretch.max()), 300)  # the exact curve, drawn as a line
     geo: dict[str, Any] = dict(inner_radius=A, outer_radius=B)
     p_ex = np.asarray(bl.pressure(la, **geo, C=C_BL, alpha=alpha))
@@ -76,9 +60,10 @@ def section(traces: dict, *, quick: bool = False, progress: Callable[[str], None
     progress("blastula: Fig. 3")
     # Fig. 3
     B, alpha, p = cases.FIG3["outer_radius"], cases.FIG3["alpha"], cases.FIG3["pressure"]
-    t0 = time.perf_counter()
-    fe = inflate(inner_radius=A, outer_radius=B, C=C_BL, alpha=alpha, pressures=np.linspace(100, p, 10), mesh=mesh)
-    wall3 = time.perf_counter() - t0
+    run3 = runcache.call(
+        inflate, dict(inner_radius=A, outer_radius=B, C=C_BL, alpha=alpha, pressures=np.linspace(100, p, 10), mesh=mesh)
+    )
+    fe, wall3 = run3.result, run3.wall  # the run's time, also when it comes from the cache (compare.runcache)
     la = float(bl.inner_stretch(p, inner_radius=A, outer_radius=B, C=C_BL, alpha=alpha))
     prof = bl.profiles(la, inner_radius=A, outer_radius=B, C=C_BL, alpha=alpha, n=200)
     R_el = figures.element_radius(fe.mesh)

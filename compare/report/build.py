@@ -108,12 +108,38 @@ def _write(out: Path, sec: Section, written: list[str]) -> None:
         written.append(name)
 
 
-def build(out_dir: str | Path = "tissuemech-report", *, quick: bool = False, progress: bool = True) -> dict:
+def build(
+    out_dir: str | Path = "tissuemech-report", *, quick: bool = False, progress: bool = True, workers: int = 2
+) -> dict:
     """Run every section and write the report folder.
 
     Args: out_dir the folder (created if missing); quick coarse meshes and fewer levels; progress
-    show a progress bar on stderr. Returns the summary dict (also written as ``summary.json``).
+    show a progress bar on stderr; workers the processes the FE runs share (2: the spheroid section's FE runs start
+    at once in a second process, through the run cache ``compare.runcache``, while this one runs the blastula
+    sections; 1: one after the other). Returns the summary dict (also written as ``summary.json``).
     """
+    import contextlib
+
+    from tissuemech.compare import runcache
+
+    with contextlib.ExitStack() as stack:
+        if workers > 1 and _spheroid_reason() is None:
+            from tissuemech.compare.batch.pool import process_pool
+            from tissuemech.compare.report.spheroid import fe_jobs
+
+            pool = stack.enter_context(process_pool(workers - 1))
+            stack.callback(runcache.cancel_pending)  # before the pool's shutdown: nothing left queued
+            runcache.prefetch(pool, fe_jobs(quick))
+        return _build(out_dir, quick=quick, progress=progress)
+
+
+def _spheroid_reason() -> str | None:
+    from tissuemech.compare.studies.accuracy import spheroid_available
+
+    return spheroid_available()
+
+
+def _build(out_dir: str | Path, *, quick: bool, progress: bool) -> dict:
     from tqdm.auto import tqdm
 
     import tissuemech.reduced  # noqa: F401  (float64 JAX)

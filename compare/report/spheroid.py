@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import functools
-import time
 from collections.abc import Callable
 from typing import Any
 
@@ -17,16 +16,19 @@ FIG89, FIG89_END, FIG89_FIELDS = cases.FIG89, cases.FIG89_END_TIME, cases.FIG89_
 
 
 def calibrated_tables(x_max: float, alpha: float, mesh) -> tuple[tuple, tuple, dict]:
-    """Equilibrium and midplane tables (x, f), (x, g) from one static FE run (``compare.calibrate``).
+    """Equilibrium and midplane tables (x, f), (x, g) from one static FE run (``compare.calibrate``, through the run
+    cache ``compare.runcache``), and the run (its ``wall_s``: the seconds it took when it ran).
 
     The knots are the run's own states (x = 0 and its steps), not a resampling: a table resampled
     linearly from the 8 static steps onto a finer grid would carry the chord error of f ~ x^1.5 between
     them (+5 % at the first ramp step of the Fig. 10 case, x = 0.0083); the reduced model's spline of
     f / f_Hertz in sqrt(x) through the states themselves is within ~1e-5 of the FE there.
     """
-    from tissuemech.compare.calibrate import static_curve
+    from tissuemech.compare import runcache
 
-    run = static_curve(alpha=alpha, x_max=x_max, mesh=mesh)
+    fn, kwargs, _ = _static_job(x_max, alpha, mesh)
+    timed_run = runcache.call(fn, kwargs)  # reused between reports
+    run = dict(timed_run.result, wall_s=timed_run.wall)  # the run's own time (also when it comes from the cache)
     a0, C = float(run["radius"]), float(run["C"])
     order = np.argsort(run["approach"])
     x = np.r_[0.0, np.asarray(run["approach"])[order] / (2 * a0)]
@@ -35,6 +37,55 @@ def calibrated_tables(x_max: float, alpha: float, mesh) -> tuple[tuple, tuple, d
     f = np.r_[0.0, np.asarray(run["force"])[order] / (C * a0**2)]
     g = np.r_[1.0, np.asarray(run["midplane_radius"])[order] / a0]
     return (x, f), (x, g), run
+
+
+def _static_job(x_max: float, alpha: float, mesh) -> tuple[Callable, dict, int]:
+    from tissuemech.compare.calibrate import static_curve
+
+    return static_curve, dict(alpha=alpha, x_max=x_max, mesh=mesh), 1
+
+
+def _levels(quick: bool) -> tuple[tuple[int, ...], int, str]:
+    """(FE levels of the Fig. 10 accuracy study, its FE repeats, the Figs 8-9 mesh). The reference is the Richardson
+    limit of the three finest levels: 1-3 in both modes (level 0 is not yet in the asymptotic range: over levels
+    0-2 the quick reference came out on level 2 itself, 1.2e-5 off)."""
+    return ((1, 2, 3) if quick else (0, 1, 2, 3)), (1 if quick else 3), ("coarse" if quick else "default")
+
+
+def _fig89_jobs(mesh89: str) -> list[tuple[Callable, dict, int]]:
+    """The Figs 8-9 FE runs: the relaxation with its fields, the static run of its mean von Mises."""
+    from tissuemech.fem import spheroid as fes
+
+    static = dict(
+        radius=FIG89["radius"],
+        C=FIG89["C"],
+        alpha=FIG89["alpha"],
+        branches=(),
+        displacement=FIG89["displacement"],
+        ramp_time=1.0,
+        end_time=1.0,
+        mesh=mesh89,
+        static=True,
+    )
+    return [
+        (fes.compress, dict(**FIG89, end_time=FIG89_END, field_times=FIG89_FIELDS, mesh=mesh89), 1),
+        (fes.compress, static, 1),
+    ]
+
+
+def fe_jobs(quick: bool = False) -> list[tuple[Callable, dict, int]]:
+    """The section's FE runs as ``(function, keywords, repeats)`` in the order it asks for them: the report's builder
+    starts them ahead on the second core (``compare.runcache.prefetch``)."""
+    from tissuemech.compare.studies.accuracy import spheroid_fe_jobs
+
+    levels, repeats, mesh89 = _levels(quick)
+    fig10 = cases.FIG10
+    return [
+        _static_job(fig10["displacement"] / (2 * fig10["radius"]), fig10["alpha"], levels[-1]),
+        *spheroid_fe_jobs(levels, repeats),
+        *_fig89_jobs(mesh89),
+        _static_job(FIG89["displacement"] / (2 * FIG89["radius"]), FIG89["alpha"], mesh89),
+    ]
 
 
 def _worst(model: np.ndarray, fe: np.ndarray, t: np.ndarray) -> tuple[float, float]:
@@ -54,19 +105,15 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
     from tissuemech.compare.plots import charts
     from tissuemech.compare.plots import seed as figures
     from tissuemech.compare.studies import accuracy
-    from tissuemech.fem import spheroid as fes
     from tissuemech.reduced import spheroid as rs
 
     # ---- Fig. 10 case: accuracy vs speed (FE levels vs the finest, reduced Hertz, reduced calibrated)
-    # the reference is the Richardson limit of the three finest levels: 1-3 in both modes (level 0 is not yet
-    # in the asymptotic range: over levels 0-2 the quick reference came out on level 2 itself, 1.2e-5 off)
-    levels = (1, 2, 3) if quick else (0, 1, 2, 3)
+    levels, fe_repeats, mesh89 = _levels(quick)
     ref_level = levels[-1]
     fig10 = cases.FIG10
     x10 = fig10["displacement"] / (2 * fig10["radius"])
-    t0 = time.perf_counter()
-    eq10, mid10, _ = calibrated_tables(x10, fig10["alpha"], ref_level)
-    calib_wall = time.perf_counter() - t0
+    eq10, mid10, run10 = calibrated_tables(x10, fig10["alpha"], ref_level)
+    calib_wall = run10["wall_s"]
     # the calibrated law comes from a static run on the REFERENCE mesh itself: its row measures the lumped-
     # relaxation assumption alone, not an independent prediction (labelled so); the shipped table comes from static
     # runs on level 3 (the reference mesh of the study) interpolated in x and alpha
@@ -82,9 +129,7 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
     if rs.DATA_FILE.exists():  # the master curves shipped with the package (python -m tissuemech.compare.calibrate)
         laws["shipped FE table"] = dict(equilibrium="fem")
     progress("spheroid: FE levels and reduced laws (Fig. 10 case)")
-    df, fe_runs = accuracy.spheroid_accuracy(
-        meshes=levels, equilibria=laws, fe_repeats=1 if quick else 3, settings=law_text
-    )
+    df, fe_runs = accuracy.spheroid_accuracy(meshes=levels, equilibria=laws, fe_repeats=fe_repeats, settings=law_text)
     nel = {m: int(r.mesh.mesh.nelements) for m, r in fe_runs.items()}
     df["setting"] = [
         (f"level {int(st.split()[1])} ({nel[int(st.split()[1])]} el.)" + (" reference" if "reference" in st else ""))
@@ -199,11 +244,12 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
     hertz = dense["hertz"]
 
     # ---- Figs 8-9 case
-    mesh89 = "coarse" if quick else "default"
     progress("spheroid: Figs 8-9 case")
-    t0 = time.perf_counter()
-    fe89 = fes.compress(**FIG89, end_time=FIG89_END, field_times=FIG89_FIELDS, mesh=mesh89)
-    wall89 = time.perf_counter() - t0
+    from tissuemech.compare import runcache
+
+    (fn89, kw89, _), (fn_st, kw_st, _) = _fig89_jobs(mesh89)
+    run89 = runcache.call(fn89, kw89)
+    fe89, wall89 = run89.result, run89.wall  # the run's own time (also when it comes from the cache)
     x89 = FIG89["displacement"] / (2 * FIG89["radius"])
     eq89, mid89, static89 = calibrated_tables(x89, FIG89["alpha"], mesh89)
     sec.save(
@@ -214,17 +260,7 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
     )
     # reduced mean von Mises: the FE static mean von Mises at delta(t) times the lumped relaxation factor F/F_eq
     t89 = np.concatenate([np.linspace(0, 0.2, 21)[1:], np.geomspace(0.2, FIG89_END, 60)[1:]])
-    st = fes.compress(
-        radius=FIG89["radius"],
-        C=FIG89["C"],
-        alpha=FIG89["alpha"],
-        branches=(),
-        displacement=FIG89["displacement"],
-        ramp_time=1.0,
-        end_time=1.0,
-        mesh=mesh89,
-        static=True,
-    )
+    st = runcache.call(fn_st, kw_st).result
 
     def vm_reduced(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """FE static mean von Mises at delta(t) (power-law interpolation between the static states, which

@@ -48,7 +48,7 @@ from typing import Any, TypeVar, cast
 import numpy as np
 import pandas as pd
 
-from tissuemech.compare import cases
+from tissuemech.compare import cases, runcache
 from tissuemech.compare.reference import shell_inner_stretch, shell_pressure
 
 A, C = cases.BLASTULA_INNER_RADIUS, cases.BLASTULA_C
@@ -63,6 +63,7 @@ __all__ = [
     "spheroid_accuracy",
     "spheroid_time_convergence",
     "TIME_TIMES",
+    "spheroid_fe_jobs",
     "pareto",
     "timed",
     "timed_stats",
@@ -173,8 +174,10 @@ def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
         )
 
     for m in FE_MESHES_QUICK if quick else FE_MESHES:
-        run = lambda m=m: inflate(inner_radius=A, outer_radius=B, C=C, alpha=ALPHA, pressures=ps, mesh=m)
-        first, walls, r = timed_stats(run, repeats)
+        # through the run cache (compare.runcache): a later report reuses the runs and the times they took
+        kw = dict(inner_radius=A, outer_radius=B, C=C, alpha=ALPHA, pressures=ps, mesh=m)
+        timed_runs = runcache.call(inflate, kw, repeats=max(int(repeats), 1) + 1)  # timed_stats: first + repeats
+        first, walls, r = timed_runs.walls[0], np.asarray(timed_runs.walls[1:]), timed_runs.result
         rows.append(
             dict(
                 method="FE Q2/P1 mixed",
@@ -235,6 +238,15 @@ def spheroid_available() -> str | None:
     return None
 
 
+def spheroid_fe_jobs(meshes: Sequence, fe_repeats: int) -> list[tuple[Callable, dict, int]]:
+    """The FE runs of :func:`spheroid_accuracy` as ``(function, keywords, repeats)``, one per mesh level (what
+    ``compare.runcache.prefetch`` can start ahead)."""
+    from tissuemech.fem import spheroid as fes
+
+    end = float(np.asarray(SPHEROID_TIMES)[-1])
+    return [(fes.compress, dict(**FIG10, end_time=end, mesh=m), int(fe_repeats)) for m in meshes]
+
+
 def spheroid_accuracy(
     quick: bool = False,
     meshes: Sequence | None = None,
@@ -268,13 +280,11 @@ def spheroid_accuracy(
     settings = settings or {}
     ts = np.asarray(SPHEROID_TIMES)
     fe: dict[Any, tuple[dict, Any]] = {}
-    for m in meshes:
-        walls: list[float] = []
-        for _ in range(int(fe_repeats)):  # every run includes its mesh set-up: the fastest is the least disturbed
-            t0 = time.perf_counter()
-            r = fes.compress(**FIG10, end_time=ts[-1], mesh=m)
-            walls.append(time.perf_counter() - t0)
-        fe[m] = (_wall_columns(walls[0], np.asarray(walls, float)), r)
+    for m, (fn, kwargs, repeats) in zip(meshes, spheroid_fe_jobs(meshes, fe_repeats)):
+        # every run includes its mesh set-up: the fastest is the least disturbed; through the run cache
+        # (compare.runcache): a later report reuses the runs and the times they took
+        runs = runcache.call(fn, kwargs, repeats=repeats)
+        fe[m] = (_wall_columns(runs.walls[0], np.asarray(runs.walls, float)), runs.result)
     sig = {m: np.interp(ts, r.time, r.nominal_stress) for m, (_, r) in fe.items()}
     h = [1.0 / fes.LEVELS[m][0] for m in meshes[-3:]]
     s_ref = np.array([richardson([sig[m][k] for m in meshes[-3:]], h)[1] for k in range(ts.size)])

@@ -1,0 +1,114 @@
+"""``python -m tissuemech.compare.bench scan-kernel``: relaxation curves for scans against the arithmetic limit
+(issue 40, item 2).
+
+Side by side in one run, ``--curves`` curves (default 1e5) x 200 output times (``compare.scan.default_times``:
+a 0.2 s ramp and a hold to 1500 s), random parameters (C 100-400 Pa, beta 0.1-2, tau 1-1000 s, approach 5-30 % of
+the diameter, a0 = 500 um), Hertz law, plate force:
+
+* the scan layer's kernel: ``reduced.spheroid.force`` (method ``Quadrature()``), ``jax.vmap``-ed and jitted over
+  chunks of ``compare.scan.CHUNK`` curves (what ``compare.scan.spheroid`` runs), after a warm-up;
+* a hand-written vectorised NumPy evaluation of the same closed form: F_eq(t) + beta k tau^1.5 (sqrt(X) - D(sqrt(X)))
+  e^{-(t - t_e)/tau} with X = t_e / tau, t_e = min(t, t_r), D Dawson's integral (``scipy.special.dawsn``), the
+  same chunks.
+
+Prints curves/s of each, the ratio, the largest relative difference between the two, and the peak memory growth
+per chunk (flat in the number of curves: both run chunk by chunk).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from collections.abc import Sequence
+
+import numpy as np
+
+__all__ = ["closed_form", "main"]
+
+A0, TR, END = 500e-6, 0.2, 1500.0
+
+
+def closed_form(t: np.ndarray, C: np.ndarray, beta: np.ndarray, tau: np.ndarray, X_app: np.ndarray) -> np.ndarray:
+    """Plate force (N), curves x times, of the Hertz-law lumped model (one branch), ramp-and-hold, in NumPy: the ramp
+    integral at the ramp's output times and once at its end, exponentials in the hold."""
+    from scipy.special import dawsn
+
+    def ramp_integral(te: np.ndarray, tau_: np.ndarray) -> np.ndarray:  # int_0^te e^{-(te-s)/tau} sqrt(s) ds
+        X = te / tau_
+        sx = np.sqrt(X)
+        # small X: sqrt(X) - D(sqrt(X)) = (2/3) X^1.5 - (4/15) X^2.5 + ..., summed without cancellation
+        series = sx * X * (2.0 / 3.0 - X * (4.0 / 15.0 - X * (8.0 / 105.0 - X * 16.0 / 945.0)))
+        return tau_**1.5 * np.where(X < 1e-2, series, sx - dawsn(sx))
+
+    ramp = t <= TR
+    scale = C * A0**2
+    k = (scale * 16.0 * np.sqrt(X_app / TR) * X_app / TR)[:, None]  # dF_eq/ds = k sqrt(s)
+    tau_ = tau[:, None]
+    out = np.empty((C.size, t.size))
+    tr_ = t[ramp][None, :]
+    out[:, ramp] = scale[:, None] * (32.0 / 3.0) * (X_app[:, None] * tr_ / TR) ** 1.5
+    out[:, ramp] += beta[:, None] * k * ramp_integral(tr_, tau_)
+    q_end = beta[:, None] * k * ramp_integral(np.full((1, 1), TR), tau_)  # (n, 1)
+    f_end = (scale * (32.0 / 3.0) * X_app**1.5)[:, None]
+    out[:, ~ramp] = f_end + q_end * np.exp(-(t[~ramp][None, :] - TR) / tau_)
+    return out
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    import jax
+    import jax.numpy as jnp
+
+    from tissuemech.compare.bench.common import machine_line
+    from tissuemech.compare.scan import CHUNK, default_times
+    from tissuemech.reduced import spheroid
+
+    ap = argparse.ArgumentParser(
+        prog="python -m tissuemech.compare.bench scan-kernel", description=__doc__.split("\n")[0]
+    )
+    ap.add_argument("--curves", type=float, default=1e5, help="curves (default 1e5)")
+    ap.add_argument("--quick", action="store_true", help="1e4 curves")
+    a = ap.parse_args(list(argv or []))
+    n = int(1e4 if a.quick else a.curves)
+    print(machine_line())
+    t = np.asarray(default_times(TR, END))
+    rng = np.random.default_rng(0)
+    C = rng.uniform(100, 400, n)
+    beta = rng.uniform(0.1, 2.0, n)
+    tau = np.exp(rng.uniform(np.log(1.0), np.log(1000.0), n))
+    X_app = rng.uniform(0.05, 0.3, n)
+
+    @jax.jit
+    def chunk_jax(C, beta, tau, X):
+        one = lambda c, b, ta, x: spheroid.force(
+            jnp.asarray(t), radius=A0, C=c, alpha=0.2, branches=[(b, ta)], displacement=2 * A0 * x, ramp_time=TR,
+            equilibrium="hertz",
+        )  # fmt: skip
+        return jax.vmap(one)(C, beta, tau, X)
+
+    def run(fn) -> tuple[float, np.ndarray]:
+        outs = []
+        t0 = time.perf_counter()
+        for i in range(0, n, CHUNK):
+            s = slice(i, min(i + CHUNK, n))
+            args = (C[s], beta[s], tau[s], X_app[s])
+            pad = CHUNK - (s.stop - s.start)  # one compiled shape: the last chunk padded
+            if pad and fn is chunk_jax:
+                args = tuple(np.concatenate([v, np.repeat(v[-1:], pad)]) for v in args)
+            out = np.asarray(jax.block_until_ready(fn(*args)))
+            outs.append(out[: s.stop - s.start])
+        return time.perf_counter() - t0, np.concatenate(outs)
+
+    jax.block_until_ready(chunk_jax(C[:CHUNK], beta[:CHUNK], tau[:CHUNK], X_app[:CHUNK]))  # compile
+    w_jax, F_jax = run(chunk_jax)
+    w_np, F_np = run(lambda C, beta, tau, X: closed_form(t, C, beta, tau, X))
+    diff = float(np.max(np.abs(F_jax[:, 1:] / F_np[:, 1:] - 1.0)))
+    print(f"{n} curves x {t.size} times, chunks of {CHUNK}, Hertz law, one branch")
+    print(f"scan kernel (jit(vmap(spheroid.force)), quadrature): {w_jax:.3f} s, {n / w_jax:.3g} curves/s")
+    print(f"NumPy closed form (Dawson's integral):               {w_np:.3f} s, {n / w_np:.3g} curves/s")
+    print(f"ratio scan kernel / NumPy: {w_jax / w_np:.2f}x (target <= 3x); largest |F_jax / F_numpy - 1| = {diff:.2e}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main(sys.argv[1:]))

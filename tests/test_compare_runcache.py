@@ -1,0 +1,67 @@
+"""The on-disk run cache (compare.runcache): a second call reads the stored result and the stored times; any change
+of an input is a new key; prefetched runs are collected; uncacheable arguments run uncached."""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+
+import numpy as np
+import pytest
+
+from tissuemech.compare import runcache
+
+CALLS: list[dict] = []
+
+
+def square(*, x, scale=1.0):
+    CALLS.append(dict(x=x, scale=scale))
+    factor = scale() if callable(scale) else scale if isinstance(scale, float) else 1.0
+    return np.asarray(x) ** 2 * factor
+
+
+@pytest.fixture()
+def cache(tmp_path):
+    with runcache.settings(tmp_path, True):
+        CALLS.clear()
+        yield tmp_path
+
+
+def test_a_second_call_reads_the_result_and_the_times(cache):
+    first = runcache.call(square, dict(x=np.arange(3.0)), repeats=2)
+    assert not first.cached and len(first.walls) == 2 and len(CALLS) == 2
+    again = runcache.call(square, dict(x=np.arange(3.0)), repeats=2)
+    assert again.cached and again.walls == first.walls and len(CALLS) == 2
+    np.testing.assert_array_equal(again.result, [0.0, 1.0, 4.0])
+    assert runcache.clear() == 1 and not runcache.call(square, dict(x=np.arange(3.0)), repeats=2).cached
+
+
+def test_every_input_is_in_the_key(cache):
+    base = runcache.key(square, dict(x=np.arange(3.0)))
+    assert runcache.key(square, dict(x=np.arange(3.0))) == base
+    for other in (
+        dict(x=np.arange(3.0) + 1e-15 * np.arange(3.0)),
+        dict(x=np.arange(3)),
+        dict(x=np.arange(3.0), scale=2.0),
+    ):
+        assert runcache.key(square, other) != base
+    assert runcache.key(square, dict(x=0.1)) != runcache.key(square, dict(x=0.1 + 1e-17 + 1e-16))
+
+
+def test_off_and_uncacheable_run_every_time(cache):
+    with runcache.settings(cache, False):
+        runcache.call(square, dict(x=1.0))
+        assert not runcache.call(square, dict(x=1.0)).cached
+    assert not runcache.call(square, dict(x=1.0, scale=lambda: 1.0)).cached  # a callable: run, never cached
+    n = len(CALLS)
+    runcache.call(square, dict(x=2.0, scale=object()))
+    runcache.call(square, dict(x=2.0, scale=object()))
+    assert len(CALLS) == n + 2  # an argument without a faithful text form: never cached
+
+
+def test_prefetched_runs_are_collected(cache):
+    with cf.ThreadPoolExecutor(1) as pool:
+        assert runcache.prefetch(pool, [(square, dict(x=3.0), 1)]) == 1
+        got = runcache.call(square, dict(x=3.0))
+    assert float(got.result) == 9.0 and len(CALLS) == 1
+    assert runcache.call(square, dict(x=3.0)).cached
+    runcache.cancel_pending()
