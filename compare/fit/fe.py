@@ -17,6 +17,7 @@ here: the FE is taken as exact and the noise as white; the residual diagnostics 
 
 from __future__ import annotations
 
+import logging
 import time as _time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -32,6 +33,8 @@ from tissuemech.compare.fit.records import Record, as_records
 from tissuemech.reduced.material import validate_positive
 
 __all__ = ["fe_relaxation", "FEFitResult", "step_times"]
+
+log = logging.getLogger(__name__)
 
 
 @dataclass
@@ -83,7 +86,7 @@ def fe_relaxation(
               or a coarse guess: every name needed (C, alpha > 0, beta, tau in SI).
     mesh      the FE mesh level ("coarse", "default", ...): node-by-node contact on it (``contact="nodal"``).
     n_ramp, n_hold  the FE's steps (:func:`step_times`).
-    progress  print one line per FE evaluation.
+    progress  log one line per FE evaluation (``logging``, logger ``tissuemech.compare.fit.fe``, level INFO).
 
     Raises ValueError for a missing or non-positive initial value or malformed records."""
     from tissuemech.fem import spheroid as fem_spheroid
@@ -132,7 +135,7 @@ def fe_relaxation(
         cache.clear()
         cache[key] = out
         if progress:
-            print(f"FE evaluation {calls[0]}: " + ", ".join(f"{n} = {v:.5g}" for n, v in p.items()), flush=True)
+            log.info("FE evaluation %d: %s", calls[0], ", ".join(f"{n} = {v:.5g}" for n, v in p.items()))
         return out
 
     data = np.concatenate([r.nominal_stress for r in recs])
