@@ -152,7 +152,7 @@ def _build(out_dir: str | Path, *, quick: bool, progress: bool) -> dict:
     t_start = time.perf_counter()
     reason = spheroid_available()
     done: dict[str, Section] = {}
-    bar = tqdm(total=12 if reason is None else 7, desc="tissuemech report", disable=not progress, unit="step")
+    bar = tqdm(total=13 if reason is None else 7, desc="tissuemech report", disable=not progress, unit="step")
 
     def step(label: str) -> None:  # one tick per milestone inside the sections, so long stages show progress
         bar.set_postfix_str(label)

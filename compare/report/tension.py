@@ -13,6 +13,7 @@ from tissuemech.compare.report.common import Section, md_table
 def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: None) -> Section:
     """The formula gamma_app = F / (pi R3^2 (1/R1 + 1/R2)) on FE aggregates (``compare.studies.tensiometry``):
     elastic ones against gamma / (C a0) and relaxing ones against the time since compression."""
+    from tissuemech.compare import runcache
     from tissuemech.compare.plots.tension import tensiometry_figure
     from tissuemech.compare.studies import tensiometry as T
 
@@ -20,9 +21,11 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
     mesh = 0 if quick else 1
     progress("surface tension: tensiometry formula")
     numbers = (0.2, 1.0, 5.0, 20.0) if quick else T.NUMBERS
-    points = T.sweep(numbers, mesh=mesh)
+    points = runcache.call(T.sweep, dict(numbers=tuple(numbers), mesh=mesh)).result  # reused between reports
     static = T.table(points)
-    hold = pd.concat([T.hold_series(n, mesh=mesh) for n in T.HOLD_NUMBERS], ignore_index=True)
+    hold = pd.concat(
+        [runcache.call(T.hold_series, dict(number=n, mesh=mesh)).result for n in T.HOLD_NUMBERS], ignore_index=True
+    )
     sec.table(static, "tensiometry_static.csv")
     sec.table(hold, "tensiometry_hold.csv")
     sec.save(tensiometry_figure(static, hold, tau=T.TAU), "tensiometry.png")
