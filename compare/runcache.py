@@ -198,8 +198,14 @@ def call(fn: Callable, kwargs: dict[str, Any], *, repeats: int = 1) -> Timed:
             return fut.result()
         except Exception:  # the run failed over there: run it here, where its error reaches the caller
             pass
-    if not _enabled():
-        k = None
+    return _cached_run(fn, kwargs, repeats)
+
+
+def _cached_run(fn: Callable, kwargs: dict[str, Any], repeats: int) -> Timed:
+    """The cache lookup and run of :func:`call`, without the prefetched runs (what :func:`prefetch` submits: a
+    worker THREAD sharing this process's pending table would otherwise wait for its own future)."""
+    repeats = max(int(repeats), 1)
+    k = _job_key(fn, kwargs, repeats) if _enabled() else None
     path = _folder() / k[:2] / f"{k}.pkl" if k else None
     if path is not None and path.exists():
         try:
@@ -237,7 +243,7 @@ def prefetch(executor: Any, jobs: list[Job]) -> int:
             continue
         if _enabled() and (_folder() / k[:2] / f"{k}.pkl").exists():
             continue
-        _PENDING[k] = executor.submit(call, fn, kwargs, repeats=repeats)
+        _PENDING[k] = executor.submit(_cached_run, fn, kwargs, repeats)
         n += 1
     return n
 
