@@ -128,32 +128,22 @@ def run(args: argparse.Namespace) -> None:
         raise ValueError("mix of force (N) and stress (Pa) files: give all records as the same quantity")
     midplane = "incompressible" if all(forces) else ("fem" if args.equilibrium == "fem" else "incompressible")
     model = fit.incompressible_model() if all(forces) else None
-    res = fit.relaxation(
-        recs,
-        radius=radius,
-        ramp_time=args.ramp_time,
-        n_branches=args.branches,
-        equilibrium=args.equilibrium,
-        model=model,
-        model_error=args.model_error,
-        misfit=args.misfit,
+    res = fit.relaxation(recs, model=model, **_options(args, radius))
+    out = _write_json(
+        res,
+        args,
+        {
+            "files": [str(f) for f in args.files],
+            "radius_m": radius,
+            "displacement_m": [r[2] for r in recs],
+            "ramp_time_s": args.ramp_time,
+            "quantity": ["force_N" if f else "stress_Pa" for f in forces],
+            "equilibrium": args.equilibrium,
+            "midplane": midplane,
+            "n_points": [int(r[0].size) for r in recs],
+            "misfit_rel": args.misfit,
+        },
     )
-    print(res.summary())
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    d = res.to_dict()
-    d["inputs"] = {
-        "files": [str(f) for f in args.files],
-        "radius_m": radius,
-        "displacement_m": [r[2] for r in recs],
-        "ramp_time_s": args.ramp_time,
-        "quantity": ["force_N" if f else "stress_Pa" for f in forces],
-        "equilibrium": args.equilibrium,
-        "midplane": midplane,
-        "n_points": [int(r[0].size) for r in recs],
-        "misfit_rel": args.misfit,
-    }
-    (out / "fit.json").write_text(json.dumps(d, indent=1))
     written = [str(out / "fit.json")]
     if not args.no_figure:
         from tissuemech.compare.plots.fit import fit_figure
@@ -164,6 +154,29 @@ def run(args: argparse.Namespace) -> None:
         save_figure(fig, str(out / "fit.png"))
         written.append(str(out / "fit.png"))
     print("wrote " + ", ".join(written))
+
+
+def _options(args: argparse.Namespace, radius: float) -> dict:
+    """The fit's keywords from the command line (SI: radius in m, ramp time in s)."""
+    return dict(
+        radius=radius,
+        ramp_time=args.ramp_time,
+        n_branches=args.branches,
+        equilibrium=args.equilibrium,
+        model_error=args.model_error,
+        misfit=args.misfit,
+    )
+
+
+def _write_json(res, args: argparse.Namespace, inputs: dict) -> Path:
+    """Print the fit's summary and write ``fit.json`` (the result and its ``inputs``) into ``--out``; its folder."""
+    print(res.summary())
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    d = res.to_dict()
+    d["inputs"] = inputs
+    (out / "fit.json").write_text(json.dumps(d, indent=1))
+    return out
 
 
 def _has_approach(path: str) -> bool:
@@ -204,29 +217,20 @@ def _run_protocols(args: argparse.Namespace, radius: float) -> None:
         print(f"{path}: {why}")
         recs.append(rec)
         kinds.append(kind)
-    res = protocols.records_fit(
-        recs,
-        radius=radius,
-        ramp_time=args.ramp_time,
-        n_branches=args.branches,
-        equilibrium=args.equilibrium,
-        model_error=args.model_error,
-        misfit=args.misfit,
+    res = protocols.records_fit(recs, **_options(args, radius))
+    out = _write_json(
+        res,
+        args,
+        {
+            "files": [str(f) for f in args.files],
+            "protocols": kinds,
+            "radius_m": radius,
+            "ramp_time_s": args.ramp_time,
+            "equilibrium": args.equilibrium,
+            "n_points": [int(np.size(r[0])) for r in recs],
+            "misfit_rel": args.misfit,
+        },
     )
-    print(res.summary())
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    d = res.to_dict()
-    d["inputs"] = {
-        "files": [str(f) for f in args.files],
-        "protocols": kinds,
-        "radius_m": radius,
-        "ramp_time_s": args.ramp_time,
-        "equilibrium": args.equilibrium,
-        "n_points": [int(np.size(r[0])) for r in recs],
-        "misfit_rel": args.misfit,
-    }
-    (out / "fit.json").write_text(json.dumps(d, indent=1))
     # data, model and residual of every record, in the records' units
     lines = ["record,protocol,time [s],observed,model,residual,unit"]
     kw = dict(radius=radius, ramp_time=args.ramp_time, equilibrium=args.equilibrium)
