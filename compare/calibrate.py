@@ -21,12 +21,38 @@ the discretisation error = max relative difference of f against an independent f
 the metadata also gets ``model_error_rel`` = half the table's largest error against that reference (the relative
 1-sigma error of F_eq that ``compare.fit`` adds with ``model_error="auto"``; the finer-level check alone does not
 set it).
+
+Table regeneration machinery (any FE-made table: plates here; indentation and surface tension reuse it)
+----------------------------------------------------------------------------------------------------
+A table is described by a :class:`Table`: its ``name``, the module-level FE function ``run`` (picklable: it runs in
+worker processes), its ``columns`` (per column, e.g. per alpha, the keyword dicts of that column's runs, SI units),
+``assemble`` (the post-processing: the runs' results, column by column, in the order given, -> the table) and
+``metadata`` (what the writer stores with it), plus ``cost`` (a relative cost per run, for scheduling only).
+:func:`build` runs the runs of one or more tables through ``compare.batch`` (resumable with ``store``) on one
+process pool of ``workers`` processes (default: every core this process may use; one BLAS thread each), the most
+expensive runs first (largest-processing-time order: the long finer-level check runs of a table no longer start last
+and leave one core idle), and returns each table's ``assemble`` output. Every run is one independent process-local
+computation, so the results do not depend on the number of workers or on the order (a test builds a table in
+parallel and serially and compares them bit for bit). Runs of the tables given to one :func:`build` that share their
+``run`` function go through one batch; a table with another function follows on the same pool.
+
+    spec = plate_table(alphas=(0.0, 0.5, 1.0), mesh=3)            # or a Table(...) of your own
+    curves, = build([spec], workers=2, store="store-dir")
+
+Warm starts. Along x a column's states come from one static continuation (each state starts from the secant
+through the two before it, ``fem.contact.static_fitted``). Along alpha nothing is carried: measured on level 3
+(n_x = 19, Newton iterations per state, edge search included) the first state costs 21 / 46 / 64 iterations at
+alpha = 0 / 0.5 / 1.5 against 14-30 for every later one, so a perfect start from the neighbouring alpha's first state
+could save at most 0-12 % of a column (12 % at alpha = 1.5), while it would chain the alphas (less parallel work) and
+move the states by the solver tolerance (the table would no longer be the one its command makes run by run). Not kept.
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Callable, Sequence
+import os
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -36,6 +62,11 @@ from tissuemech.reduced.material import hertz_plate_f
 
 __all__ = [
     "MasterCurves",
+    "Table",
+    "build",
+    "plate_table",
+    "plate_cost",
+    "default_workers",
     "tabulate",
     "table_grid",
     "smooth",
@@ -127,6 +158,153 @@ def table_grid(n_x: int = 37, x_max: float = 0.36, x_small: float = 0.01, n_smal
     return np.unique(np.r_[0.0, small[small < main[0] * (1 - 1e-9)], main])
 
 
+@dataclass(frozen=True)
+class Table:
+    """One FE-made table (module doc): ``run(**kw)`` for every ``kw`` of every column, then ``assemble``.
+
+    name      what the table is (for messages).
+    run       module-level (picklable) function of keyword arguments: one FE run.
+    columns   per column (e.g. per alpha) the keyword dicts of its runs (SI units).
+    assemble  ``assemble(results)``: ``results[i][j]`` the result of ``columns[i][j]`` (a ``compare.batch.Stored``:
+              a dict of NumPy arrays) -> the table.
+    cost      relative cost of one run from its keywords (scheduling only; default 1).
+    metadata  stored with the table by its writer (mesh, command, error estimates ...).
+    """
+
+    name: str
+    run: Callable[..., Any]
+    columns: tuple[tuple[dict, ...], ...]
+    assemble: Callable[[list[list[Any]]], Any]
+    cost: Callable[[Mapping[str, Any]], float] | None = None
+    metadata: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if not callable(self.run) or not callable(self.assemble):
+            raise ValueError(f"table {self.name!r}: run and assemble must be callables")
+        cols = tuple(tuple(dict(kw) for kw in col) for col in self.columns)
+        if not cols or any(not col for col in cols):
+            raise ValueError(f"table {self.name!r}: every column needs at least one run (keyword dict)")
+        object.__setattr__(self, "columns", cols)
+
+    def runs(self) -> list[dict]:
+        """The keyword dicts of all runs, column by column."""
+        return [kw for col in self.columns for kw in col]
+
+
+def default_workers() -> int:
+    """The cores this process may use (``os.sched_getaffinity`` where it exists, else ``os.cpu_count()``)."""
+    try:
+        return max(len(os.sched_getaffinity(0)), 1)
+    except AttributeError:  # not on every platform
+        return max(os.cpu_count() or 1, 1)
+
+
+def build(
+    tables: Sequence[Table],
+    *,
+    workers: int | None = None,
+    executor: Any = None,
+    store: str | None = None,
+    progress: bool = True,
+) -> list[Any]:
+    """Run every table's runs (module doc), the most expensive first, and return each table's ``assemble`` output.
+
+    workers   local processes (default :func:`default_workers`, at most one per run); ignored with ``executor``.
+    executor  as ``compare.batch.run``'s ("serial", a ``concurrent.futures.Executor``, a dask Client); None: a
+              process pool of ``workers`` (``compare.batch.process_pool``).
+    store     folder of per-run results (``compare.batch``): a rerun resumes; runs shared by two tables run once.
+    Raises ``compare.batch.BatchError`` naming the first failed run (finished runs are stored: rerun with the same
+    store to retry only the failed ones).
+    """
+    from tissuemech.compare import batch
+
+    tables = list(tables)
+    if not all(isinstance(t, Table) for t in tables):
+        raise ValueError("tables must be a sequence of compare.calibrate.Table")
+    flat = [(ti, ci, ri) for ti, t in enumerate(tables) for ci, col in enumerate(t.columns) for ri in range(len(col))]
+    kw_of = lambda k: tables[k[0]].columns[k[1]][k[2]]
+    cost_of = lambda k: float(tables[k[0]].cost(kw_of(k))) if tables[k[0]].cost is not None else 1.0
+    order = sorted(flat, key=lambda k: -cost_of(k))  # stable: equal costs keep the tables' order
+    groups: dict[Any, list] = {}
+    for k in order:
+        groups.setdefault(tables[k[0]].run, []).append(k)
+    owned = None
+    if executor is None:
+        n = default_workers() if workers is None else workers
+        owned = batch.process_pool(min(n, len(flat)))
+        executor = owned
+    out: dict[tuple, Any] = {}
+    try:
+        for fn, keys in groups.items():
+            runs = batch.run(fn, [kw_of(k) for k in keys], executor=executor, store=store, progress=progress)
+            out.update(zip(keys, runs, strict=True))
+    finally:
+        if owned is not None:
+            owned.shutdown(wait=True, cancel_futures=True)
+    return [
+        t.assemble([[out[(ti, ci, ri)] for ri in range(len(col))] for ci, col in enumerate(t.columns)])
+        for ti, t in enumerate(tables)
+    ]
+
+
+def plate_cost(kw: Mapping[str, Any]) -> float:
+    """Relative cost of one static plate run: its steps x the level's cost per step (measured, one BLAS thread: 0.6 s
+    per state on level 3, 1.7 s on level 4 (n_x = 19, alpha = 1): ~2.8 x per level); a named or mesh-object level
+    counts as level 1."""
+    mesh = kw.get("mesh", 1)
+    level = mesh if isinstance(mesh, int) and not isinstance(mesh, bool) else 1
+    return float(kw.get("n") or 8) * 2.8**level
+
+
+def plate_table(
+    *,
+    alphas: Sequence[float] = DEFAULT_ALPHAS,
+    n_x: int = 37,
+    x_max: float = 0.36,
+    x_small: float = 0.01,
+    n_small: int = 4,
+    mesh: Any = 2,
+    curve: Callable[..., Any] = static_curve,
+    name: str = "plate master curves",
+    metadata: Mapping[str, Any] | None = None,
+) -> Table:
+    """The plate table as a :class:`Table`: per alpha one static run to x_max in n_x - 1 equal steps and one to
+    x_small in n_small steps (skipped if n_small = 0); assembled into :class:`MasterCurves` on ``table_grid``."""
+    if not 0 < x_max < 0.5:
+        raise ValueError(f"x_max = delta/(2 a0) must be in (0, 0.5); got {x_max}")
+    if any(a < 0 for a in alphas):
+        raise ValueError("alpha must be >= 0 (0 is neo-Hookean)")
+    x = table_grid(n_x, x_max, x_small if n_small else 0.0, n_small)
+    small = bool(n_small) and x[1] < x_max / (n_x - 1) * (1 - 1e-9)
+    columns = []
+    for a in alphas:
+        col = [dict(alpha=float(a), x_max=float(x_max), mesh=mesh, n=n_x - 1)]
+        if small:
+            col.append(dict(alpha=float(a), x_max=float(x_small), mesh=mesh, n=n_small))
+        if curve is not static_curve:  # a user/fake curve may not take n
+            col = [{k: v for k, v in j.items() if k != "n"} for j in col]
+        columns.append(tuple(col))
+
+    def assemble(results: list[list[Any]]) -> MasterCurves:
+        fg = [_to_master(_merged(parts), x) for parts in results]
+        return MasterCurves(
+            x, np.asarray(alphas, dtype=float), np.array([f for f, _ in fg]), np.array([g for _, g in fg])
+        )
+
+    return Table(name, curve, tuple(columns), assemble, plate_cost, dict(metadata or {}))
+
+
+def _merged(parts: list[Any]) -> dict:
+    """The runs of one column as one run (their states concatenated)."""
+    return {
+        "approach": np.concatenate([p["approach"] for p in parts]),
+        "force": np.concatenate([p["force"] for p in parts]),
+        "midplane_radius": np.concatenate([p["midplane_radius"] for p in parts]),
+        "radius": parts[0]["radius"],
+        "C": parts[0]["C"],
+    }
+
+
 def tabulate(
     *,
     alphas: Sequence[float] = DEFAULT_ALPHAS,
@@ -138,41 +316,12 @@ def tabulate(
     executor: Any = None,
     store: str | None = None,
     curve: Callable[..., Any] = static_curve,
+    workers: int | None = None,
 ) -> MasterCurves:
-    """Static FE curves per alpha (through ``compare.batch``): one run to x_max in n_x - 1 equal steps and
-    one to x_small in n_small steps (skipped if n_small = 0); f, g on ``table_grid`` (the run states)."""
-    from tissuemech.compare import batch
-
-    if not 0 < x_max < 0.5:
-        raise ValueError(f"x_max = delta/(2 a0) must be in (0, 0.5); got {x_max}")
-    if any(a < 0 for a in alphas):
-        raise ValueError("alpha must be >= 0 (0 is neo-Hookean)")
-    x = table_grid(n_x, x_max, x_small if n_small else 0.0, n_small)
-    jobs = [dict(alpha=float(a), x_max=float(x_max), mesh=mesh, n=n_x - 1) for a in alphas]
-    if n_small and x[1] < x_max / (n_x - 1) * (1 - 1e-9):
-        jobs += [dict(alpha=float(a), x_max=float(x_small), mesh=mesh, n=n_small) for a in alphas]
-    if curve is not static_curve:  # a user/fake curve may not take n
-        jobs = [{k: v for k, v in j.items() if k != "n"} for j in jobs]
-    runs = batch.run(curve, jobs, executor=executor, store=store)
-    failed = [j for j, r in zip(jobs, runs, strict=True) if r is None]
-    if failed:
-        raise RuntimeError(
-            f"calibration: {len(failed)} FE curve(s) failed, first {failed[0]}; rerun with the same store to retry"
-        )
-    done = [r for r in runs if r is not None]
-    na = len(alphas)
-    fg = []
-    for i in range(na):
-        parts = [done[i]] + ([done[na + i]] if len(done) > na else [])
-        merged = {
-            "approach": np.concatenate([p["approach"] for p in parts]),
-            "force": np.concatenate([p["force"] for p in parts]),
-            "midplane_radius": np.concatenate([p["midplane_radius"] for p in parts]),
-            "radius": parts[0]["radius"],
-            "C": parts[0]["C"],
-        }
-        fg.append(_to_master(merged, x))
-    return MasterCurves(x, np.asarray(alphas, dtype=float), np.array([a for a, _ in fg]), np.array([b for _, b in fg]))
+    """Static FE curves per alpha (:func:`plate_table` through :func:`build`): one run to x_max in n_x - 1 equal
+    steps and one to x_small in n_small steps (skipped if n_small = 0); f, g on ``table_grid`` (the run states)."""
+    spec = plate_table(alphas=alphas, n_x=n_x, x_max=x_max, x_small=x_small, n_small=n_small, mesh=mesh, curve=curve)
+    return build([spec], workers=workers, executor=executor, store=store)[0]
 
 
 def sqrt_basis(x: np.ndarray, degree: int) -> np.ndarray:

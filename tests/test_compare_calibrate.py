@@ -133,7 +133,7 @@ def test_main_writes_model_error_rel_from_a_reference(tmp_path, monkeypatch):
     import json
 
     fake = calibrate.tabulate(alphas=(0.0, 0.5, 1.0), n_x=16, x_max=0.3, executor="serial", curve=fake_curve)
-    monkeypatch.setattr(calibrate, "tabulate", lambda **kw: fake)
+    monkeypatch.setattr(calibrate, "build", lambda tables, **kw: [fake] * len(tables))
     x, a = 0.1, 0.5
     ref = tmp_path / "ref.json"
     ref.write_text(
@@ -148,3 +148,69 @@ def test_main_writes_model_error_rel_from_a_reference(tmp_path, monkeypatch):
     assert calibrate_cli.main([*args, "--reference", str(ref)]) == 0
     meta = calibrate.load(out)[1]
     assert meta["model_error_rel"] == pytest.approx(2e-4, rel=0.05) and "2-sigma" in meta["model_error_basis"]
+
+
+def test_a_table_built_in_parallel_equals_the_serial_one(tmp_path):
+    """Two worker processes, largest runs first, give the table of one in-process pass bit for bit (each run is
+    independent); the finer-level check shares the pool and comes back as its own table."""
+    spec = calibrate.plate_table(alphas=(0.0, 0.3, 0.7, 1.2), n_x=11, x_max=0.3, mesh=1, curve=fake_curve)
+    check = calibrate.plate_table(alphas=(0.0, 1.2), n_x=11, x_max=0.3, mesh=2, curve=fake_curve, name="check")
+    serial = calibrate.build([spec, check], executor="serial", progress=False)
+    parallel = calibrate.build([spec, check], workers=2, store=str(tmp_path / "s"), progress=False)
+    for a, b in zip(serial, parallel, strict=True):
+        for k in ("x", "alpha", "f", "g"):
+            assert np.array_equal(getattr(a, k), getattr(b, k)), k
+    assert serial[1].f.shape == (2, len(serial[0].x)) and np.array_equal(serial[1].f, serial[0].f[[0, 3]])
+    # the store holds every run once (the check's alphas on another mesh are other runs): a rerun computes nothing
+    again = calibrate.build([spec], executor=_Refuse(), store=str(tmp_path / "s"), progress=False)[0]
+    assert np.array_equal(again.f, serial[0].f)
+
+
+class _Refuse:
+    """An executor that fails the test if anything is submitted."""
+
+    def submit(self, *a, **k):
+        raise AssertionError("a stored run was computed again")
+
+    def shutdown(self, wait=True, cancel_futures=False):
+        pass
+
+
+CALLS: list[float] = []
+
+
+def _recording_run(*, size):
+    CALLS.append(size)
+    return {"y": np.array([size])}
+
+
+def test_build_runs_the_most_expensive_first_and_assembles_in_column_order():
+    CALLS.clear()
+    spec = calibrate.Table(
+        "toy",
+        _recording_run,
+        columns=(({"size": 1.0}, {"size": 5.0}), ({"size": 3.0},)),
+        assemble=lambda res: [[float(r["y"][0]) for r in col] for col in res],
+        cost=lambda kw: kw["size"],
+    )
+    assert calibrate.build([spec], executor="serial", progress=False) == [[[1.0, 5.0], [3.0]]]
+    assert CALLS == [5.0, 3.0, 1.0]
+    assert spec.runs() == [{"size": 1.0}, {"size": 5.0}, {"size": 3.0}]
+
+
+def test_table_and_build_reject_bad_input():
+    with pytest.raises(ValueError, match="at least one run"):
+        calibrate.Table("empty", _recording_run, columns=((),), assemble=list)
+    with pytest.raises(ValueError, match="callables"):
+        calibrate.Table("bad", _recording_run, columns=(({"size": 1.0},),), assemble=None)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="Table"):
+        calibrate.build(["not a table"])  # type: ignore[list-item]
+    spec = calibrate.Table("toy", _recording_run, columns=(({"size": 1.0},),), assemble=list)
+    with pytest.raises(ValueError, match="workers"):
+        calibrate.build([spec], workers=0)
+
+
+def test_plate_cost_orders_levels_and_steps():
+    assert calibrate.plate_cost({"mesh": 4, "n": 18}) > calibrate.plate_cost({"mesh": 3, "n": 18})
+    assert calibrate.plate_cost({"mesh": 3, "n": 18}) > calibrate.plate_cost({"mesh": 3, "n": 4})
+    assert calibrate.plate_cost({"mesh": "coarse", "n": 4}) == calibrate.plate_cost({"mesh": 1, "n": 4})

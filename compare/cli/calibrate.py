@@ -28,6 +28,16 @@ def _count(text: str) -> int:
     return v
 
 
+def _workers(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number of processes, got {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {v}")
+    return v
+
+
 def _fraction(text: str) -> float:
     try:
         v = float(text)
@@ -47,6 +57,12 @@ def _options(ap: argparse.ArgumentParser) -> argparse.ArgumentParser:
     )
     ap.add_argument("--install", action="store_true", help="write the shipped table reduced/data/spheroid_master.npz")
     ap.add_argument("--store", default=None, help="folder for per-run results (resume)")
+    ap.add_argument(
+        "--workers",
+        type=_workers,
+        default=None,
+        help="local processes sharing the FE runs (default: every core this process may use)",
+    )
     ap.add_argument("--n-x", type=_count, default=37, help="states of the main run, from x = 0 (default: %(default)s)")
     ap.add_argument(
         "--x-max",
@@ -89,11 +105,15 @@ def _execute(a: argparse.Namespace, error: Any) -> int:
     lev = lambda v: int(v) if str(v).isdigit() else v  # a fem.spheroid level number or name
     a.mesh, a.error_mesh = lev(a.mesh), lev(a.error_mesh)
     kw = dict(n_x=a.n_x, x_max=a.x_max)
-    raw = calibrate.tabulate(alphas=alphas, mesh=a.mesh, store=a.store, **kw)
+    # the table and its finer-level check in one batch on one pool (the check's long runs first: no idle core at the end)
+    tables = [calibrate.plate_table(alphas=alphas, mesh=a.mesh, **kw)]
+    if a.error_mesh != "":
+        tables.append(calibrate.plate_table(alphas=chk, mesh=a.error_mesh, name="finer-level check", **kw))
+    raw, *check = calibrate.build(tables, workers=a.workers, store=a.store)
     _, change = calibrate.smooth(raw, a.degree) if a.degree > 0 else (raw, float("nan"))
     err, err_x = None, None
-    if a.error_mesh != "":
-        fine = calibrate.tabulate(alphas=chk, mesh=a.error_mesh, store=a.store, **kw)
+    if check:
+        fine = check[0]
         rows = [alphas.index(c) for c in chk]
         rel = np.abs(raw.f[rows][:, 1:] / fine.f[:, 1:] - 1.0)
         err = float(rel.max())
