@@ -3,9 +3,18 @@ spheroid's convergence in time (:func:`time_convergence`, shown in section 3 nex
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from tissuemech.compare.report.common import Section, md_table
+
+
+def fe_jobs(quick: bool = False) -> list[tuple[Callable, dict, int]]:
+    """The blastula accuracy's FE runs as ``(function, keywords, repeats)`` in the order it asks for them."""
+    from tissuemech.compare.studies import accuracy
+
+    return accuracy.blastula_fe_jobs(quick=quick)
 
 
 def section(*, quick: bool = False) -> Section:

@@ -15,8 +15,8 @@ from tissuemech.compare.report.common import Section, md_table
 A, C_BL = cases.BLASTULA_INNER_RADIUS, cases.BLASTULA_C
 
 
-def _blastula_set(alpha: float, B: float, mesh, max_pressure: float = 1000.0, n: int = 20):
-    """FE curve of one set: load control to max_pressure, or arc-length through a limit point."""
+def _set_job(alpha: float, B: float, mesh, max_pressure: float = 1000.0, n: int = 20) -> tuple[Callable, dict, int]:
+    """The FE run of one set: load control to max_pressure, or arc-length through a limit point (below it)."""
     from tissuemech.fem.blastula import inflate
     from tissuemech.reduced import blastula as bl
 
@@ -26,7 +26,37 @@ def _blastula_set(alpha: float, B: float, mesh, max_pressure: float = 1000.0, n:
         kw.update(pressures=None, method="arclength", max_inner_stretch=1.3 * float(lim.inner_stretch))
     else:
         kw.update(pressures=np.linspace(max_pressure / n, max_pressure, n))
-    run = runcache.call(inflate, kw)  # reused between reports (compare.runcache), with the time it took
+    return inflate, kw, 1
+
+
+def _fig3_job(mesh) -> tuple[Callable, dict, int]:
+    from tissuemech.fem.blastula import inflate
+
+    B, alpha, p = cases.FIG3["outer_radius"], cases.FIG3["alpha"], cases.FIG3["pressure"]
+    return (
+        inflate,
+        dict(inner_radius=A, outer_radius=B, C=C_BL, alpha=alpha, pressures=np.linspace(100, p, 10), mesh=mesh),
+        1,
+    )
+
+
+def _mesh(quick: bool) -> str:
+    return "default" if quick else "fine"
+
+
+def fe_jobs(quick: bool = False) -> list[tuple[Callable, dict, int]]:
+    """The section's FE runs as ``(function, keywords, repeats)`` in the order it asks for them (Fig. 3, then the
+    sets of Figs 4-5): what the report's builder starts ahead on the second core."""
+    mesh = _mesh(quick)
+    return [_fig3_job(mesh)] + [_set_job(alpha_, B_, mesh) for _, alpha_, B_ in cases.BLASTULA_SETS]
+
+
+def _blastula_set(alpha: float, B: float, mesh, max_pressure: float = 1000.0, n: int = 20):
+    """FE curve of one set (:func:`_set_job`) and its error against the exact shell."""
+    from tissuemech.reduced import blastula as bl
+
+    lim = bl.limit_point(inner_radius=A, outer_radius=B, C=C_BL, alpha=alpha)
+    run = runcache.call(*_set_job(alpha, B, mesh, max_pressure, n)[:2])  # reused between reports, with its time
     fe, wall = run.result, run.wall
     la = np.linspace(1.0, float(fe.inner_stretch.max()), 300)  # the exact curve, drawn as a line
     geo: dict[str, Any] = dict(inner_radius=A, outer_radius=B)
@@ -53,16 +83,13 @@ def section(traces: dict, *, quick: bool = False, progress: Callable[[str], None
     """
     sec = Section("blastula", quick)
     from tissuemech.compare.plots import seed as figures
-    from tissuemech.fem.blastula import inflate
     from tissuemech.reduced import blastula as bl
 
-    mesh = "default" if sec.quick else "fine"
+    mesh = _mesh(sec.quick)
     progress("blastula: Fig. 3")
     # Fig. 3
     B, alpha, p = cases.FIG3["outer_radius"], cases.FIG3["alpha"], cases.FIG3["pressure"]
-    run3 = runcache.call(
-        inflate, dict(inner_radius=A, outer_radius=B, C=C_BL, alpha=alpha, pressures=np.linspace(100, p, 10), mesh=mesh)
-    )
+    run3 = runcache.call(*_fig3_job(mesh)[:2])
     fe, wall3 = run3.result, run3.wall  # the run's time, also when it comes from the cache (compare.runcache)
     la = float(bl.inner_stretch(p, inner_radius=A, outer_radius=B, C=C_BL, alpha=alpha))
     prof = bl.profiles(la, inner_radius=A, outer_radius=B, C=C_BL, alpha=alpha, n=200)

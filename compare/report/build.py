@@ -26,11 +26,13 @@ markdown in document order: seed comparison, blastula (Figs 3-5), blastula accur
 
 from __future__ import annotations
 
+import contextlib
+import importlib
 import json
 import platform
 import time
 import traceback
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -38,7 +40,7 @@ import numpy as np
 
 from tissuemech.compare.report.common import Section
 
-__all__ = ["build", "FIGURES", "TABLES", "SPHEROID_FIGURES", "SPHEROID_TABLES"]
+__all__ = ["build", "fe_jobs", "FIGURES", "TABLES", "SPHEROID_FIGURES", "SPHEROID_TABLES"]
 
 FIGURES = (
     "fig3_blastula_von_mises.png",
@@ -114,23 +116,41 @@ def build(
     """Run every section and write the report folder.
 
     Args: out_dir the folder (created if missing); quick coarse meshes and fewer levels; progress
-    show a progress bar on stderr; workers the processes the FE runs share (2: the spheroid section's FE runs start
-    at once in a second process, through the run cache ``compare.runcache``, while this one runs the blastula
-    sections; 1: one after the other). Returns the summary dict (also written as ``summary.json``).
+    show a progress bar on stderr; workers the processes the FE runs share (2: every section's FE runs
+    (:func:`fe_jobs`) are started at once, in REVERSE order, in a second process through the run cache
+    ``compare.runcache``, while this one works through the sections in order: the two meet in the middle, and a run
+    not yet started there when this process reaches it is taken back and run here; 1: one after the other).
+    Returns the summary dict (also written as ``summary.json``).
     """
-    import contextlib
-
     from tissuemech.compare import runcache
 
     with contextlib.ExitStack() as stack:
-        if workers > 1 and _spheroid_reason() is None:
+        if workers > 1:
             from tissuemech.compare.batch.pool import process_pool
-            from tissuemech.compare.report.spheroid import fe_jobs
 
+            jobs = fe_jobs(quick, spheroid=_spheroid_reason() is None)
             pool = stack.enter_context(process_pool(workers - 1))
             stack.callback(runcache.cancel_pending)  # before the pool's shutdown: nothing left queued
-            runcache.prefetch(pool, fe_jobs(quick))
+            runcache.prefetch(pool, jobs[::-1])
         return _build(out_dir, quick=quick, progress=progress)
+
+
+def fe_jobs(quick: bool = False, spheroid: bool = True) -> list[tuple[Callable, dict, int]]:
+    """Every section's FE runs as ``(function, keywords, repeats)``, in the order the builder asks for them
+    (stability map, blastula figures, blastula accuracy, then with ``spheroid`` the spheroid section and surface
+    tension). The limit-point runs are not listed (their load-control sweeps end in an expected ``LimitPointError``);
+    an optional section whose jobs cannot be listed (an import error) is left out: it runs, or fails, in place."""
+    from tissuemech.compare.report import accuracy, blastula, stability
+
+    jobs = stability.fe_jobs(quick, spheroid=spheroid) + blastula.fe_jobs(quick) + accuracy.fe_jobs(quick)
+    if spheroid:
+        for name in ("spheroid", "tension"):
+            try:
+                module = importlib.import_module(f"tissuemech.compare.report.{name}")
+                jobs += module.fe_jobs(quick)
+            except Exception:  # reported by the section itself (_guarded)
+                continue
+    return jobs
 
 
 def _spheroid_reason() -> str | None:
@@ -160,19 +180,37 @@ def _build(out_dir: str | Path, *, quick: bool, progress: bool) -> dict:
 
     summary: dict[str, Any] = {"quick": quick}
     written: list[str] = []
+    # wall and CPU seconds of this process per section (FE runs taken from the cache or from the second process
+    # count where they are collected, with the wait for them)
+    times: dict[str, dict[str, float]] = {}
+
+    @contextlib.contextmanager
+    def timed(name: str) -> Iterator[None]:
+        w0, c0 = time.perf_counter(), time.process_time()
+        try:
+            yield
+        finally:
+            times[name] = {"wall_s": time.perf_counter() - w0, "cpu_s": time.process_time() - c0}
+
     step("limit point: load control, arc-length, exact (3 geometries)")
-    limit = stability_study.limit_point_map(mesh="default")
-    done["stability map"] = stability.section(limit, quick=quick, spheroid_reason=reason, progress=step)
-    done["blastula figures"] = blastula.section(limit[1], quick=quick, progress=step)
+    with timed("limit point"):
+        limit = stability_study.limit_point_map(mesh="default")
+    with timed("stability map"):
+        done["stability map"] = stability.section(limit, quick=quick, spheroid_reason=reason, progress=step)
+    with timed("blastula figures"):
+        done["blastula figures"] = blastula.section(limit[1], quick=quick, progress=step)
     step("blastula accuracy")
-    done["blastula accuracy"] = accuracy.section(quick=quick)
+    with timed("blastula accuracy"):
+        done["blastula accuracy"] = accuracy.section(quick=quick)
     if reason is None:
-        done["spheroid figures + accuracy"] = _guarded(
-            "spheroid", lambda: spheroid.section(quick=quick, progress=step), quick=quick
-        )
-        done["surface tension"] = _guarded(
-            "tension", lambda: tension.section(quick=quick, progress=step), quick=quick, title="5. Surface tension"
-        )
+        with timed("spheroid figures + accuracy"):
+            done["spheroid figures + accuracy"] = _guarded(
+                "spheroid", lambda: spheroid.section(quick=quick, progress=step), quick=quick
+            )
+        with timed("surface tension"):
+            done["surface tension"] = _guarded(
+                "tension", lambda: tension.section(quick=quick, progress=step), quick=quick, title="5. Surface tension"
+            )
     for sec in done.values():
         summary.update(sec.summary)
     step("seed comparison, writing")
@@ -188,11 +226,13 @@ def _build(out_dir: str | Path, *, quick: bool, progress: bool) -> dict:
     order = ["seed comparison", "blastula figures", "blastula accuracy", "spheroid figures + accuracy", "stability map"]
     order += ["surface tension"] * ("surface tension" in done)
     md: list[str] = []
-    for key in order:
-        _write(out, done[key], written)
-        md += done[key].md
+    with timed("writing figures and tables"):
+        for key in order:
+            _write(out, done[key], written)
+            md += done[key].md
     total = time.perf_counter() - t_start
     summary["total_wall_s"] = total
+    summary["section_times"] = times
     summary["spheroid_available"] = reason is None
     summary["files"] = sorted(set(written) | {"report.md", "summary.json"})  # every file this run writes
     head = [

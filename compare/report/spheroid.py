@@ -76,7 +76,7 @@ def _fig89_jobs(mesh89: str) -> list[tuple[Callable, dict, int]]:
 def fe_jobs(quick: bool = False) -> list[tuple[Callable, dict, int]]:
     """The section's FE runs as ``(function, keywords, repeats)`` in the order it asks for them: the report's builder
     starts them ahead on the second core (``compare.runcache.prefetch``)."""
-    from tissuemech.compare.studies.accuracy import spheroid_fe_jobs
+    from tissuemech.compare.studies.accuracy import spheroid_fe_jobs, time_convergence_jobs
 
     levels, repeats, mesh89 = _levels(quick)
     fig10 = cases.FIG10
@@ -85,6 +85,7 @@ def fe_jobs(quick: bool = False) -> list[tuple[Callable, dict, int]]:
         *spheroid_fe_jobs(levels, repeats),
         *_fig89_jobs(mesh89),
         _static_job(FIG89["displacement"] / (2 * FIG89["radius"]), FIG89["alpha"], mesh89),
+        *time_convergence_jobs(quick),  # the convergence in time (report.accuracy.time_convergence), last
     ]
 
 

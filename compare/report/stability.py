@@ -10,6 +10,26 @@ import pandas as pd
 from tissuemech.compare.report.common import Section, md_table
 
 
+def _kappa_mesh(quick: bool) -> tuple[int, int]:
+    return (4, 8) if quick else (8, 16)
+
+
+def _compression_settings(quick: bool) -> tuple[tuple[float, ...], str]:
+    """(approach fractions, mesh) of the compression-depth panel."""
+    if quick:
+        return (0.3, 0.5, 0.7, 0.79), "coarse"
+    return (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.75, 0.79), "default"
+
+
+def fe_jobs(quick: bool = False, spheroid: bool = True) -> list[tuple[Callable, dict, int]]:
+    """The section's FE runs as ``(function, keywords, repeats)`` in the order it asks for them (kappa map, then the
+    compression depth when ``spheroid``): what the report's builder starts ahead on the second core."""
+    from tissuemech.compare.studies import stability
+
+    jobs = stability.kappa_jobs(mesh=_kappa_mesh(quick))
+    return jobs + (stability.compression_jobs(*_compression_settings(quick)) if spheroid else [])
+
+
 def section(
     limit: tuple[pd.DataFrame, dict],
     *,
@@ -28,7 +48,7 @@ def section(
 
     lim, traces = limit
     progress("stability: locking vs kappa/C")
-    kap = stability.kappa_map(mesh=(4, 8) if sec.quick else (8, 16))
+    kap = stability.kappa_map(mesh=_kappa_mesh(sec.quick))
     progress("stability: viscous step, stiff solvers")
     visc, bounds = stability.viscous_step_map(
         np.geomspace(1e-2 if sec.quick else 1e-3, 1500.0, 24 if sec.quick else 34)
@@ -37,10 +57,7 @@ def section(
     comp = None
     if spheroid_reason is None:
         progress("stability: compression depth")
-        comp = stability.compression_map(
-            (0.3, 0.5, 0.7, 0.79) if sec.quick else (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.75, 0.79),
-            mesh="coarse" if sec.quick else "default",
-        )
+        comp = stability.compression_map(*_compression_settings(sec.quick))
         sec.table(comp, "stability_compression.csv")
     for df, name in (
         (lim, "stability_limit_point.csv"),

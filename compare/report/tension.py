@@ -10,6 +10,18 @@ import pandas as pd
 from tissuemech.compare.report.common import Section, md_table
 
 
+def fe_jobs(quick: bool = False) -> list[tuple[Callable, dict, int]]:
+    """The section's FE runs as ``(function, keywords, repeats)`` in the order it asks for them (the static sweep,
+    then one hold per ``HOLD_NUMBERS``): what the report's builder starts ahead on the second core."""
+    from tissuemech.compare.studies import tensiometry as T
+
+    mesh = 0 if quick else 1
+    numbers = (0.2, 1.0, 5.0, 20.0) if quick else T.NUMBERS
+    return [(T.sweep, dict(numbers=tuple(numbers), mesh=mesh), 1)] + [
+        (T.hold_series, dict(number=n, mesh=mesh), 1) for n in T.HOLD_NUMBERS
+    ]
+
+
 def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: None) -> Section:
     """The formula gamma_app = F / (pi R3^2 (1/R1 + 1/R2)) on FE aggregates (``compare.studies.tensiometry``):
     elastic ones against gamma / (C a0) and relaxing ones against the time since compression."""
@@ -18,14 +30,11 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
     from tissuemech.compare.studies import tensiometry as T
 
     sec = Section("tension", quick)
-    mesh = 0 if quick else 1
     progress("surface tension: tensiometry formula")
-    numbers = (0.2, 1.0, 5.0, 20.0) if quick else T.NUMBERS
-    points = runcache.call(T.sweep, dict(numbers=tuple(numbers), mesh=mesh)).result  # reused between reports
+    (fn, kw, _), *holds = fe_jobs(quick)
+    points = runcache.call(fn, kw).result  # reused between reports
     static = T.table(points)
-    hold = pd.concat(
-        [runcache.call(T.hold_series, dict(number=n, mesh=mesh)).result for n in T.HOLD_NUMBERS], ignore_index=True
-    )
+    hold = pd.concat([runcache.call(f, k).result for f, k, _ in holds], ignore_index=True)
     sec.table(static, "tensiometry_static.csv")
     sec.table(hold, "tensiometry_hold.csv")
     sec.save(tensiometry_figure(static, hold, tau=T.TAU), "tensiometry.png")
@@ -43,7 +52,7 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
         "Parallel-plate tensiometry reads the tissue surface tension as gamma_app = F / (pi R3^2 (1/R1 + 1/R2)), "
         "exact for a liquid drop at rest (`tissuemech.reduced.drop`). Here it is applied to FE aggregates "
         f"(`compare.studies.tensiometry`, S180 numbers: a0 = {T.A0 * 1e6:g} um, gamma = {T.GAMMA * 1e3:g} mN/m, "
-        f"10 % compression, mesh level {mesh}, node-by-node contact), radii read from the FE profile as from a side "
+        f"10 % compression, mesh level {kw['mesh']}, node-by-node contact), radii read from the FE profile as from a side "
         "view. Left: elastic aggregates at rest; right: an aggregate of instantaneous E0 = "
         f"{T.E0:g} Pa relaxing through one Maxwell branch (tau = 3 eta / E0 = {T.TAU:g} s for eta = {T.ETA:g} Pa s) "
         "to the long-time modulus C_inf = gamma / (number a0), plates held.",

@@ -64,6 +64,8 @@ __all__ = [
     "spheroid_time_convergence",
     "TIME_TIMES",
     "spheroid_fe_jobs",
+    "blastula_fe_jobs",
+    "time_convergence_jobs",
     "pareto",
     "timed",
     "timed_stats",
@@ -127,6 +129,15 @@ def _pressure_error(stretch: Any, pressure: Any, alpha: float = ALPHA) -> float:
     )
 
 
+def blastula_fe_jobs(quick: bool = False, repeats: int = 3) -> list[tuple[Callable, dict, int]]:
+    """The FE runs of :func:`blastula_accuracy` as ``(function, keywords, repeats)``, one per mesh (the first call
+    and ``repeats`` timed ones; what ``compare.runcache.prefetch`` can start ahead)."""
+    from tissuemech.fem.blastula import inflate
+
+    kw = dict(inner_radius=A, outer_radius=B, C=C, alpha=ALPHA, pressures=np.asarray(PRESSURES))
+    return [(inflate, dict(kw, mesh=m), max(int(repeats), 1) + 1) for m in (FE_MESHES_QUICK if quick else FE_MESHES)]
+
+
 def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
     """Error against wall time for the reduced (quadrature, diffrax) and FE blastula paths.
 
@@ -138,7 +149,6 @@ def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
     """
     import jax
 
-    from tissuemech.fem.blastula import inflate
     from tissuemech.reduced import blastula as bl
 
     ps = np.asarray(PRESSURES)
@@ -173,10 +183,9 @@ def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
             )
         )
 
-    for m in FE_MESHES_QUICK if quick else FE_MESHES:
+    for m, job in zip(FE_MESHES_QUICK if quick else FE_MESHES, blastula_fe_jobs(quick, repeats)):
         # through the run cache (compare.runcache): a later report reuses the runs and the times they took
-        kw = dict(inner_radius=A, outer_radius=B, C=C, alpha=ALPHA, pressures=ps, mesh=m)
-        timed_runs = runcache.call(inflate, kw, repeats=max(int(repeats), 1) + 1)  # timed_stats: first + repeats
+        timed_runs = runcache.call(*job[:2], repeats=job[2])  # timed_stats: first + repeats
         first, walls, r = timed_runs.walls[0], np.asarray(timed_runs.walls[1:]), timed_runs.result
         rows.append(
             dict(
@@ -333,6 +342,33 @@ def spheroid_accuracy(
 TIME_TIMES = (0.05, 0.1, 0.2)  # s, where spheroid_time_convergence reads F (the ramp of cases.FAST_BRANCHES)
 
 
+def _time_convergence_settings(
+    quick: bool, level: int | None, fixed: Sequence[int] | None, tols: Sequence[float] | None
+) -> tuple[int, list[int], list[float]]:
+    level = (0 if quick else 1) if level is None else int(level)
+    fixed = list(fixed or ((6, 12, 24) if quick else (6, 12, 24, 48)))
+    tols = list(tols or ((1e-3,) if quick else (5e-4, 2e-4)))
+    return level, fixed, tols
+
+
+def time_convergence_jobs(
+    quick: bool = False,
+    level: int | None = None,
+    fixed: Sequence[int] | None = None,
+    tols: Sequence[float] | None = None,
+) -> list[tuple[Callable, dict, int]]:
+    """The FE runs of :func:`spheroid_time_convergence` as ``(function, keywords, repeats)``: the fixed step counts,
+    then the adaptive tolerances (what ``compare.runcache.prefetch`` can start ahead)."""
+    from tissuemech.fem.spheroid import compress
+    from tissuemech.fem.stepping import Adaptive
+
+    level, fixed, tols = _time_convergence_settings(quick, level, fixed, tols)
+    case = dict(cases.FAST_BRANCHES, end_time=TIME_TIMES[-1], mesh=level, field_times=list(TIME_TIMES))
+    return [(compress, dict(case, n_ramp=int(n)), 1) for n in fixed] + [
+        (compress, dict(case, stepping=Adaptive(tol=float(tol))), 1) for tol in tols
+    ]
+
+
 def spheroid_time_convergence(
     quick: bool = False,
     level: int | None = None,
@@ -346,12 +382,9 @@ def spheroid_time_convergence(
     Richardson"), setting, ramp steps, ``error 0.05 s`` ..., error (max |.| over the times), ``lumped estimate``
     (the same max for the lumped recursion on the same steps, against its own 100x finer run), ``wall_time [s]``.
     """
-    from tissuemech.fem.spheroid import compress
-    from tissuemech.fem.stepping import Adaptive, lumped_force
+    from tissuemech.fem.stepping import lumped_force
 
-    level = (0 if quick else 1) if level is None else int(level)
-    fixed = list(fixed or ((6, 12, 24) if quick else (6, 12, 24, 48)))
-    tols = list(tols or ((1e-3,) if quick else (5e-4, 2e-4)))
+    level, fixed, tols = _time_convergence_settings(quick, level, fixed, tols)
     if len(fixed) < 3:
         raise ValueError("spheroid_time_convergence needs >= 3 fixed step counts (the three finest give the reference)")
     case = dict(cases.FAST_BRANCHES, end_time=TIME_TIMES[-1])
@@ -363,10 +396,10 @@ def spheroid_time_convergence(
     F_fine = lumped_force(fine, shape, beta, tau)
     lumped_ref = np.array([F_fine[np.argmin(np.abs(fine - t))] for t in ts])
 
-    def run(label: str, setting: str, **stepping) -> dict:
-        t0 = time.perf_counter()
-        r = compress(**case, mesh=level, field_times=list(ts), **stepping)
-        wall = time.perf_counter() - t0
+    def run(label: str, setting: str, job: tuple[Callable, dict, int]) -> dict:
+        # through the run cache (compare.runcache): a later report reuses the run and the time it took
+        timed = runcache.call(job[0], job[1])
+        r, wall = timed.result, timed.wall
         k = [int(np.argmin(np.abs(r.time - t))) for t in ts]
         Fl = lumped_force(r.time, shape, beta, tau)[k]
         return dict(
@@ -378,8 +411,9 @@ def spheroid_time_convergence(
             **{WALL: wall},
         )
 
-    rows = [run("FE fixed", f"n_ramp = {n}", n_ramp=n) for n in fixed]
-    rows += [run("FE adaptive", f"tol = {tol:g}", stepping=Adaptive(tol=tol)) for tol in tols]
+    jobs = time_convergence_jobs(quick, level, fixed, tols)
+    rows = [run("FE fixed", f"n_ramp = {n}", job) for n, job in zip(fixed, jobs)]
+    rows += [run("FE adaptive", f"tol = {tol:g}", job) for tol, job in zip(tols, jobs[len(fixed) :])]
     F1, F2, F4 = (rows[i]["F"] for i in range(len(fixed) - 3, len(fixed)))
     with np.errstate(divide="ignore", invalid="ignore"):
         p = np.clip(np.nan_to_num(np.log2(np.abs(F2 - F1) / np.abs(F4 - F2)), nan=2.0), 1.0, 3.0)

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import time
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -54,7 +54,9 @@ def _positive_list(name: str, values: Sequence[float] | np.ndarray, unit: str = 
 __all__ = [
     "limit_point_map",
     "kappa_map",
+    "kappa_jobs",
     "compression_map",
+    "compression_jobs",
     "viscous_step_map",
     "stiff_solver_map",
     "exact_lumped_force",
@@ -215,6 +217,21 @@ def _parabolic_max(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
 # ---------------------------------------------------------------------------------------------
 
 
+KAPPA_SHELL = (75e-6, 0.2)  # (B in m, alpha) of the kappa map
+
+
+def kappa_jobs(
+    ratios: Sequence[float] = (1e2, 1e3, 1e4, 1e5, 1e6, 1e7), mesh=(4, 8), pressures: Sequence[float] = (250.0, 500.0)
+) -> list[tuple[Callable, dict, int]]:
+    """The FE runs :func:`kappa_map` asks for (same arguments), mixed then displacement-only, each over ``ratios``,
+    as ``(function, keywords, repeats)`` (what ``compare.runcache.prefetch`` can start ahead)."""
+    from tissuemech.fem.blastula import inflate
+
+    B, alpha = KAPPA_SHELL
+    kw = dict(inner_radius=A, outer_radius=B, C=C, alpha=alpha, pressures=list(pressures), mesh=mesh)
+    return [(inflate, dict(kw, kappa=k * C, formulation=form), 1) for form in ("mixed", "displacement") for k in ratios]
+
+
 def kappa_map(
     ratios: Sequence[float] = (1e2, 1e3, 1e4, 1e5, 1e6, 1e7), mesh=(4, 8), pressures: Sequence[float] = (250.0, 500.0)
 ) -> pd.DataFrame:
@@ -225,14 +242,15 @@ def kappa_map(
     recorded (error NaN, failed True, the message). Columns: formulation, kappa_over_C, error, failed,
     ``wall_time [s]``, note.
     """
-    from tissuemech.fem.blastula import LockingWarning, inflate
+    from tissuemech.fem.blastula import LockingWarning
     from tissuemech.fem.newton import NewtonError
 
     _positive_list("ratios (kappa/C)", ratios)
     _positive_list("pressures", pressures, " in Pa")
-    B, alpha = 75e-6, 0.2
+    B, alpha = KAPPA_SHELL
     ex = np.array([shell_inner_stretch(p, outer_radius=B, alpha=alpha) for p in pressures])
     rows = []
+    jobs = iter(kappa_jobs(ratios, mesh, pressures))
     for form in ("mixed", "displacement"):
         for k in ratios:
             t0 = time.perf_counter()
@@ -240,8 +258,7 @@ def kappa_map(
             try:
                 with np.errstate(all="ignore"), warnings.catch_warnings():
                     warnings.simplefilter("ignore", LockingWarning)  # the study measures the locking it warns of
-                    kw = dict(inner_radius=A, outer_radius=B, C=C, alpha=alpha, pressures=list(pressures), mesh=mesh)
-                    run = runcache.call(inflate, dict(kw, kappa=k * C, formulation=form))  # reused between reports
+                    run = runcache.call(*next(jobs)[:2])  # reused between reports
                 err = float(np.max(np.abs(run.result.inner_stretch / ex - 1)))
                 wall = run.wall
             except NewtonError as e:
@@ -257,6 +274,25 @@ def kappa_map(
 
 
 CAP_FRACTION = 0.8  # fem.spheroid.compress refuses displacement >= 1.6 a0 (80 % of the diameter)
+
+
+def compression_jobs(
+    fractions: Sequence[float] = (0.2, 0.3, 0.4, 0.5, 0.6),
+    mesh="default",
+    radius: float = 500 * UM,
+    C_: float = 200.0,
+    alpha: float = 0.2,
+    probe_cap: bool = True,
+) -> list[tuple[Callable, dict, int]]:
+    """The static FE runs :func:`compression_map` asks for (same arguments), as ``(function, keywords, repeats)``
+    (what ``compare.runcache.prefetch`` can start ahead; the map stops at the first failure)."""
+    from tissuemech.fem import spheroid as fes
+
+    tries = [float(f) for f in fractions]
+    if probe_cap and max(tries) < CAP_FRACTION:
+        tries.append(CAP_FRACTION)
+    static = dict(radius=radius, C=C_, alpha=alpha, branches=(), ramp_time=1.0, end_time=1.0, mesh=mesh, static=True)
+    return [(fes.compress, dict(static, displacement=2 * radius * f), 1) for f in tries]
 
 
 def compression_map(
@@ -280,30 +316,17 @@ def compression_map(
     fr = _positive_list("fractions (approach / diameter)", fractions)
     if np.any(fr >= 1):
         raise ValueError(f"fractions are total approach / diameter and must be below 1; got {list(fractions)}")
-    from tissuemech.fem import spheroid as fes
     from tissuemech.fem.newton import NewtonError
 
     tries = [float(f) for f in fractions]
     if probe_cap and max(tries) < CAP_FRACTION:
         tries.append(CAP_FRACTION)
     rows = []
-    for f in tries:
+    jobs = compression_jobs(tries, mesh, radius, C_, alpha, probe_cap=False)
+    for f, (fn, kw, _) in zip(tries, jobs):
         t0 = time.perf_counter()
         try:
-            run = runcache.call(  # reused between reports (compare.runcache), with the time it took
-                fes.compress,
-                dict(
-                    radius=radius,
-                    C=C_,
-                    alpha=alpha,
-                    branches=(),
-                    displacement=2 * radius * f,
-                    ramp_time=1.0,
-                    end_time=1.0,
-                    mesh=mesh,
-                    static=True,
-                ),
-            )
+            run = runcache.call(fn, kw)  # reused between reports (compare.runcache), with the time it took
             r = run.result
             rows.append(
                 dict(
