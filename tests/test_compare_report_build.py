@@ -153,3 +153,26 @@ def test_accuracy_chart_keeps_every_label_inside_the_axes():
     assert len(ys) == 7 and max(ys) > 1.2e-4 * 10  # the six FE labels stack above their points
     assert all(lo <= y <= hi for y in ys)
     pyplot().close(fig)
+
+
+def test_fe_jobs_list_every_prefetched_run_once_and_cacheable():
+    """The builder's job list (what the second process starts ahead, in reverse): every run has a cache key, the
+    spheroid section's runs (accuracy levels, Figs 8-9, time convergence) and the tension sweep are in it, and without
+    the spheroid nothing of the spheroid is."""
+    from tissuemech.compare import runcache
+    from tissuemech.compare.report.build import fe_jobs
+    from tissuemech.compare.studies.accuracy import time_convergence_jobs
+
+    jobs = fe_jobs(quick=True)
+    keys = [runcache.key(fn, {"kwargs": kw, "repeats": r}) for fn, kw, r in jobs]  # raises if one is not cacheable
+    names = {f"{fn.__module__}.{fn.__name__}" for fn, _, _ in jobs}
+    assert {"tissuemech.fem.spheroid.compress", "tissuemech.fem.blastula.inflate"} <= names
+    assert {"tissuemech.compare.calibrate.static_curve", "tissuemech.compare.studies.tensiometry.sweep"} <= names
+    tc = [runcache.key(fn, {"kwargs": kw, "repeats": r}) for fn, kw, r in time_convergence_jobs(quick=True)]
+    assert len(tc) == 4 and set(tc) <= set(keys)
+    assert len(set(keys)) >= len(keys) - 1  # Fig. 3's run is also one of the Fig. 4 sets
+    bare = fe_jobs(quick=True, spheroid=False)
+    assert not {f"{fn.__module__}.{fn.__name__}" for fn, _, _ in bare} & {
+        "tissuemech.fem.spheroid.compress",
+        "tissuemech.compare.calibrate.static_curve",
+    }
