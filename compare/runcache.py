@@ -36,6 +36,7 @@ __all__ = [
     "call",
     "prefetch",
     "cancel_pending",
+    "counts",
     "key",
     "default_dir",
     "configure",
@@ -193,12 +194,36 @@ def call(fn: Callable, kwargs: dict[str, Any], *, repeats: int = 1) -> Timed:
     repeats = max(int(repeats), 1)
     k = _job_key(fn, kwargs, repeats) if (_enabled() or _PENDING) else None
     fut = _PENDING.pop(k, None) if k else None
-    if fut is not None and not fut.cancel():
-        try:
-            return fut.result()
-        except Exception:  # the run failed over there: run it here, where its error reaches the caller
-            pass
-    return _cached_run(fn, kwargs, repeats)
+    if fut is not None:
+        if not fut.cancel():
+            try:
+                timed = fut.result()
+                _count("prefetched" if not timed.cached else "cached")
+                return timed
+            except Exception:  # the run failed over there: run it here, where its error reaches the caller
+                _count("failed in the other process")
+        else:
+            _count("taken back")
+    timed = _cached_run(fn, kwargs, repeats)
+    _count("cached" if timed.cached else "run here")
+    return timed
+
+
+_COUNTS: dict[str, int] = {}
+
+
+def _count(what: str) -> None:
+    _COUNTS[what] = _COUNTS.get(what, 0) + 1
+
+
+def counts(reset: bool = False) -> dict[str, int]:
+    """How the runs :func:`call` returned were obtained in this process: "cached" (read from the cache), "prefetched"
+    (computed by :func:`prefetch`'s executor), "run here", and how many prefetched runs were "taken back" (not yet
+    started there) or "failed in the other process" (then run here too). ``reset``: start counting anew."""
+    out = dict(_COUNTS)
+    if reset:
+        _COUNTS.clear()
+    return out
 
 
 def _cached_run(fn: Callable, kwargs: dict[str, Any], repeats: int) -> Timed:

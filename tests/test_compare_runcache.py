@@ -67,3 +67,11 @@ def test_prefetched_runs_are_collected(cache):
     assert float(got.result) == 9.0 and len(CALLS) == 1
     assert runcache.call(square, dict(x=3.0)).cached
     runcache.cancel_pending()
+
+
+def test_counts_say_where_each_run_came_from(cache):
+    runcache.counts(reset=True)
+    runcache.call(square, dict(x=3.0))
+    runcache.call(square, dict(x=3.0))
+    assert runcache.counts() == {"run here": 1, "cached": 1}
+    assert runcache.counts(reset=True) and runcache.counts() == {}

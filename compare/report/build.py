@@ -163,6 +163,7 @@ def _build(out_dir: str | Path, *, quick: bool, progress: bool) -> dict:
     from tqdm.auto import tqdm
 
     import tissuemech.reduced  # noqa: F401  (float64 JAX)
+    from tissuemech.compare import runcache
     from tissuemech.compare.report import accuracy, blastula, seed_comparison, spheroid, stability, tension
     from tissuemech.compare.studies import stability as stability_study
     from tissuemech.compare.studies.accuracy import spheroid_available
@@ -170,6 +171,7 @@ def _build(out_dir: str | Path, *, quick: bool, progress: bool) -> dict:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     t_start = time.perf_counter()
+    runcache.counts(reset=True)
     reason = spheroid_available()
     done: dict[str, Section] = {}
     bar = tqdm(total=13 if reason is None else 7, desc="tissuemech report", disable=not progress, unit="step")
@@ -233,6 +235,7 @@ def _build(out_dir: str | Path, *, quick: bool, progress: bool) -> dict:
     total = time.perf_counter() - t_start
     summary["total_wall_s"] = total
     summary["section_times"] = times
+    summary["fe_runs"] = runcache.counts()  # where the FE runs came from: cache, second process, this one
     summary["spheroid_available"] = reason is None
     summary["files"] = sorted(set(written) | {"report.md", "summary.json"})  # every file this run writes
     head = [
