@@ -15,9 +15,10 @@ like sqrt(x): interpolate h in s = sqrt(x), not f in x), and ``metadata`` (JSON:
 the discretisation error = max relative difference of f against an independent finer-level run at
 ``check_alphas``, and the residual of the small-x basis fit h = 1 + sum_k c_k s^k).
 
-``python -m tissuemech.compare.calibrate [--out PATH] [--store DIR] [--n-x N] [--x-max X] [--alphas a,b,..]
+``python -m tissuemech.compare.calibrate [--out PATH] [--store DIR] [--workers N] [--n-x N] [--x-max X] [--alphas a,b,..]
 [--mesh M] [--error-mesh M] [--check-alphas a,b,..] [--reference JSON]`` regenerates it through ``compare.batch``
-(resumable with ``--store``). With ``--reference`` (converged Richardson forces, e.g. tests/data/plate_reference_levels1-3.json)
+(resumable with ``--store``; the table and its finer-level check share one pool of ``--workers`` processes, default every
+core). With ``--reference`` (converged Richardson forces, e.g. tests/data/plate_reference_levels1-3.json)
 the metadata also gets ``model_error_rel`` = half the table's largest error against that reference (the relative
 1-sigma error of F_eq that ``compare.fit`` adds with ``model_error="auto"``; the finer-level check alone does not
 set it).
