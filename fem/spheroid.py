@@ -48,7 +48,7 @@ from tissuemech.fem.linalg import Reuse, Symmetric
 from tissuemech.fem.mesh import FITTED_LEVELS, FITTED_SPLIT, AxiMesh, fitted_mesh
 from tissuemech.fem.output import SpheroidField, SpheroidResult
 from tissuemech.fem.problem import SPHEROID_MARGIN, SceneProblem, check_mesh, mesh_spec, roundoff_floor, secant
-from tissuemech.fem.protocols import Record, force_controlled, record_schedule
+from tissuemech.fem.protocols import FORCE_TOL, Record, force_controlled, record_schedule
 from tissuemech.fem.stepping import Adaptive, Fixed, Step, TimedState
 from tissuemech.fem.surface import SurfaceTension
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
@@ -401,9 +401,10 @@ def compress(
             steps change the force by at most the ramp's largest step) or ``(times, forces)`` (as a measured history
             above), which may remove the force (recovery: at F = 0 the plates leave the ball, whose approach is then
             the plate touching its recovering top, ``in_contact`` False). Every step solves for the approach whose
-            plate force is F(t) to 1e-7 (``fem.protocols.force_controlled``: a secant / regula falsi iteration on
-            the approach around the displacement-controlled step, each trial a full step with its fitted edge; a
-            failure names the step's time (s) and force). ``approach`` (m) is then the observable, ``force`` F(t).
+            plate force is F(t) to 1e-7 (min(1e-7, 1e3 rtol): tighter with a tighter ``rtol``;
+            ``fem.protocols.force_controlled``: a secant / regula falsi iteration on the approach around the
+            displacement-controlled step, each trial a full step with its fitted edge; a failure names the step's
+            time (s) and force). ``approach`` (m) is then the observable, ``force`` F(t).
             ``n_hold`` defaults to 40 here (the creep moves the plate through the hold: the time error is 2nd
             order, on the Fig. 10 creep 4.5e-4 of the approach at 20 hold steps, 1.0e-4 at 40).
             On a level, steps that move the plate by < 5 % of the approach (``PROTOCOL_HOLD``: creep) carry the Maxwell
@@ -651,7 +652,7 @@ def compress(
         assert proto is not None
         steps = _force_steps(
             fit, treat, lambda: _nodal_start(mesh, a0, mat, beta, tau, rtol, gam), beta, tau,
-            lambda t: proto.target(t) / (C * a0**2), times, too_large, load_of, sensed,
+            lambda t: proto.target(t) / (C * a0**2), times, too_large, load_of, sensed, min(FORCE_TOL, 1e3 * rtol),
         )  # fmt: skip
     elif fit is not None:  # every state / step on its own fitted mesh
         if static:
@@ -915,18 +916,17 @@ class _TimeSensing:
             KUU = tpl._with_data(K.data[src], copy=False)
         else:  # the surface tangent added entries: slice
             KUU = sp.csr_matrix(K)[U][:, U]
+        Kf = K[fixed]  # the held rows (K symmetric: also the held columns)
         cols = -R[U]
         plate = self.force_control and act.size > 0
-        if plate:  # the plate moved: u_z = h - Z on the active nodes, dh = -dd
-            vfix = np.zeros(asm.ndof)
-            vfix[fixed] = -1.0
-            cols = np.column_stack([cols, -(K @ vfix)[U]])
+        if plate:  # the plate moved: u_z = h - Z on the active nodes, dh = -dd: the right-hand side K[U, fixed] 1
+            cols = np.column_stack([cols, np.asarray(Kf.sum(axis=0)).ravel()[U]])
         key = U.tobytes()
         approx = self.kept.get(key)
         newton = prob.linear.kept
         if newton is not None and newton.solve is not None and newton.age == 0 and newton.n == U.size:
             approx = getattr(newton.solve, "unrefined", newton.solve)  # Newton factored during this step
-        dxU, solve, its = sens.solve_block(KUU, approx, cols, f"t = {t:.6g} s", tol=TIME_SENSITIVITY_TOL)
+        dxU, solve, its = sens.solve_block(KUU, approx, cols, f"t = {t:.6g} s", tol=TIME_SENSITIVITY_TOL, max_iter=5)
         self.kept = {key: solve}
         self.refinements.append(its)
         if its < 0 and newton is not None:  # a new factorisation: Newton's next step starts from it
@@ -935,11 +935,11 @@ class _TimeSensing:
         dx[U] = dxU
         if plate:
             dx[fixed, -1] = -1.0
-        Kdx = K @ dx
-        dF = -(np.sum(R[fixed], axis=0) + np.sum(Kdx[fixed, :P], axis=0))
+        Kdx = Kf @ dx
+        dF = -(np.sum(R[fixed], axis=0) + np.sum(Kdx[:, :P], axis=0))
         dd = np.zeros(P)
         if plate:
-            F_d = -float(np.sum(Kdx[fixed, -1]))
+            F_d = -float(np.sum(Kdx[:, -1]))
             f_s = -float(np.sum(s.residual[fixed]))  # the scaled force f = F / (C a0^2): df / dln C = -f
             target = np.zeros(P)
             target[0] = -f_s
@@ -1149,11 +1149,12 @@ def _nodal_start(mesh, a0: float, mat: Material, beta, tau, rtol: float, gam: fl
     return PlateStep(s0, prob, float("nan"))
 
 
-def _force_steps(fit, treat, nodal_start, beta, tau, f_of_t, times, too_large, load_of, wrap=None):
+def _force_steps(fit, treat, nodal_start, beta, tau, f_of_t, times, too_large, load_of, wrap=None, tol=FORCE_TOL):
     """The march under the prescribed (scaled) plate force f_of_t(t): every step an outer iteration on the approach
     around the displacement-controlled step (``fem.protocols.force_controlled``), on fitted meshes or node by node.
     ``wrap(start, step)``: the march's step function from the start state and the force-controlled step (node by
-    node: the sensitivities taken as each step is accepted)."""
+    node: the sensitivities taken as each step is accepted); ``tol``: the force's relative tolerance
+    (``fem.protocols.force_controlled``; compress gives min(FORCE_TOL, 1e3 rtol): tighter with a tighter Newton)."""
     if fit is not None:
         assert isinstance(treat, FittedEdge)
         step_to = fitted_stepper(
@@ -1171,6 +1172,7 @@ def _force_steps(fit, treat, nodal_start, beta, tau, f_of_t, times, too_large, l
         f_of_t,
         load_of,
         stiffness=1.0 + float(np.sum(beta)),
+        tol=tol,
     )
     if wrap is not None and fit is None:
         step = wrap(start, step)
