@@ -469,10 +469,14 @@ def compress(
             (1/1)}, "alpha": {...per unit alpha}, "surface_tension": {...per N/m}, "beta" / "tau" (one branch;
             per unit beta, per s) or "beta_1", "tau_1", ...}`` (arrays over the steps; ``fem.sensitivity``: one
             solve per parameter with the converged tangent, the plate held; on fitted meshes the contact edge's
-            motion with the parameters is included, from the residual on the meshes either side of the edge;
-            time runs carry the Maxwell history's sensitivity step by step). Time runs need contact="nodal"
-            for now (across the fitted meshes of a time run the history's sensitivity is not carried yet:
-            ValueError).
+            motion with the parameters is included, from the residual on the meshes either side of the edge).
+            Time runs carry the Maxwell history's sensitivity step by step (closed-form stress derivatives, all
+            parameters one block of right-hand sides refined from a kept factorisation) and also give
+            ``"approach"`` (m per unit parameter: 0 under displacement control); under force control (``force=``)
+            the plate's motion with the parameters is solved for (the force stays F(t): its gradient is 0, the
+            approach, midplane radius and nominal stress move). Time runs need contact="nodal" for now (across
+            the fitted meshes of a time run the history's sensitivity is not carried yet: ValueError). Accuracy
+            and cost: ``tissuemech bench fem-gradient``.
 
     Returns:
         ``SpheroidResult`` with one entry per converged step: ``time`` (s), ``approach`` (m), plate
