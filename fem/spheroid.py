@@ -860,6 +860,7 @@ class _TimeSensing:
         self.dS = np.zeros((P,) + visco0.S_iso.shape)
         self.prev, self.t_prev = visco0, 0.0
         self.kept: dict = {}  # the active set's key -> a factorisation of a recent tangent
+        self.sets: dict = {}  # the active set's key -> (active nodes, held dofs, unknowns, the tangent's gather)
         self.out: list[dict] = []
         self.refinements: list[int] = []  # per step: refinement iterations (-1: the tangent was factored)
 
@@ -880,9 +881,13 @@ class _TimeSensing:
         mat, asm, beta, tau, prev = prob.mat, prob.asm, self.beta, self.tau, self.prev
         P = len(names)
         x, dt = s.x, float(t) - self.t_prev
-        act = np.flatnonzero(s.active)
-        fixed = prob.plane.dofs[act]
-        U = np.setdiff1d(prob.free, fixed)
+        key = s.active.tobytes()
+        if key not in self.sets:  # the held dofs and the unknowns of this active set, and the tangent's gather
+            act = np.flatnonzero(s.active)
+            fixed = prob.plane.dofs[act]
+            U = np.setdiff1d(prob.free, fixed)
+            self.sets = {key: (act, fixed, U, asm.pattern.restricted(U))}
+        act, fixed, U, (src, tpl) = self.sets[key]
         iso, extra = float(s.iso_scale), s.extra_S
         f = asm.f_at(x)
         lin = sens.IsoLinearisation(f, mat.C, mat.alpha)
@@ -915,7 +920,6 @@ class _TimeSensing:
             R[:, 2] += rg
             R[:, 0] -= self.g * rg
         _, K = asm.internal(x, mat, extra_S=extra, iso_scale=iso, tangent=True)
-        src, tpl = asm.pattern.restricted(U)
         if K.nnz == asm.pattern.nnz:
             KUU = tpl._with_data(K.data[src], copy=False)
         else:  # the surface tangent added entries: slice
@@ -925,7 +929,6 @@ class _TimeSensing:
         plate = self.force_control and act.size > 0
         if plate:  # the plate moved: u_z = h - Z on the active nodes, dh = -dd: the right-hand side K[U, fixed] 1
             cols = np.column_stack([cols, np.asarray(Kf.sum(axis=0)).ravel()[U]])
-        key = U.tobytes()
         approx = self.kept.get(key)
         newton = prob.linear.kept
         if newton is not None and newton.solve is not None and newton.age == 0 and newton.n == U.size:
