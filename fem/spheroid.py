@@ -839,7 +839,7 @@ class _TimeSensing:
     the plate moved (dx/dd, every active node's u_z by -1), gives dF/dd, and each parameter's plate motion is
     dd/dtheta = (df/dtheta - dF/dtheta|_d) / (dF/dd); the state's sensitivity is then dx/dtheta|_d + dd/dtheta dx/dd
     (the history's sensitivity carries it). Without contact the approach is the plate touching the ball's top
-    (its largest u_z). ``out``: per accepted step {name: (dF, dr_mid, dd)} (scaled)."""
+    (d = 1 - max(Z + u_z)). ``out``: per accepted step {name: (dF, dr_mid, dd)} (scaled)."""
 
     def __init__(self, prob: BallProblem, force_control: bool = False) -> None:
         self.prob, self.force_control = prob, force_control
@@ -953,9 +953,9 @@ class _TimeSensing:
             dd = (target - dF) / F_d
             dx = dx[:, :P] + dx[:, -1:] * dd[None, :]
             dF = target
-        elif self.force_control:  # the free ball: the plate touches its top, d = max u_z of the candidates
+        elif self.force_control:  # the free ball: the plate touches its top, d = 1 - max(Z + u_z) of the candidates
             top = prob.plane.dofs[int(np.argmin(prob.plane.gap(x, 1.0)))]
-            dd = dx[top, :P].copy()
+            dd = -dx[top, :P]
         eq = 2 * prob.equator
         self.out.append({n: (float(dF[j]), float(dx[eq, j]), float(dd[j])) for j, n in enumerate(names)})
         dS_new = lin.dS(sens.point_increments(asm, dx[:, :P]))
