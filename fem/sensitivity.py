@@ -12,7 +12,11 @@ dg/dtheta = dg/dx . dx/dtheta + dg/dtheta|_x. This module holds the pieces every
   Newton inside: the residual is an explicit smooth function of theta, so the step h ~ 1e-4 theta leaves
   ~1e-8 relative truncation and ~1e-12 round-off; the nonlinear solve is never differenced);
 * :func:`directional`: dg/dx . v of an observable along a direction, by the same central difference;
-* :func:`solve_all`: one LU factorisation of the converged tangent reused for every parameter.
+* :func:`solve_all`: one LU factorisation of the converged tangent reused for every parameter;
+* time runs (``fem.spheroid.compress(..., gradient=True)``): :class:`IsoLinearisation` (the Fung stress and its exact
+  directional derivative in closed form), :func:`point_increments` / :func:`stress_residuals` (B dx at the points
+  and int B^T P dV for a block of directions), :func:`solve_block` (all parameters as one block of right-hand sides,
+  minimal-residual refinement from a kept factorisation, else one new factorisation).
 
 Used by ``fem.blastula.inflate(..., gradient=True)``; verified against central differences of whole runs at
 tight Newton tolerance and against the exact shell's JAX gradient (``tests/test_fem_sensitivity.py``).
