@@ -43,12 +43,12 @@ from tissuemech.fem.contact import (
     top_approach,
 )
 from tissuemech.fem.forms import Material
-from tissuemech.fem.kinematics import invariants
+from tissuemech.fem.kinematics import first_from_second, invariants
 from tissuemech.fem.linalg import Reuse, Symmetric
 from tissuemech.fem.mesh import FITTED_LEVELS, FITTED_SPLIT, AxiMesh, fitted_mesh
 from tissuemech.fem.output import SpheroidField, SpheroidResult
 from tissuemech.fem.problem import SPHEROID_MARGIN, SceneProblem, check_mesh, mesh_spec, roundoff_floor, secant
-from tissuemech.fem.protocols import Record, force_controlled, record_schedule
+from tissuemech.fem.protocols import FORCE_TOL, Record, force_controlled, record_schedule
 from tissuemech.fem.stepping import Adaptive, Fixed, Step, TimedState
 from tissuemech.fem.surface import SurfaceTension
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
@@ -401,9 +401,10 @@ def compress(
             steps change the force by at most the ramp's largest step) or ``(times, forces)`` (as a measured history
             above), which may remove the force (recovery: at F = 0 the plates leave the ball, whose approach is then
             the plate touching its recovering top, ``in_contact`` False). Every step solves for the approach whose
-            plate force is F(t) to 1e-7 (``fem.protocols.force_controlled``: a secant / regula falsi iteration on
-            the approach around the displacement-controlled step, each trial a full step with its fitted edge; a
-            failure names the step's time (s) and force). ``approach`` (m) is then the observable, ``force`` F(t).
+            plate force is F(t) to 1e-7 (min(1e-7, 1e3 rtol): tighter with a tighter ``rtol``;
+            ``fem.protocols.force_controlled``: a secant / regula falsi iteration on the approach around the
+            displacement-controlled step, each trial a full step with its fitted edge; a failure names the step's
+            time (s) and force). ``approach`` (m) is then the observable, ``force`` F(t).
             ``n_hold`` defaults to 40 here (the creep moves the plate through the hold: the time error is 2nd
             order, on the Fig. 10 creep 4.5e-4 of the approach at 20 hold steps, 1.0e-4 at 40).
             On a level, steps that move the plate by < 5 % of the approach (``PROTOCOL_HOLD``: creep) carry the Maxwell
@@ -468,10 +469,14 @@ def compress(
             (1/1)}, "alpha": {...per unit alpha}, "surface_tension": {...per N/m}, "beta" / "tau" (one branch;
             per unit beta, per s) or "beta_1", "tau_1", ...}`` (arrays over the steps; ``fem.sensitivity``: one
             solve per parameter with the converged tangent, the plate held; on fitted meshes the contact edge's
-            motion with the parameters is included, from the residual on the meshes either side of the edge;
-            time runs carry the Maxwell history's sensitivity step by step). Time runs need contact="nodal"
-            for now (across the fitted meshes of a time run the history's sensitivity is not carried yet:
-            ValueError).
+            motion with the parameters is included, from the residual on the meshes either side of the edge).
+            Time runs carry the Maxwell history's sensitivity step by step (closed-form stress derivatives, all
+            parameters one block of right-hand sides refined from a kept factorisation) and also give
+            ``"approach"`` (m per unit parameter: 0 under displacement control); under force control (``force=``)
+            the plate's motion with the parameters is solved for (the force stays F(t): its gradient is 0, the
+            approach, midplane radius and nominal stress move). Time runs need contact="nodal" for now (across
+            the fitted meshes of a time run the history's sensitivity is not carried yet: ValueError). Accuracy
+            and cost: ``tissuemech bench fem-gradient``.
 
     Returns:
         ``SpheroidResult`` with one entry per converged step: ``time`` (s), ``approach`` (m), plate
@@ -572,11 +577,6 @@ def compress(
     level = _level(mesh)
     warn_small_approach(_largest_x(proto, d_max, displacement, ramp_time, a0, C), level)
     treat = contact_treatment(contact if contact is not None else ("fitted" if level is not None else "nodal"))
-    if gradient and force is not None:
-        raise ValueError(
-            "gradient=True under force control is not carried yet (the approach moves with the parameters): use a "
-            "displacement-controlled run (a number, a function of t or a measured history (times, approaches))"
-        )
     if gradient and not static and isinstance(treat, FittedEdge):
         raise ValueError(
             "gradient=True in a time run needs contact='nodal' (one fixed mesh): the sensitivity of the Maxwell "
@@ -643,10 +643,20 @@ def compress(
         return f"delta = {dfun(t1) * 1e6:.4g} um" if static else f"t = {t1:.6g} s, delta = {dfun(t1) * 1e6:.4g} um"
 
     steps: list[Step[PlateStep[BallProblem]]]
-    if proto is not None and proto.kind == "force":  # an outer iteration on the approach per step (fem.protocols)
+    sensing: list[_TimeSensing] = []  # a time run's sensitivities, taken as each step is accepted (node by node)
+    fc = proto is not None and proto.kind == "force"
+
+    def sensed(start: PlateStep[BallProblem], step: Callable) -> Callable:
+        if not gradient or static:
+            return step
+        sensing.append(_TimeSensing(start.problem, fc))
+        return sensing[0].wrap(step)
+
+    if fc:  # an outer iteration on the approach per step (fem.protocols)
+        assert proto is not None
         steps = _force_steps(
             fit, treat, lambda: _nodal_start(mesh, a0, mat, beta, tau, rtol, gam), beta, tau,
-            lambda t: proto.target(t) / (C * a0**2), times, too_large, load_of,
+            lambda t: proto.target(t) / (C * a0**2), times, too_large, load_of, sensed, min(FORCE_TOL, 1e3 * rtol),
         )  # fmt: skip
     elif fit is not None:  # every state / step on its own fitted mesh
         if static:
@@ -665,7 +675,7 @@ def compress(
         ) -> tuple[PlateStep[BallProblem], int]:
             return nodal_step(old, prev, dscaled(t1), None if static else t1 - t0, load_of(t1))
 
-        steps = march(step, start, times, too_large=too_large)
+        steps = march(sensed(start, step), start, times, too_large=too_large)
     modes = tuple(
         ("fitted" if np.isfinite(st.state.edge) else "nodal") if st.state.state.active.any() else "none" for st in steps
     )
@@ -729,7 +739,7 @@ def compress(
     area = np.pi * col["midplane_radius"] ** 2
     grad = None
     if gradient and not static:
-        per_state = _time_sensitivities([st.state for st in steps], list(col["time"]), beta, tau)
+        grad = _time_gradients(sensing[0].out, col, a0, C, beta.size, fc)
     elif gradient:
         per_state = []
         for st in steps:
@@ -739,7 +749,6 @@ def compress(
                 moved = _moved(fit, e) if fit is not None and np.isfinite(e) else None
                 done = st.state.problem.sensitivities(st.state.state, moved)
             per_state.append(done)
-    if gradient:
         grad = _gradients(per_state, col, a0, C, float(kappa), float(surface_tension), beta.size)
     touching = np.array([m_ != "none" for m_ in modes])
     return SpheroidResult(
@@ -805,87 +814,188 @@ def branch_names(n_branches: int) -> list[tuple[str, str, int]]:
     return [(f"beta_{m + 1}", f"tau_{m + 1}", m) for m in range(n_branches)]
 
 
-def _time_sensitivities(states: list, times: list[float], beta: np.ndarray, tau: np.ndarray) -> list[dict]:
+# the relative residual of a time run's sensitivity solves: on Fig. 10 (default level) the force gradients then differ
+# from those at 1e-12 by <= 6e-9 (1e-7: 4.5e-8), and the refinement from the last factorisation takes 3-4 iterations
+TIME_SENSITIVITY_TOL = 1e-8
+
+
+class _TimeSensing:
     """Forward sensitivities through the time steps of a node-by-node run on one fixed mesh (scaled: plate force,
-    midplane radius) to alpha, k = kappa / C, g = gamma / (C a0) and each branch's beta_m and tau_m (s).
+    midplane radius, plate displacement d = delta / (2 a0)) to ln C (at fixed SI kappa and gamma: k = kappa / C and
+    g = gamma / (C a0) move as -k, -g), alpha, g and each branch's beta_m and tau_m (s), taken step by step as the
+    march accepts each state (:meth:`add`), while the problem's Newton factorisation of it is at hand.
 
     Per step, with the step's active set held: K dx/dtheta = -(dr/dtheta), where r depends on theta explicitly
-    (alpha, k, g) and through the step's algorithmic stress S = S_vol + iso_scale S_iso + extra_S (affine in
-    both: their derivatives enter as one exact residual difference), with iso_scale = 1 + sum_m b_m and extra_S =
-    sum_m (decay_m Q_m^n - b_m S_iso^n): the branch history (Q_m, S_iso) is carried with its own sensitivity,
-    dQ_m^{n+1} = d(decay_m) Q_m^n + decay_m dQ_m^n + d(b_m) (S^{n+1} - S^n) + b_m (dS^{n+1} - dS^n)."""
-    prob: BallProblem = states[0].problem
-    mat, asm = prob.mat, prob.asm
-    names = ["alpha", "kappa"] + ["surface_tension"] * bool(prob.asm.surface is not None)
-    names += [n for b, t, _ in branch_names(beta.size) for n in (b, t)]
-    which = {b: ("beta", m) for b, _, m in branch_names(beta.size)} | {
-        t: ("tau", m) for _, t, m in branch_names(beta.size)
-    }
-    tension = SurfaceTension(prob.m.X, prob.m.edges["outer"], 1.0)
-    visco0 = prob.maxwell_initial()
-    dQ = {n: np.zeros_like(visco0.Q) for n in names}
-    dS = {n: np.zeros_like(visco0.S_iso) for n in names}
-    prev, t_prev, out = visco0, 0.0, []
-    kept = sens.KeptLU()  # one factorisation while the active set stays (the hold's tangents change little)
-    for st, t in zip(states, times):
-        s = st.state
-        x, dt = s.x, float(t) - t_prev
-        fixed = prob.plane.dofs[np.flatnonzero(s.active)]
-        U = np.setdiff1d(prob.free, fixed)
-        iso, extra = s.iso_scale, s.extra_S
+    (ln C through k and g, alpha through W' = exp(alpha (Ibar - 3))) and through the step's algorithmic stress
+    S = S_vol + iso_scale S_iso + extra_S (affine in both), with iso_scale = 1 + sum_m b_m and extra_S = sum_m
+    (decay_m Q_m^n - b_m S_iso^n): the branch history (Q_m, S_iso) is carried with its own sensitivity,
+    dQ_m^{n+1} = d(decay_m) Q_m^n + decay_m dQ_m^n + d(b_m) (S^{n+1} - S^n) + b_m (dS^{n+1} - dS^n). Every
+    derivative is in closed form (``fem.sensitivity.IsoLinearisation``: the stress and its directional derivative,
+    no difference quotient); all parameters are one block of right-hand sides, solved by refinement from a kept
+    factorisation against the step's exact tangent (``fem.sensitivity.solve_block``); a new factorisation (when
+    refinement is slow) is handed to the problem's Newton as its kept factor for the next step.
 
-        def res(m: Material = mat, iso: float = iso, extra=extra) -> np.ndarray:
-            return asm.internal(x, m, extra_S=extra, iso_scale=iso, tangent=False)[0]
+    ``force_control``: the plate force is prescribed (scaled f = F / (C a0^2), so df/dln C = -f): one more column,
+    the plate moved (dx/dd, every active node's u_z by -1), gives dF/dd, and each parameter's plate motion is
+    dd/dtheta = (df/dtheta - dF/dtheta|_d) / (dF/dd); the state's sensitivity is then dx/dtheta|_d + dd/dtheta dx/dd
+    (the history's sensitivity carries it). Without contact the approach is the plate touching the ball's top
+    (d = 1 - max(Z + u_z)). ``out``: per accepted step {name: (dF, dr_mid, dd)} (scaled)."""
 
-        _, K = asm.internal(x, mat, extra_S=extra, iso_scale=iso, tangent=True)
-        K = sp.csr_matrix(K)
+    def __init__(self, prob: BallProblem, force_control: bool = False) -> None:
+        self.prob, self.force_control = prob, force_control
+        beta, tau = prob.beta, prob.tau
+        self.beta, self.tau = beta, tau
+        asm = prob.asm
+        self.g = asm.surface.gamma if asm.surface is not None else 0.0
+        names = ["lnC", "alpha"] + ["surface_tension"] * bool(self.g)
+        names += [n for b, t, _ in branch_names(beta.size) for n in (b, t)]
+        self.names = names
+        self.which = {b: ("beta", m) for b, _, m in branch_names(beta.size)} | {
+            t: ("tau", m) for _, t, m in branch_names(beta.size)
+        }
+        self.tension = SurfaceTension(prob.m.X, prob.m.edges["outer"], 1.0) if self.g else None
+        visco0 = prob.maxwell_initial()
+        P = len(names)
+        self.dQ = np.zeros((P,) + visco0.Q.shape)
+        self.dS = np.zeros((P,) + visco0.S_iso.shape)
+        self.prev, self.t_prev = visco0, 0.0
+        self.kept: dict = {}  # the active set's key -> a factorisation of a recent tangent
+        self.sets: dict = {}  # the active set's key -> (active nodes, held dofs, unknowns, the tangent's gather)
+        self.out: list[dict] = []
+        self.refinements: list[int] = []  # per step: refinement iterations (-1: the tangent was factored)
+
+    def wrap(self, step: Callable) -> Callable:
+        """The march's step function with the sensitivities of every state it returns (march accepts every state a
+        step returns: a failed step raises)."""
+
+        def sensed(t0, old, t1, prev):
+            new, its = step(t0, old, t1, prev)
+            self.add(new.state, t1)
+            return new, its
+
+        return sensed
+
+    def add(self, s: PlateState, t: float) -> None:
+        """The sensitivities of the accepted state ``s`` at time t (s), the step after the last one added."""
+        prob, names, which = self.prob, self.names, self.which
+        mat, asm, beta, tau, prev = prob.mat, prob.asm, self.beta, self.tau, self.prev
+        P = len(names)
+        x, dt = s.x, float(t) - self.t_prev
+        key = s.active.tobytes()
+        if key not in self.sets:  # the held dofs and the unknowns of this active set, and the tangent's gather
+            act = np.flatnonzero(s.active)
+            fixed = prob.plane.dofs[act]
+            U = np.setdiff1d(prob.free, fixed)
+            self.sets = {key: (act, fixed, U, asm.pattern.restricted(U))}
+        act, fixed, U, (src, tpl) = self.sets[key]
+        iso, extra = float(s.iso_scale), s.extra_S
+        f = asm.f_at(x)
+        lin = sens.IsoLinearisation(f, mat.C, mat.alpha)
+        # the explicit dr/dtheta: stresses (P, n_el, n_qp, 5) assembled as one block
+        Pst = np.zeros((P,) + f.shape)
+        Pst[1] = iso * lin.d_alpha[..., None] * lin.P
         coef = sens.maxwell_coefficients(beta, tau, dt) if beta.size else None
-        r0 = res()
-        rhs = {}
-        for n in names:
-            r = np.zeros(asm.ndof)
-            if n == "alpha":
-                r += sens.residual_derivative(lambda a: res(mat._replace(alpha=a)), mat.alpha)
-            elif n == "kappa":
-                r += sens.residual_derivative(lambda k: res(mat._replace(kappa=k)), mat.kappa)
-            elif n == "surface_tension":
-                r += tension.residual(x, asm.ndof)
-            if coef is not None:
-                decay, b, ddecay, db_dbeta, db_dtau = coef
-                d_iso = 0.0
-                d_extra = np.einsum("m,m...->...", decay, dQ[n]) - b.sum() * dS[n]
+        dQ, dS = self.dQ, self.dS
+        if coef is not None:
+            decay, b, ddecay, db_dbeta, db_dtau = coef
+            d_extra = np.einsum("m,pm...->p...", decay, dQ) - b.sum() * dS
+            d_iso = np.zeros(P)
+            for j, n in enumerate(names):
                 if n in which:
                     kind, m = which[n]
                     if kind == "beta":
-                        d_iso += db_dbeta[m]
-                        d_extra = d_extra - db_dbeta[m] * prev.S_iso
+                        d_iso[j] = db_dbeta[m]
+                        d_extra[j] -= db_dbeta[m] * prev.S_iso
                     else:
-                        d_iso += db_dtau[m]
-                        d_extra = d_extra + ddecay[m] * prev.Q[m] - db_dtau[m] * prev.S_iso
-                r += res(mat, iso + d_iso, extra + d_extra) - r0  # exact: r is affine in (iso_scale, extra_S)
-            rhs[n] = r
-        KUU = K[U][:, U]
-        dxU = sens.solve_all(KUU, {n: v[U] for n, v in rhs.items()}, f"t = {t:.6g} s", kept.solver(KUU, U))
-        KfU = K[fixed][:, U]
-        step_out, S_new = {}, s.visco.S_iso
-        for n in names:
-            dx = np.zeros_like(x)
-            dx[U] = dxU[n]
-            step_out[n] = (-float(np.sum(rhs[n][fixed] + KfU @ dxU[n])), float(dx[2 * prob.equator]))
-            dS_new = sens.directional_field(lambda y: asm.iso_S(y, mat), x, dx)
-            if n == "alpha":
-                dS_new = dS_new + sens.residual_derivative(lambda a: asm.iso_S(x, mat._replace(alpha=a)), mat.alpha)
-            if coef is not None:
-                decay, b, ddecay, db_dbeta, db_dtau = coef
-                q = decay[:, None, None, None] * dQ[n] + b[:, None, None, None] * (dS_new - dS[n])[None]
+                        d_iso[j] = db_dtau[m]
+                        d_extra[j] += ddecay[m] * prev.Q[m] - db_dtau[m] * prev.S_iso
+            Pst += d_iso[:, None, None, None] * lin.P[None]
+            Pst += first_from_second(f, d_extra)
+        R = sens.stress_residuals(asm, Pst)
+        # ln C: k and g scale as 1 / C; r_q = ... - M q / k, so dr_q / dln C = -M q / k (and -g dr/dg)
+        q = x[asm.qdofs]
+        R[asm.n_u :, 0] = -(np.matmul(asm.M, q[:, :, None])[..., 0] / mat.kappa).ravel()
+        if self.tension is not None:
+            rg = self.tension.residual(x, asm.ndof)
+            R[:, 2] += rg
+            R[:, 0] -= self.g * rg
+        _, K = asm.internal(x, mat, extra_S=extra, iso_scale=iso, tangent=True)
+        if K.nnz == asm.pattern.nnz:
+            KUU = tpl._with_data(K.data[src], copy=False)
+        else:  # the surface tangent added entries: slice
+            KUU = sp.csr_matrix(K)[U][:, U]
+        Kf = K[fixed]  # the held rows (K symmetric: also the held columns)
+        cols = -R[U]
+        plate = self.force_control and act.size > 0
+        if plate:  # the plate moved: u_z = h - Z on the active nodes, dh = -dd: the right-hand side K[U, fixed] 1
+            cols = np.column_stack([cols, np.asarray(Kf.sum(axis=0)).ravel()[U]])
+        approx = self.kept.get(key)
+        newton = prob.linear.kept
+        if newton is not None and newton.solve is not None and newton.age == 0 and newton.n == U.size:
+            approx = getattr(newton.solve, "unrefined", newton.solve)  # Newton factored during this step
+        dxU, solve, its = sens.solve_block(KUU, approx, cols, f"t = {t:.6g} s", tol=TIME_SENSITIVITY_TOL, max_iter=5)
+        self.kept = {key: solve}
+        self.refinements.append(its)
+        if its < 0 and newton is not None:  # a new factorisation: Newton's next step starts from it
+            newton.store(solve, U.size)
+        dx = np.zeros((asm.ndof, cols.shape[1]))
+        dx[U] = dxU
+        if plate:
+            dx[fixed, -1] = -1.0
+        Kdx = Kf @ dx
+        dF = -(np.sum(R[fixed], axis=0) + np.sum(Kdx[:, :P], axis=0))
+        dd = np.zeros(P)
+        if plate:
+            F_d = -float(np.sum(Kdx[:, -1]))
+            f_s = -float(np.sum(s.residual[fixed]))  # the scaled force f = F / (C a0^2): df / dln C = -f
+            target = np.zeros(P)
+            target[0] = -f_s
+            dd = (target - dF) / F_d
+            dx = dx[:, :P] + dx[:, -1:] * dd[None, :]
+            dF = target
+        elif self.force_control:  # the free ball: the plate touches its top, d = 1 - max(Z + u_z) of the candidates
+            top = prob.plane.dofs[int(np.argmin(prob.plane.gap(x, 1.0)))]
+            dd = -dx[top, :P]
+        eq = 2 * prob.equator
+        self.out.append({n: (float(dF[j]), float(dx[eq, j]), float(dd[j])) for j, n in enumerate(names)})
+        dS_new = lin.dS(sens.point_increments(asm, dx[:, :P]))
+        dS_new[1] += lin.d_alpha[..., None] * lin.S
+        if coef is not None:
+            decay, b, ddecay, db_dbeta, db_dtau = coef
+            jump = s.visco.S_iso - prev.S_iso
+            dQ = decay[None, :, None, None, None] * dQ + b[None, :, None, None, None] * (dS_new - dS)[:, None]
+            for j, n in enumerate(names):
                 if n in which:
                     kind, m = which[n]
-                    jump = S_new - prev.S_iso
-                    q[m] += db_dbeta[m] * jump if kind == "beta" else ddecay[m] * prev.Q[m] + db_dtau[m] * jump
-                dQ[n] = q
-            dS[n] = dS_new
-        out.append(step_out)
-        prev, t_prev = s.visco, float(t)
+                    dQ[j, m] += db_dbeta[m] * jump if kind == "beta" else ddecay[m] * prev.Q[m] + db_dtau[m] * jump
+        self.dQ, self.dS = dQ, dS_new
+        self.prev, self.t_prev = s.visco, float(t)
+
+
+def _time_gradients(per_state: list[dict], col: dict, a0: float, C: float, n_branches: int, force_control: bool):
+    """SI sensitivities of a time run from :func:`_time_sensitivities`' scaled ones: F = C a0^2 F~, r_mid = a0 r~,
+    delta = 2 a0 d; d/dC = (d/dln C) / C with F~'s own scaling (dF/dC = F / C + a0^2 dF~/dln C), gamma = C a0 g."""
+    F, rm = col["force"], col["midplane_radius"]
+    names = ["C", "alpha"] + ["surface_tension"] * ("surface_tension" in per_state[0])
+    names += [n for b, t, _ in branch_names(n_branches) for n in (b, t)]
+
+    def scaled(name: str, which: int) -> np.ndarray:
+        return np.array([d["lnC" if name == "C" else name][which] for d in per_state])
+
+    out = {}
+    for n in names:
+        per = {"C": 1.0 / C, "surface_tension": 1.0 / (C * a0)}.get(n, 1.0)  # d(scaled parameter) / d(SI one)
+        dF = C * a0**2 * scaled(n, 0) * per + (F / C if n == "C" else 0.0)
+        if force_control:
+            dF = np.zeros_like(F)  # the force is prescribed
+        dr = a0 * scaled(n, 1) * per
+        area = np.pi * rm**2
+        out[n] = {
+            "force": dF,
+            "midplane_radius": dr,
+            "nominal_stress": dF / area - 2 * F / area / rm * dr,
+            "approach": 2 * a0 * scaled(n, 2) * per,
+        }
     return out
 
 
@@ -1046,9 +1156,12 @@ def _nodal_start(mesh, a0: float, mat: Material, beta, tau, rtol: float, gam: fl
     return PlateStep(s0, prob, float("nan"))
 
 
-def _force_steps(fit, treat, nodal_start, beta, tau, f_of_t, times, too_large, load_of):
+def _force_steps(fit, treat, nodal_start, beta, tau, f_of_t, times, too_large, load_of, wrap=None, tol=FORCE_TOL):
     """The march under the prescribed (scaled) plate force f_of_t(t): every step an outer iteration on the approach
-    around the displacement-controlled step (``fem.protocols.force_controlled``), on fitted meshes or node by node."""
+    around the displacement-controlled step (``fem.protocols.force_controlled``), on fitted meshes or node by node.
+    ``wrap(start, step)``: the march's step function from the start state and the force-controlled step (node by
+    node: the sensitivities taken as each step is accepted); ``tol``: the force's relative tolerance
+    (``fem.protocols.force_controlled``; compress gives min(FORCE_TOL, 1e3 rtol): tighter with a tighter Newton)."""
     if fit is not None:
         assert isinstance(treat, FittedEdge)
         step_to = fitted_stepper(
@@ -1066,7 +1179,10 @@ def _force_steps(fit, treat, nodal_start, beta, tau, f_of_t, times, too_large, l
         f_of_t,
         load_of,
         stiffness=1.0 + float(np.sum(beta)),
+        tol=tol,
     )
+    if wrap is not None and fit is None:
+        step = wrap(start, step)
     return march(step, start, times, too_large=too_large)
 
 

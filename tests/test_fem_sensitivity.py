@@ -182,3 +182,115 @@ def test_time_run_gradient_names_one_branch_as_the_fit_does():
     r = fs.compress(branches=[(0.5, 2.0)], contact="nodal", gradient=True, n_ramp=2, n_hold=3, **kw)
     assert set(r.gradient) == {"C", "alpha", "beta", "tau"}
     assert np.all(r.gradient["beta"]["force"] > 0)  # a stiffer branch pushes back harder at every step
+
+
+@pytest.mark.parametrize("alpha", [0.2, 1.4])
+def test_closed_form_stress_derivative_equals_the_stress_differences(alpha):
+    """The isochoric second Piola stress and its directional derivative in closed form (what the time runs' sensitivities
+    use) equal the constitutive module's stress and its central differences (step 1e-6: truncation ~1e-12)."""
+    from tissuemech.fem import constitutive as cm
+
+    rng = np.random.default_rng(3)
+    f = np.array([1.0, 0.0, 0.0, 1.0, 1.0]) + 0.2 * rng.standard_normal((40, 5))
+    lin = sens.IsoLinearisation(f, 1.0, alpha)
+    np.testing.assert_allclose(lin.S, cm.iso_second_piola(f, 1.0, alpha), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(lin.P, cm.iso_stress(f, 1.0, alpha)[0], rtol=1e-12, atol=1e-12)
+    df = rng.standard_normal((3, 40, 5))
+    h = 1e-6
+    fd = np.stack([(cm.iso_second_piola(f + h * d, 1.0, alpha) - cm.iso_second_piola(f - h * d, 1.0, alpha)) / (2 * h)
+                   for d in df])  # fmt: skip
+    assert np.max(np.abs(lin.dS(df) - fd)) <= 1e-8 * np.max(np.abs(fd))
+    fa = (cm.iso_second_piola(f, 1.0, alpha + h) - cm.iso_second_piola(f, 1.0, alpha - h)) / (2 * h)
+    assert np.max(np.abs(lin.d_alpha[..., None] * lin.S - fa)) <= 1e-8 * np.max(np.abs(fa))
+
+
+def test_block_solve_refines_from_a_nearby_factor_and_names_a_singular_state():
+    from tissuemech.fem.linalg import symmetric_factor
+
+    rng = np.random.default_rng(0)
+    n = 60
+    M = sp.random(n, n, density=0.1, random_state=1)
+    K = sp.csr_matrix(M @ M.T + 10 * sp.eye(n))
+    near = symmetric_factor(sp.csr_matrix(K + 0.05 * sp.eye(n)))
+    b = rng.standard_normal((n, 3))
+    X, _, its = sens.solve_block(K, near, b, "t = 1 s", tol=1e-12, max_iter=10)
+    assert its > 0  # refined, not factored again
+    np.testing.assert_allclose(K @ X, b, atol=1e-10 * np.max(np.abs(b)))
+    with pytest.raises(RuntimeError, match="t = 2 s"):
+        sens.solve_block(sp.csr_matrix((n, n)), None, b, "t = 2 s")
+
+
+CREEP = dict(radius=A0, force=3e-6, ramp_time=1.0, end_time=30.0, mesh="coarse", contact="nodal", n_ramp=4, n_hold=8)
+
+
+def test_force_control_gradient_moves_the_approach_not_the_force():
+    """Under force control the force is prescribed: its gradient is 0; a stiffer material (C, beta) gives a smaller
+    approach at every step, and the nominal stress F / (pi r_mid^2) falls as the midplane widens."""
+    from tissuemech.fem import spheroid as fs
+
+    r = fs.compress(C=150.0, alpha=1.4, branches=[(0.5, 2.0)], gradient=True, **{**CREEP, "n_hold": 3})
+    g = r.gradient
+    assert set(g) == {"C", "alpha", "beta", "tau"}
+    for name in g:
+        assert np.all(g[name]["force"] == 0.0)
+        rm, F = r.midplane_radius, r.force
+        np.testing.assert_allclose(
+            g[name]["nominal_stress"], -2 * F / (np.pi * rm**3) * g[name]["midplane_radius"], rtol=1e-12
+        )
+    assert np.all(g["C"]["approach"] < 0) and np.all(g["beta"]["approach"] < 0)
+
+
+@pytest.mark.slow
+def test_force_control_gradient_equals_central_differences_of_whole_runs():
+    """A creep under force control (3 uN, alpha = 1.4, two branches, coarse, node by node): d approach / d theta,
+    d r_mid / d theta and d sigma~ / d theta for C, alpha and each branch's beta and tau within 1e-6 of the largest
+    central difference of whole runs at rtol 1e-13 (force control then to 1e-10) at every step (measured <= 4e-7:
+    the nominal stress's differences carry the force tolerance)."""
+    from tissuemech.fem import spheroid as fs
+
+    base = {"C": 150.0, "alpha": 1.4}
+    br = [(0.8, 0.5), (0.3, 20.0)]
+    g = fs.compress(branches=br, gradient=True, **base, **CREEP).gradient
+    values = {**base, "beta_1": 0.8, "tau_1": 0.5, "beta_2": 0.3, "tau_2": 20.0}
+
+    def run(name, v):
+        p, b = dict(base), [list(x) for x in br]
+        if name in p:
+            p[name] = v
+        else:
+            kind, m = name.split("_")
+            b[int(m) - 1][0 if kind == "beta" else 1] = v
+        return fs.compress(branches=[tuple(x) for x in b], rtol=1e-13, **p, **CREEP)
+
+    for name, v in values.items():
+        h = 1e-4 * v
+        rp, rm = run(name, v + h), run(name, v - h)
+        for obs in ("approach", "midplane_radius", "nominal_stress"):
+            fd = (getattr(rp, obs) - getattr(rm, obs)) / (2 * h)
+            assert np.max(np.abs(g[name][obs] - fd)) <= 1e-6 * np.max(np.abs(fd)), (name, obs)
+
+
+@pytest.mark.slow
+def test_force_removed_gradient_follows_the_free_top():
+    """A force history that removes the force (3 uN held 4 s, then 0: the plates leave the recovering ball, whose
+    approach is the plate touching its top): d approach / d theta within 1e-6 of the largest central difference of
+    whole runs at every step, the free steps included (measured <= 1.1e-7)."""
+    from tissuemech.fem import spheroid as fs
+
+    F = (np.array([0.0, 1.0, 5.0, 5.5, 12.0]), np.array([0.0, 3e-6, 3e-6, 0.0, 0.0]))
+    kw = dict(radius=A0, force=F, mesh="coarse", contact="nodal", n_ramp=4, alpha=1.0)
+    r = fs.compress(C=150.0, branches=[(0.8, 2.0)], gradient=True, **kw)
+    assert not r.in_contact[-1]
+    for name, v in {"C": 150.0, "beta": 0.8, "tau": 2.0}.items():
+        h = 1e-4 * v
+
+        def run(x, name=name):
+            p = {"C": 150.0, "branches": [(0.8, 2.0)]}
+            if name == "C":
+                p["C"] = x
+            else:
+                p["branches"] = [(x, 2.0)] if name == "beta" else [(0.8, x)]
+            return fs.compress(rtol=1e-13, **p, **kw).approach
+
+        fd = (run(v + h) - run(v - h)) / (2 * h)
+        assert np.max(np.abs(r.gradient[name]["approach"] - fd)) <= 1e-6 * np.max(np.abs(fd)), name
