@@ -30,7 +30,7 @@ import logging
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -52,6 +52,7 @@ __all__ = [
     "IndentationResult",
     "IndentProblem",
     "FittedEdges",
+    "fitted_states",
     "make_mesh",
     "zone_mesh",
     "hertz_split",
@@ -331,6 +332,123 @@ class FittedEdges:
         )
 
 
+def fitted_states(
+    *,
+    radius: float,
+    probe_radius: float,
+    C: float,
+    alphas: Sequence[float],
+    approaches: Sequence[float] | np.ndarray,
+    kappa: float = 2.2e9,
+    mesh: str | int = 2,
+    rtol: float = 1e-10,
+) -> dict[str, np.ndarray]:
+    """Static equilibria with fitted contact edges (``FittedEdges``) on a grid of approaches and Fung exponents.
+
+    The states are continued in both directions: each alpha's state at an approach starts from its own state at the
+    previous approach (edges grown like sqrt(delta)), the first one (or a retry after a failed solve) from the
+    previous alpha's state at the same approach. A strain-stiffening ball (alpha ~ 1.5) under a small probe is
+    solved on levels >= 2 only this way (started from the uniform squeeze, its Newton iteration diverges). An
+    alpha whose state fails at some approach stops there: its later entries are NaN (a table generator keeps the
+    approaches every alpha reached).
+
+    Args:
+        radius: the ball's radius a0 (m).
+        probe_radius: the probe's radius R_p (m).
+        C: Fung stiffness (Pa).
+        alphas: Fung exponents (dimensionless, >= 0), in the order of the continuation (increasing is best).
+        approaches: increasing approaches delta (m), X_MIN <= delta / (2 a0) <= X_MAX.
+        kappa: bulk modulus (Pa).
+        mesh: "coarse", "default", "fine" or a level 0..4 (default 2).
+        rtol: Newton's relative residual tolerance.
+
+    Returns:
+        dict: ``approach`` (n_d,) m, ``alpha`` (n_a,), ``force`` (n_a, n_d) N (NaN: not reached),
+        ``contact_radius_probe`` / ``contact_radius_plate`` (n_a, n_d) m, ``wall_time`` (n_a, n_d) s.
+
+    Raises:
+        ValueError: an input out of range (the message names the quantity and its unit).
+    """
+    validate_positive("radius (the ball radius a0)", radius, "m")
+    validate_positive("probe_radius (the radius of the spherical probe)", probe_radius, "m")
+    a0, rp, C = float(radius), float(probe_radius), float(C)
+    al = [float(a) for a in alphas]
+    for a in al:
+        validate_material(C, a, kappa)
+    d = np.asarray(approaches, dtype=float)
+    if d.ndim != 1 or d.size == 0 or np.any(~np.isfinite(d)) or np.any(np.diff(d) <= 0):
+        raise ValueError(f"approaches (m) must be a non-empty increasing 1-D list of finite values; got {approaches!r}")
+    _check_approach(float(d[0]), a0, rp, smallest=True)
+    _check_approach(float(d[-1]), a0, rp)
+    level = int(mesh_spec(mesh, MESHES, "or a level 0..4"))
+    if level not in LEVELS:
+        raise ValueError(f"mesh level must be an integer 0..4 (0 coarse, 1 default, 2 fine), got {mesh!r}")
+    fits = [
+        FittedEdges(a0, rp, level, (lambda m: lambda mm: IndentProblem(mm, m, rp / a0, np.zeros(0), np.zeros(0), rtol))(
+            Material(1.0, a, float(kappa) / C)))
+        for a in al
+    ]  # fmt: skip
+    shape = (len(al), d.size)
+    out = {k: np.full(shape, np.nan) for k in ("force", "contact_radius_probe", "contact_radius_plate", "wall_time")}
+    last: list[tuple[tuple[float, float], np.ndarray, float] | None] = [None] * len(al)
+    stopped = [False] * len(al)
+    for j, dj in enumerate(d / a0):
+        here: tuple[tuple[float, float], np.ndarray] | None = None  # the previous alpha's state at this approach
+        for i, fit in enumerate(fits):
+            if stopped[i]:
+                here = None
+                continue
+            w0 = time.perf_counter()
+            starts: list[tuple[Any, Any]] = []
+            if last[i] is not None:
+                e_old, x_old, d_old = last[i]  # type: ignore[misc]
+                starts.append(((e_old[0] * np.sqrt(dj / d_old), e_old[1] * np.sqrt(dj / d_old)), x_old))
+            if here is not None:
+                starts.append(here)
+            if not starts:
+                starts.append((None, None))
+            load = f"alpha = {al[i]:g}, delta = {dj * a0 * 1e6:.4g} um"
+            res = None
+            for e0, x0 in starts:
+                try:
+                    res = fit.solve(dj, e0, x0, load)
+                    break
+                except (NewtonError, ContactError) as err:
+                    log.info("fitted state failed (%s): %s", load, err)
+            if res is None:
+                stopped[i], here = True, None
+                log.warning(
+                    "fitted_states: alpha = %g stops at delta = %.4g um (no converged state)", al[i], dj * a0 * 1e6
+                )
+                continue
+            pb, st, e, _, _ = res
+            ob = pb.observe(st)
+            out["force"][i, j] = ob["force"] * C * a0**2
+            out["contact_radius_probe"][i, j] = ob["contact_radius_probe"] * a0
+            out["contact_radius_plate"][i, j] = ob["contact_radius_plate"] * a0
+            out["wall_time"][i, j] = time.perf_counter() - w0
+            last[i] = (e, st.x, dj)
+            here = (e, st.x)
+    return dict(approach=d, alpha=np.asarray(al), **out)
+
+
+def _check_approach(d_max: float, a0: float, rp: float, smallest: bool = False) -> None:
+    """The approach (m) inside what the scene resolves: X_MIN <= delta / (2 a0) <= X_MAX (only the upper bound for
+    the largest of a run unless ``smallest``), the probe-ball depth below half its effective radius."""
+    x = d_max / (2 * a0)
+    if (smallest and x < X_MIN) or x > X_MAX or (not smallest and x < X_MIN):
+        raise ValueError(
+            f"the approach {d_max:g} m is {x:.3g} of the ball's diameter {2 * a0:g} m; the FE indentation "
+            f"covers {X_MIN:g} to {X_MAX:g} of it (check the units: m)"
+        )
+    d1_max = hertz_split(d_max / a0, rp / a0)[0] * a0
+    if d1_max > 0.5 * rp / (1 + rp / a0):
+        raise ValueError(
+            f"displacement {d_max:g} m pushes the probe (radius {rp:g} m) about {d1_max:g} m into the ball, more than "
+            "half its effective radius R_p a0 / (R_p + a0): beyond the contacts this scene resolves"
+        )
+
+
 @dataclass
 class IndentationResult:
     """:func:`indent`'s result, one entry per converged step (SI: s, m, N).
@@ -445,18 +563,7 @@ def indent(
         d_max = float(displacement)
         tr = float(ramp_time) if ramp_time is not None else 1.0
         delta_fn = lambda t: d_max * min(float(t) / tr, 1.0)
-    x_max = d_max / (2 * a0)
-    if not X_MIN <= x_max <= X_MAX:
-        raise ValueError(
-            f"the largest approach {d_max:g} m is {x_max:.3g} of the ball's diameter {2 * a0:g} m; the FE indentation "
-            f"covers {X_MIN:g} to {X_MAX:g} of it (check the units: m)"
-        )
-    d1_max = hertz_split(d_max / a0, rp / a0)[0] * a0
-    if d1_max > 0.5 * rp / (1 + rp / a0):
-        raise ValueError(
-            f"displacement {d_max:g} m pushes the probe (radius {rp:g} m) about {d1_max:g} m into the ball, more than "
-            "half its effective radius R_p a0 / (R_p + a0): beyond the contacts this scene resolves"
-        )
+    _check_approach(d_max, a0, rp)
     if contact not in ("nodal", "fitted"):
         raise ValueError(f"contact must be 'nodal' or 'fitted', got {contact!r}")
     if contact == "fitted" and not static:

@@ -1,0 +1,221 @@
+r"""Tabulate the FE-calibrated equilibrium law of a spherical probe on a ball resting on a plate.
+
+For an incompressible Fung ball of radius a0 under a rigid sphere of radius R_p (both contacts frictionless),
+dimensional analysis gives
+
+    F_eq = F_Hertz,series(delta) h(y, alpha, rho),   rho = R_p / a0,   y = d_1 / R_1 = 2 x share(rho) / r_1(rho),
+
+with F_Hertz,series the two-Hertz-contacts law of ``reduced.indentation`` (series radius R_s), x = delta / (2 a0),
+R_1 = R_p a0 / (R_p + a0) (r_1 = R_1 / a0) and d_1 = share(rho) delta the probe-ball contact's small-strain share of
+the approach (``reduced.material.probe_share``): y is the probe contact's depth in units of its effective radius,
+the quantity that bounds what the scene resolves (y <= 1/2 for every rho), so one y grid serves every probe size
+(x = y r_1 / (2 share): at y = 0.1, x = 0.045 for R_p = a0 and x = 0.0032 for R_p = a0 / 20). h -> 1 as y -> 0.
+
+One job per rho (``fem.indentation.fitted_states`` on a contact-edge-fitted level: every alpha over the whole y
+grid, continued in y and in alpha) gives a rho-slice; the grid's end is the largest y every (alpha, rho) reached.
+The table (``reduced/data/indentation_master.npz``): ``y`` (n_y,) from 0, ``alpha`` (n_a,), ``rho`` (n_r,),
+``h`` (n_r, n_a, n_y) (h = 1 at y = 0), ``force`` (N, the FE values at the run's a0 and C) and ``metadata`` (JSON:
+levels, command, kappa / C, wall time, ``discretisation_error`` = the largest |h_table / h_finer - 1| against an
+independent finer level at the check points, and the check points). ``reduced.indentation`` interpolates h by
+natural cubic splines in s = sqrt(y), alpha and ln rho (the plate table's sqrt rule: h - 1 grows like sqrt(y)).
+
+``python -m tissuemech.compare.calibrate_indentation [--out PATH] [--install] [--store DIR] [--mesh L]
+[--check-mesh L] [--rhos ..] [--alphas ..] [--ys ..] [--serial]`` regenerates it through ``compare.batch``
+(resumable with ``--store``; the table's own jobs and the checks run in one process pool).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tissuemech.reduced.material import probe_share
+
+__all__ = [
+    "depth_ratio",
+    "x_of_depth_ratio",
+    "slice_states",
+    "tabulate",
+    "write",
+    "main",
+    "RHOS",
+    "ALPHAS",
+    "YS",
+    "CHECK_RHOS",
+    "CHECK_ALPHAS",
+    "CHECK_YS",
+    "DEFAULT_OUT",
+]
+
+log = logging.getLogger(__name__)
+
+RHOS = (0.05, 0.1, 0.2, 0.4, 1.0)
+ALPHAS = (0.0, 0.5, 1.5)
+YS = (0.0125, 0.025, 0.05, 0.075, 0.1)
+CHECK_RHOS = (0.2,)
+CHECK_ALPHAS = (0.0, 1.5)
+CHECK_YS = (0.025, 0.05, 0.1)
+DEFAULT_OUT = Path(__file__).resolve().parent.parent / "reduced" / "data" / "indentation_master.npz"
+RADIUS, C_REF, KAPPA = 100e-6, 100.0, 2.2e9  # kappa / C = 2.2e7: nearly incompressible
+
+
+def depth_ratio(x: Any, rho: Any) -> np.ndarray:
+    """y = d_1 / R_1 = 2 x share(rho) / r_1(rho): the probe contact's small-strain depth over its effective radius at
+    x = delta / (2 a0) and rho = R_p / a0 (module doc)."""
+    rho = np.asarray(rho, dtype=float)
+    return 2.0 * np.asarray(x, dtype=float) * probe_share(1.0, rho) / (rho / (1.0 + rho))
+
+
+def x_of_depth_ratio(y: Any, rho: Any) -> np.ndarray:
+    """x = delta / (2 a0) at the depth ratio y (the inverse of :func:`depth_ratio`)."""
+    rho = np.asarray(rho, dtype=float)
+    return np.asarray(y, dtype=float) * (rho / (1.0 + rho)) / (2.0 * probe_share(1.0, rho))
+
+
+def slice_states(
+    *, rho: float, alphas: Sequence[float], ys: Sequence[float], mesh: Any = 2, radius: float = RADIUS,
+    C: float = C_REF, kappa: float = KAPPA,
+) -> dict:  # fmt: skip
+    """One rho-slice (module level, picklable for ``compare.batch``): ``fem.indentation.fitted_states`` at the
+    approaches of the depth ratios ``ys``; ``h`` (n_a, n_y) = F / F_Hertz,series (NaN where not reached)."""
+    from tissuemech.fem.indentation import fitted_states
+    from tissuemech.reduced.indentation import HERTZ_PREFACTOR, series_radius
+
+    d = 2 * radius * x_of_depth_ratio(np.asarray(ys, float), rho)
+    r = fitted_states(radius=radius, probe_radius=rho * radius, C=C, alphas=alphas, approaches=d, kappa=kappa, mesh=mesh)
+    hertz = HERTZ_PREFACTOR * C * np.sqrt(float(series_radius(radius, rho * radius))) * d**1.5
+    return dict(r, h=r["force"] / hertz, y=np.asarray(ys, float), rho=float(rho))
+
+
+def tabulate(
+    *,
+    rhos: Sequence[float] = RHOS,
+    alphas: Sequence[float] = ALPHAS,
+    ys: Sequence[float] = YS,
+    mesh: Any = 2,
+    check_mesh: Any = 3,
+    check_rhos: Sequence[float] = CHECK_RHOS,
+    check_alphas: Sequence[float] = CHECK_ALPHAS,
+    check_ys: Sequence[float] = CHECK_YS,
+    executor: Any = None,
+    store: str | None = None,
+) -> tuple[dict, dict]:
+    """(table, metadata): the rho-slices through ``compare.batch`` (with the finer-level checks, if ``check_mesh``
+    is not None, in the same pool), cut at the largest y every slice reached (module doc)."""
+    from tissuemech.compare import batch
+
+    yv = np.asarray(sorted(ys), float)
+    jobs = [dict(rho=float(r), alphas=[float(a) for a in alphas], ys=yv.tolist(), mesh=mesh) for r in rhos]
+    checks = []
+    if check_mesh is not None:
+        checks = [
+            dict(rho=float(r), alphas=[float(a) for a in check_alphas], ys=[float(v) for v in check_ys], mesh=check_mesh)
+            for r in check_rhos
+        ]
+    t0 = time.perf_counter()
+    runs = batch.run(slice_states, checks + jobs, executor=executor, store=store)  # the long checks first
+    wall = time.perf_counter() - t0
+    if any(r is None for r in runs):
+        raise RuntimeError("calibration: an FE slice failed; rerun with the same --store to retry")
+    done: list[Any] = list(runs[len(checks) :]) + list(runs[: len(checks)])  # slices, then checks
+    slices = [dict(r) for r in done[: len(jobs)]]
+    h = np.stack([np.asarray(s["h"]) for s in slices])  # (n_r, n_a, n_y)
+    reached = np.all(np.isfinite(h), axis=(0, 1))
+    n_ok = int(np.argmin(reached)) if not reached.all() else yv.size
+    if n_ok < 3:
+        raise RuntimeError(f"calibration: the FE reached only y = {yv[:n_ok]} in every slice; the table needs >= 3")
+    y = np.r_[0.0, yv[:n_ok]]
+    h_tab = np.concatenate([np.ones(h.shape[:2] + (1,)), h[:, :, :n_ok]], axis=2)
+    force = np.stack([np.asarray(s["force"])[:, :n_ok] for s in slices])
+    err, at = 0.0, ""
+    points = []
+    for stored in done[len(jobs) :]:
+        c = dict(stored)
+        if c["rho"] not in list(rhos):
+            continue
+        k = list(rhos).index(c["rho"])
+        for i, a in enumerate(c["alpha"]):
+            if float(a) not in list(alphas):
+                continue
+            ia = list(alphas).index(float(a))
+            for j, yv in enumerate(c["y"]):
+                if not np.isfinite(c["h"][i, j]) or yv > y[-1] * (1 + 1e-12):
+                    continue
+                jy = int(np.argmin(np.abs(y - yv)))
+                e = float(h_tab[k, ia, jy] / c["h"][i, j] - 1.0)
+                points.append(dict(rho=float(c["rho"]), alpha=float(a), y=float(yv), table=float(h_tab[k, ia, jy]),
+                                   finer=float(c["h"][i, j]), rel=e))  # fmt: skip
+                if abs(e) > abs(err):
+                    err, at = e, f"rho {c['rho']:g} alpha {a:g} y {yv:g}"
+    stopped = {f"rho {s['rho']:g} alpha {a:g}": float(yv[int(np.argmin(np.isfinite(s['h'][i])))])
+               for s in slices for i, a in enumerate(s["alpha"]) if not np.all(np.isfinite(s["h"][i]))}  # fmt: skip
+    meta = dict(
+        quantity="h = F_eq / F_Hertz,series (reduced.indentation), y = d_1 / R_1 = 2 x share(rho) / r_1(rho)",
+        scene="rigid frictionless sphere R_p = rho a0 on a Fung ball a0 resting on a rigid frictionless plate",
+        mesh=mesh,
+        check_mesh=check_mesh,
+        contact="fitted",
+        kappa_over_C=KAPPA / C_REF,
+        radius=RADIUS,
+        C=C_REF,
+        y_max=float(y[-1]),
+        x_max_per_rho={f"{r:g}": float(x_of_depth_ratio(y[-1], r)) for r in rhos},
+        stopped=stopped,
+        discretisation_error=abs(err),
+        discretisation_error_at=at,
+        check_points=points,
+        interpolation="natural cubic splines in s = sqrt(y), alpha and ln(rho)",
+        wall_seconds=wall,
+        command="python -m tissuemech.compare.calibrate_indentation " + " ".join(sys.argv[1:]),
+    )
+    return dict(y=y, alpha=np.asarray(alphas, float), rho=np.asarray(rhos, float), h=h_tab, force=force), meta
+
+
+def write(path: str | Path, table: dict, metadata: dict) -> None:
+    """Write the table (``y``, ``alpha``, ``rho``, ``h``, ``force``) with JSON ``metadata`` to an npz file."""
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    np.savez(path, **{k: np.asarray(v) for k, v in table.items()}, metadata=np.asarray(json.dumps(metadata)))
+
+
+def _floats(text: str) -> list[float]:
+    try:
+        return [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a comma list of numbers, got {text!r}") from None
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """The command line (module doc)."""
+    ap = argparse.ArgumentParser(prog="python -m tissuemech.compare.calibrate_indentation", description=__doc__.split("\n")[0])
+    ap.add_argument("--out", default="indentation_master.npz", help="table to write (default: %(default)s)")
+    ap.add_argument("--install", action="store_true", help=f"write the shipped table {DEFAULT_OUT}")
+    ap.add_argument("--store", default=None, help="folder for per-slice results (resume)")
+    ap.add_argument("--mesh", type=int, default=2, help="FE level of the table (default: %(default)s)")
+    ap.add_argument("--check-mesh", type=int, default=3, help="finer level of the check (-1: none; default: %(default)s)")
+    ap.add_argument("--rhos", type=_floats, default=list(RHOS), help="probe radius / ball radius values")
+    ap.add_argument("--alphas", type=_floats, default=list(ALPHAS), help="Fung exponents (increasing)")
+    ap.add_argument("--ys", type=_floats, default=list(YS), help="depth ratios y = d_1 / R_1 (increasing, > 0)")
+    ap.add_argument("--serial", action="store_true", help="one process (default: compare.batch's local pool)")
+    a = ap.parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s: %(message)s")
+    table, meta = tabulate(
+        rhos=a.rhos, alphas=a.alphas, ys=a.ys, mesh=a.mesh, check_mesh=None if a.check_mesh < 0 else a.check_mesh,
+        executor="serial" if a.serial else None, store=a.store,
+    )  # fmt: skip
+    out = DEFAULT_OUT if a.install else Path(a.out)
+    write(out, table, meta)
+    print(f"wrote {out}: y up to {meta['y_max']:g}, discretisation error {meta['discretisation_error']:.2e} "
+          f"({meta['discretisation_error_at']}), {meta['wall_seconds']:.0f} s")  # fmt: skip
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
