@@ -52,6 +52,7 @@ __all__ = [
     "CHECK_RHOS",
     "CHECK_ALPHAS",
     "CHECK_YS",
+    "ORDER",
     "DEFAULT_OUT",
 ]
 
@@ -60,7 +61,11 @@ log = logging.getLogger(__name__)
 RHOS = (0.05, 0.1, 0.2, 0.4, 1.0)
 ALPHAS = (0.0, 0.5, 1.5)
 YS = (0.0125, 0.025, 0.05, 0.075, 0.1)
-CHECK_RHOS = (0.2,)
+CHECK_RHOS = (0.05, 0.2)
+# the observed order of the fitted-edge FE in n_zone (fem.indentation.LEVELS): (h_1 - h_2) / (h_2 - h_3) = 4.09, 4.13,
+# 4.10 at rho = 0.05, 0.1, 0.27 (x = 0.0005, 0.0012, 0.0102; alpha 0, 0, 0.75), i.e. p = 2.84 over levels 1-3 (3.79 over
+# levels 2-4 at rho = 0.27: the extrapolation from levels 1-2 with 2.84 is on the safe side)
+ORDER = 2.84
 CHECK_ALPHAS = (0.0, 1.5)
 CHECK_YS = (0.025, 0.05, 0.1)
 DEFAULT_OUT = Path(__file__).resolve().parent.parent / "reduced" / "data" / "indentation_master.npz"
@@ -101,6 +106,8 @@ def tabulate(
     alphas: Sequence[float] = ALPHAS,
     ys: Sequence[float] = YS,
     mesh: Any = 2,
+    coarse_mesh: Any = 1,
+    order: float = ORDER,
     check_mesh: Any = 3,
     check_rhos: Sequence[float] = CHECK_RHOS,
     check_alphas: Sequence[float] = CHECK_ALPHAS,
@@ -108,59 +115,78 @@ def tabulate(
     executor: Any = None,
     store: str | None = None,
 ) -> tuple[dict, dict]:
-    """(table, metadata): the rho-slices through ``compare.batch`` (with the finer-level checks, if ``check_mesh``
-    is not None, in the same pool), cut at the largest y every slice reached (module doc)."""
-    from tissuemech.compare import batch
+    """(table, metadata): the rho-slices on ``mesh`` (and ``coarse_mesh``, None: none) and the checks on
+    ``check_mesh`` (None: none) through ``compare.batch`` in one pool, cut at the largest y every slice reached.
 
-    yv = np.asarray(sorted(ys), float)
-    jobs = [dict(rho=float(r), alphas=[float(a) for a in alphas], ys=yv.tolist(), mesh=mesh) for r in rhos]
+    With ``coarse_mesh`` the table is the Richardson extrapolation h = h_f + (h_f - h_c) / ((n_f / n_c)^p - 1) of
+    the two levels (n: elements across the contact zone, ``fem.indentation.LEVELS``; p = ``order``), and a check
+    point's reference is the same extrapolation of the check level and ``mesh``; without it, the table is ``mesh``
+    and the reference the check level itself."""
+    from tissuemech.compare import batch
+    from tissuemech.fem.indentation import LEVELS
+
+    ygrid = np.asarray(sorted(ys), float)
+    al = [float(a) for a in alphas]
+    jobs = [dict(rho=float(r), alphas=al, ys=ygrid.tolist(), mesh=mesh) for r in rhos]
+    coarse = [] if coarse_mesh is None else [dict(j, mesh=coarse_mesh) for j in jobs]
     checks = []
     if check_mesh is not None:
-        checks = [
-            dict(rho=float(r), alphas=[float(a) for a in check_alphas], ys=[float(v) for v in check_ys], mesh=check_mesh)
-            for r in check_rhos
-        ]
+        ca, cy = [float(a) for a in check_alphas], [float(v) for v in check_ys]
+        checks = [dict(rho=float(r), alphas=ca, ys=cy, mesh=check_mesh) for r in check_rhos]
     t0 = time.perf_counter()
-    runs = batch.run(slice_states, checks + jobs, executor=executor, store=store)  # the long checks first
+    runs = batch.run(slice_states, checks + jobs + coarse, executor=executor, store=store)  # the long checks first
     wall = time.perf_counter() - t0
     if any(r is None for r in runs):
         raise RuntimeError("calibration: an FE slice failed; rerun with the same --store to retry")
-    done: list[Any] = list(runs[len(checks) :]) + list(runs[: len(checks)])  # slices, then checks
-    slices = [dict(r) for r in done[: len(jobs)]]
-    h = np.stack([np.asarray(s["h"]) for s in slices])  # (n_r, n_a, n_y)
-    reached = np.all(np.isfinite(h), axis=(0, 1))
-    n_ok = int(np.argmin(reached)) if not reached.all() else yv.size
+    done: list[Any] = [dict(r) for r in runs]  # type: ignore[arg-type]
+    check_runs, fine, crs = done[: len(checks)], done[len(checks) : len(checks) + len(jobs)], done[len(checks) + len(jobs) :]
+    h_f = np.stack([np.asarray(s["h"]) for s in fine])  # (n_r, n_a, n_y)
+    h_c = np.stack([np.asarray(s["h"]) for s in crs]) if crs else None
+    both = h_f if h_c is None else h_f + h_c
+    reached = np.all(np.isfinite(both), axis=(0, 1))
+    n_ok = int(np.argmin(reached)) if not reached.all() else ygrid.size
     if n_ok < 3:
-        raise RuntimeError(f"calibration: the FE reached only y = {yv[:n_ok]} in every slice; the table needs >= 3")
-    y = np.r_[0.0, yv[:n_ok]]
-    h_tab = np.concatenate([np.ones(h.shape[:2] + (1,)), h[:, :, :n_ok]], axis=2)
-    force = np.stack([np.asarray(s["force"])[:, :n_ok] for s in slices])
-    err, at = 0.0, ""
+        raise RuntimeError(f"calibration: the FE reached only y = {ygrid[:n_ok]} in every slice; the table needs >= 3")
+    n_of = lambda m: LEVELS[int(m)][0]
+    gain = lambda fine_m, coarse_m: 1.0 / ((n_of(fine_m) / n_of(coarse_m)) ** order - 1.0)
+    h_ext = h_f if h_c is None else h_f + (h_f - h_c) * gain(mesh, coarse_mesh)
+    y = np.r_[0.0, ygrid[:n_ok]]
+    h_tab = np.concatenate([np.ones(h_f.shape[:2] + (1,)), h_ext[:, :, :n_ok]], axis=2)
+    force = np.stack([np.asarray(s["force"])[:, :n_ok] for s in fine])
+    err, raw, at = 0.0, 0.0, ""
     points = []
-    for stored in done[len(jobs) :]:
-        c = dict(stored)
+    for c in check_runs:
         if c["rho"] not in list(rhos):
             continue
         k = list(rhos).index(c["rho"])
         for i, a in enumerate(c["alpha"]):
-            if float(a) not in list(alphas):
+            if float(a) not in al:
                 continue
-            ia = list(alphas).index(float(a))
-            for j, yv in enumerate(c["y"]):
-                if not np.isfinite(c["h"][i, j]) or yv > y[-1] * (1 + 1e-12):
+            ia = al.index(float(a))
+            for j, yc in enumerate(c["y"]):
+                if not np.isfinite(c["h"][i, j]) or yc > y[-1] * (1 + 1e-12) or not np.any(np.isclose(y, yc)):
                     continue
-                jy = int(np.argmin(np.abs(y - yv)))
-                e = float(h_tab[k, ia, jy] / c["h"][i, j] - 1.0)
-                points.append(dict(rho=float(c["rho"]), alpha=float(a), y=float(yv), table=float(h_tab[k, ia, jy]),
-                                   finer=float(c["h"][i, j]), rel=e))  # fmt: skip
+                jy = int(np.argmin(np.abs(y - yc)))
+                h3, h2 = float(c["h"][i, j]), float(h_f[k, ia, jy - 1])
+                ref = h3 if h_c is None else h3 + (h3 - h2) * gain(check_mesh, mesh)
+                e = float(h_tab[k, ia, jy] / ref - 1.0)
+                points.append(dict(rho=float(c["rho"]), alpha=float(a), y=float(yc), table=float(h_tab[k, ia, jy]),
+                                   level_fine=h2, level_check=h3, reference=ref, rel=e))  # fmt: skip
+                raw = max(raw, abs(h2 / h3 - 1.0))
                 if abs(e) > abs(err):
-                    err, at = e, f"rho {c['rho']:g} alpha {a:g} y {yv:g}"
-    stopped = {f"rho {s['rho']:g} alpha {a:g}": float(yv[int(np.argmin(np.isfinite(s['h'][i])))])
-               for s in slices for i, a in enumerate(s["alpha"]) if not np.all(np.isfinite(s["h"][i]))}  # fmt: skip
+                    err, at = e, f"rho {c['rho']:g} alpha {a:g} y {yc:g}"
+    stopped = {
+        f"rho {s['rho']:g} alpha {a:g} level {s.get('mesh', '')}": float(ygrid[int(np.argmin(np.isfinite(s["h"][i])))])
+        for s in fine + crs
+        for i, a in enumerate(s["alpha"])
+        if not np.all(np.isfinite(s["h"][i]))
+    }
     meta = dict(
         quantity="h = F_eq / F_Hertz,series (reduced.indentation), y = d_1 / R_1 = 2 x share(rho) / r_1(rho)",
         scene="rigid frictionless sphere R_p = rho a0 on a Fung ball a0 resting on a rigid frictionless plate",
         mesh=mesh,
+        coarse_mesh=coarse_mesh,
+        richardson_order=None if h_c is None else order,
         check_mesh=check_mesh,
         contact="fitted",
         kappa_over_C=KAPPA / C_REF,
@@ -171,18 +197,23 @@ def tabulate(
         stopped=stopped,
         discretisation_error=abs(err),
         discretisation_error_at=at,
+        fine_vs_check_level=raw,
         check_points=points,
         interpolation="natural cubic splines in s = sqrt(y), alpha and ln(rho)",
         wall_seconds=wall,
         command="python -m tissuemech.compare.calibrate_indentation " + " ".join(sys.argv[1:]),
     )
-    return dict(y=y, alpha=np.asarray(alphas, float), rho=np.asarray(rhos, float), h=h_tab, force=force), meta
+    table = dict(y=y, alpha=np.asarray(al), rho=np.asarray(rhos, float), h=h_tab, force=force, h_fine=h_f[:, :, :n_ok])
+    if h_c is not None:
+        table["h_coarse"] = h_c[:, :, :n_ok]
+    return table, meta
 
 
 def write(path: str | Path, table: dict, metadata: dict) -> None:
     """Write the table (``y``, ``alpha``, ``rho``, ``h``, ``force``) with JSON ``metadata`` to an npz file."""
     Path(path).parent.mkdir(parents=True, exist_ok=True)
-    np.savez(path, **{k: np.asarray(v) for k, v in table.items()}, metadata=np.asarray(json.dumps(metadata)))
+    arrays = {k: np.asarray(v) for k, v in table.items()}
+    np.savez(path, **arrays, metadata=np.asarray(json.dumps(metadata)))  # type: ignore[arg-type]
 
 
 def _floats(text: str) -> list[float]:
@@ -199,6 +230,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--install", action="store_true", help=f"write the shipped table {DEFAULT_OUT}")
     ap.add_argument("--store", default=None, help="folder for per-slice results (resume)")
     ap.add_argument("--mesh", type=int, default=2, help="FE level of the table (default: %(default)s)")
+    ap.add_argument("--coarse-mesh", type=int, default=1, help="coarser level of the Richardson table (-1: none)")
+    ap.add_argument("--order", type=float, default=ORDER, help="Richardson order in n_zone (default: %(default)s)")
+    ap.add_argument("--check-rhos", type=_floats, default=list(CHECK_RHOS), help="rho values of the check slices")
     ap.add_argument("--check-mesh", type=int, default=3, help="finer level of the check (-1: none; default: %(default)s)")
     ap.add_argument("--rhos", type=_floats, default=list(RHOS), help="probe radius / ball radius values")
     ap.add_argument("--alphas", type=_floats, default=list(ALPHAS), help="Fung exponents (increasing)")
@@ -207,7 +241,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     a = ap.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s: %(message)s")
     table, meta = tabulate(
-        rhos=a.rhos, alphas=a.alphas, ys=a.ys, mesh=a.mesh, check_mesh=None if a.check_mesh < 0 else a.check_mesh,
+        rhos=a.rhos, alphas=a.alphas, ys=a.ys, mesh=a.mesh, coarse_mesh=None if a.coarse_mesh < 0 else a.coarse_mesh,
+        order=a.order, check_rhos=a.check_rhos, check_mesh=None if a.check_mesh < 0 else a.check_mesh,
         executor="serial" if a.serial else None, store=a.store,
     )  # fmt: skip
     out = DEFAULT_OUT if a.install else Path(a.out)
