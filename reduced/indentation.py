@@ -293,7 +293,9 @@ class MasterTable:
             rs = float(series_radius(1.0, key))
             xp = x_of_depth_ratio(self.y, key) / (8.0 * rs)
             H = self.slice(key)
-            mc = spheroid.MasterCurve(xp, np.asarray(spheroid.hertz_f(xp)) * H, alpha=self.alpha, metadata=self.metadata, h=H)
+            mc = spheroid.MasterCurve(
+                xp, np.asarray(spheroid.hertz_f(xp)) * H, alpha=self.alpha, metadata=self.metadata, h=H
+            )
             self._laws[key] = spheroid.FEMTable(mc)
         return self._laws[key]
 
