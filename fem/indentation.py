@@ -21,6 +21,13 @@ order 3.5 under refinement (F at approach / (2 a0) = 0.005, R_p = a0: level 2 wi
 limit, level 4 within 7e-6). Measured by ``python -m tissuemech.compare.bench.fem_indentation`` (``docs/afm.md``,
 "FE indentation").
 
+Loading (time runs, node-by-node contact): the approach as a ramp and hold, a callable or a measured history
+``(times, approaches)``, or the probe force (``force=``: a number, a callable or ``(times, forces)``, > 0 N) by the
+outer iteration of ``fem.protocols.force_controlled`` around the displacement-controlled step (records and their
+step times: ``fem.protocols.Record`` / ``record_schedule``). :func:`fitted_states` gives static fitted-edge states
+over a grid of approaches and alphas, continued in both (the indentation table's generator,
+``compare.calibrate_indentation``).
+
 Inside, lengths are scaled by a0, stresses by C, forces by C a0^2 (``fem.problem.SceneProblem``).
 """
 

@@ -203,7 +203,7 @@ def test_master_table_reproduces_its_nodes_and_raises_outside():
 
 def test_table_law_is_the_equilibrium_of_the_lumped_force():
     tab = ind.master_table()
-    assert tab.metadata["discretisation_error"] < 2e-4 and tab.y[0] == 0.0
+    assert tab.metadata["discretisation_error"] < 2e-5 and tab.y[0] == 0.0
     rho, a = float(tab.rho[2]), float(tab.alpha[1])
     a0 = 50e-6
     d = 2 * a0 * float(ind.x_of_depth_ratio(tab.y[3], rho))  # a node
@@ -263,7 +263,7 @@ def test_table_against_converged_fe_off_the_nodes():
     a0, c = ref["radius"], ref["C"]
     d = ref["approach"]
     F = float(ind.equilibrium_force(d, radius=a0, probe_radius=rho * a0, C=c, alpha=a, law="table"))
-    assert abs(F / ref["richardson_force"] - 1) < 5e-4
+    assert abs(F / ref["richardson_force"] - 1) < 5e-4  # measured: 5.1e-6
     lv = ref["levels"]["2"]
     r = fitted_states(radius=a0, probe_radius=rho * a0, C=c, alphas=[0.0, a], approaches=lv["approaches"], mesh=2)
     assert float(r["force"][1, -1]) == pytest.approx(lv["force"], rel=1e-7)
