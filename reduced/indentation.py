@@ -50,11 +50,13 @@ a0 / 20). Off the nodes (R_p / a0 = 0.27, alpha = 0.75, x = 0.0102) the table is
 for level 2 with the level-3 check at rho = 0.2, 4 min for level 1 with the check at rho = 0.05 (2 processes on a
 shared, heavily loaded 2-core machine).
 Its range: rho and alpha inside the grid (:func:`master_table`: ``rho_range``, ``alpha_range``) and x up to
-``x_max(rho)``. ``law="auto"`` takes the table when radius and probe_radius are concrete numbers with R_p / a0
-inside its rho range (then an approach or alpha beyond the table raises InputError naming the quantity and
-suggesting ``law="hertz"``), and the Hertz law otherwise: a half-space (``radius=math.inf``), a probe outside
-the rho range, or a geometry traced under jit/grad (the table is sliced at one concrete rho; ``law="table"``
-raises there). Under jit with traced C / alpha / approaches the table's range is checked at run time by
+``x_max(rho)``. ``law="table"`` raises outside it (InputError naming the quantity and its range). ``law="auto"``
+takes the table when radius and probe_radius are concrete numbers with R_p / a0, alpha and the largest approach
+inside it, and the Hertz law otherwise: a half-space (``radius=math.inf``) or a probe outside the rho range
+(silently: the Hertz law's own domain), an approach or alpha beyond the table (with a ``UserWarning``: the law is
+then up to a few % soft, and a fit whose approaches cross x_max would see the two laws), several geometries in
+one call, or a geometry traced under jit/grad (the table is sliced at one concrete rho; ``law="table"`` raises
+there). Under jit with traced C / alpha / approaches the table's range is checked at run time by
 ``reduced.spheroid`` (its messages speak of the equivalent ball's x' = delta / (2 a'), a' = 8 R_s).
 
 Viscoelasticity (the lumped convolution of :mod:`tissuemech.reduced.spheroid`)
@@ -85,6 +87,7 @@ from __future__ import annotations
 
 import functools
 import json
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -198,11 +201,9 @@ def equilibrium_force(
         validate_material(C, alpha)
         dv = validate_finite("displacement (approach of the probe since contact)", displacement, "m")
         _check_depth(dv, radius, probe_radius)
-    tab = _geometry_law(law, radius, probe_radius)
+    tab = _geometry_law(law, radius, probe_radius, _concrete_max(displacement), alpha)
     if tab is not None:
         table, rho = tab
-        if not is_traced(displacement):
-            table.check(np.max(np.asarray(displacement, dtype=float)) / (2.0 * float(np.max(radius))), alpha, rho)
         a_equiv = 8.0 * series_radius(radius, probe_radius)
         d = jnp.maximum(jnp.asarray(displacement, dtype=jnp.float64), 0.0)
         return spheroid.equilibrium_force(d, radius=a_equiv, C=C, alpha=alpha, equilibrium=table.law(rho))
@@ -356,8 +357,19 @@ def master_table(path: str | None = None) -> MasterTable:
         return MasterTable(z["y"], z["alpha"], z["rho"], z["h"], metadata=meta)
 
 
-def _geometry_law(law: str, radius: Any, probe_radius: Any) -> tuple[MasterTable, float] | None:
-    """(table, rho) when ``law`` resolves to the table at this geometry, None for the Hertz law (module doc)."""
+def _concrete_max(v: Any) -> float | None:
+    """max(v) as a float for concrete values, None for traced ones."""
+    return None if is_traced(v) else float(np.max(np.asarray(v, dtype=float)))
+
+
+def _geometry_law(
+    law: str, radius: Any, probe_radius: Any, d_max: float | None = None, alpha: Any = 0.0
+) -> tuple[MasterTable, float] | None:
+    """(table, rho) when ``law`` resolves to the table at this geometry, None for the Hertz law (module doc).
+
+    ``d_max``: the largest approach (m) when concrete. ``law="table"`` raises outside the table (InputError naming
+    the quantity); ``law="auto"`` takes the Hertz law outside its rho range silently (the law's own domain: a
+    half-space, a probe beyond the grid) and beyond its approach or alpha range with a ``UserWarning``."""
     if law not in LAWS:
         raise InputError(f"law must be one of {LAWS}, got {law!r}")
     if law == "hertz":
@@ -371,8 +383,10 @@ def _geometry_law(law: str, radius: Any, probe_radius: Any) -> tuple[MasterTable
         return None
     rho = np.unique(np.asarray(probe_radius, dtype=float) / np.asarray(radius, dtype=float))
     if rho.size != 1:
+        if law == "auto":
+            return None  # several geometries in one call: the Hertz law broadcasts over them
         raise InputError(
-            f"law={law!r}: one geometry per call (radius and probe_radius, m, as single values; got shapes "
+            f"law='table': one geometry per call (radius and probe_radius, m, as single values; got shapes "
             f"{np.shape(radius)} and {np.shape(probe_radius)}); loop over the geometries, or use law='hertz'"
         )
     r = float(rho.reshape(-1)[0])
@@ -381,7 +395,19 @@ def _geometry_law(law: str, radius: Any, probe_radius: Any) -> tuple[MasterTable
     table = master_table()
     if law == "auto" and not table.covers(r):
         return None
-    table.check(0.0, 0.0, r)
+    x_max = 0.0 if d_max is None else d_max / (2.0 * float(np.max(np.asarray(radius, dtype=float))))
+    if law == "table":
+        table.check(x_max, alpha, r)
+        return table, r
+    try:
+        table.check(x_max, alpha, r)
+    except InputError as err:
+        warnings.warn(
+            f"law='auto' uses the small-strain Hertz law here: {err.args[0].split('; use')[0]}",
+            UserWarning,
+            stacklevel=3,
+        )
+        return None
     return table, r
 
 
@@ -458,16 +484,11 @@ def force(
                 raise InputError("ramp_time (s) is needed with a numeric displacement (linear ramp, then hold)")
             validate_positive("ramp_time (duration of the loading ramp)", ramp_time, "s")
             _check_depth(displacement, radius, probe_radius)
-    tab = _geometry_law(law, radius, probe_radius)
+    tab = _geometry_law(law, radius, probe_radius, _concrete_max(approaches if measured else displacement), alpha)
     equilibrium: Any = "hertz"
     if tab is not None:
         table, rho = tab
         equilibrium = table.law(rho)
-        if eager:
-            dmax = np.max(np.asarray(approaches)) if measured and not is_traced(approaches) else None
-            if not measured:
-                dmax = np.max(np.asarray(displacement, dtype=float))
-            table.check(0.0 if dmax is None else dmax / (2.0 * float(np.max(radius))), alpha, rho)
     rs = series_radius(radius, probe_radius)
     a_equiv = 8.0 * rs  # the spheroid's law with this radius and C' = C sqrt(8 R_s / a') = C (module doc)
     common = dict(radius=a_equiv, C=C, alpha=alpha, branches=branches, equilibrium=equilibrium)

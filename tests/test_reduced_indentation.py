@@ -230,8 +230,14 @@ def test_auto_law_outside_the_table_and_under_jit():
     assert float(ind.equilibrium_force(d, **kw)) == float(ind.equilibrium_force(d, **kw, law="hertz"))
     with pytest.raises(ValueError, match="outside the calibrated indentation table"):
         ind.equilibrium_force(d, **kw, law="table")
-    with pytest.raises(ValueError, match="beyond the calibrated indentation table"):
-        ind.force(np.array([1.0]), radius=A0, probe_radius=RP, C=C, displacement=1e-6, ramp_time=1.0)
+    deep = dict(radius=A0, probe_radius=RP, C=C, displacement=1e-6, ramp_time=1.0)  # y = 0.15: beyond the table
+    with pytest.raises(ValueError, match=r"delta / \(2 a0\) = .* beyond the calibrated indentation table"):
+        ind.force(np.array([1.0]), **deep, law="table")
+    with pytest.warns(UserWarning, match="Hertz law here: displacement"):
+        auto = float(ind.force(np.array([1.0]), **deep)[0])
+    assert auto == float(ind.force(np.array([1.0]), **deep, law="hertz")[0])
+    with pytest.raises(ValueError, match="alpha .* outside the calibrated indentation table"):
+        ind.equilibrium_force(d, radius=A0, probe_radius=RP, C=C, alpha=2.0, law="table")
     with pytest.raises(ValueError, match="law must be one of"):
         ind.equilibrium_force(d, radius=A0, probe_radius=RP, C=C, law="fem")
     # a traced geometry: auto is the Hertz law, 'table' refuses
