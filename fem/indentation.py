@@ -21,6 +21,13 @@ order 3.5 under refinement (F at approach / (2 a0) = 0.005, R_p = a0: level 2 wi
 limit, level 4 within 7e-6). Measured by ``python -m tissuemech.compare.bench.fem_indentation`` (``docs/afm.md``,
 "FE indentation").
 
+Loading (time runs, node-by-node contact): the approach as a ramp and hold, a callable or a measured history
+``(times, approaches)``, or the probe force (``force=``: a number, a callable or ``(times, forces)``, > 0 N) by the
+outer iteration of ``fem.protocols.force_controlled`` around the displacement-controlled step (records and their
+step times: ``fem.protocols.Record`` / ``record_schedule``). :func:`fitted_states` gives static fitted-edge states
+over a grid of approaches and alphas, continued in both (the indentation table's generator,
+``compare.calibrate_indentation``).
+
 Inside, lengths are scaled by a0, stresses by C, forces by C a0^2 (``fem.problem.SceneProblem``).
 """
 
@@ -30,7 +37,7 @@ import logging
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -41,6 +48,7 @@ from tissuemech.fem.linalg import Symmetric
 from tissuemech.fem.mesh import AxiMesh, full_ball_section, surface_layers, zone_points
 from tissuemech.fem.newton import NewtonError
 from tissuemech.fem.problem import SPHEROID_MARGIN, SceneProblem, mesh_spec, roundoff_floor, secant
+from tissuemech.fem.protocols import Record, force_controlled, record_schedule
 from tissuemech.fem.stepping import TimedState
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
 from tissuemech.reduced.material import probe_share, validate_branches, validate_material, validate_positive
@@ -52,6 +60,7 @@ __all__ = [
     "IndentationResult",
     "IndentProblem",
     "FittedEdges",
+    "fitted_states",
     "make_mesh",
     "zone_mesh",
     "hertz_split",
@@ -331,6 +340,170 @@ class FittedEdges:
         )
 
 
+def fitted_states(
+    *,
+    radius: float,
+    probe_radius: float,
+    C: float,
+    alphas: Sequence[float],
+    approaches: Sequence[float] | np.ndarray,
+    kappa: float = 2.2e9,
+    mesh: str | int = 2,
+    rtol: float = 1e-10,
+) -> dict[str, np.ndarray]:
+    """Static equilibria with fitted contact edges (``FittedEdges``) on a grid of approaches and Fung exponents.
+
+    The states are continued in both directions: each alpha's state at an approach starts from its own state at the
+    previous approach (edges grown like sqrt(delta)), the first one (or a retry after a failed solve) from the
+    previous alpha's state at the same approach. A strain-stiffening ball (alpha ~ 1.5) under a small probe is
+    solved on levels >= 2 only this way (started from the uniform squeeze, its Newton iteration diverges). An
+    alpha whose state fails at some approach stops there: its later entries are NaN (a table generator keeps the
+    approaches every alpha reached).
+
+    Args:
+        radius: the ball's radius a0 (m).
+        probe_radius: the probe's radius R_p (m).
+        C: Fung stiffness (Pa).
+        alphas: Fung exponents (dimensionless, >= 0), in the order of the continuation (increasing is best).
+        approaches: increasing approaches delta (m), X_MIN <= delta / (2 a0) <= X_MAX.
+        kappa: bulk modulus (Pa).
+        mesh: "coarse", "default", "fine" or a level 0..4 (default 2).
+        rtol: Newton's relative residual tolerance.
+
+    Returns:
+        dict: ``approach`` (n_d,) m, ``alpha`` (n_a,), ``force`` (n_a, n_d) N (NaN: not reached),
+        ``contact_radius_probe`` / ``contact_radius_plate`` (n_a, n_d) m, ``wall_time`` (n_a, n_d) s.
+
+    Raises:
+        ValueError: an input out of range (the message names the quantity and its unit).
+    """
+    validate_positive("radius (the ball radius a0)", radius, "m")
+    validate_positive("probe_radius (the radius of the spherical probe)", probe_radius, "m")
+    a0, rp, C = float(radius), float(probe_radius), float(C)
+    al = [float(a) for a in alphas]
+    for a in al:
+        validate_material(C, a, kappa)
+    d = np.asarray(approaches, dtype=float)
+    if d.ndim != 1 or d.size == 0 or np.any(~np.isfinite(d)) or np.any(np.diff(d) <= 0):
+        raise ValueError(f"approaches (m) must be a non-empty increasing 1-D list of finite values; got {approaches!r}")
+    _check_approach(float(d[0]), a0, rp, smallest=True)
+    _check_approach(float(d[-1]), a0, rp)
+    level = int(mesh_spec(mesh, MESHES, "or a level 0..4"))
+    if level not in LEVELS:
+        raise ValueError(f"mesh level must be an integer 0..4 (0 coarse, 1 default, 2 fine), got {mesh!r}")
+    fits = [
+        FittedEdges(a0, rp, level, (lambda m: lambda mm: IndentProblem(mm, m, rp / a0, np.zeros(0), np.zeros(0), rtol))(
+            Material(1.0, a, float(kappa) / C)))
+        for a in al
+    ]  # fmt: skip
+    shape = (len(al), d.size)
+    out = {k: np.full(shape, np.nan) for k in ("force", "contact_radius_probe", "contact_radius_plate", "wall_time")}
+    last: list[tuple[tuple[float, float], np.ndarray, float] | None] = [None] * len(al)
+    stopped = [False] * len(al)
+    for j, dj in enumerate(d / a0):
+        here: tuple[tuple[float, float], np.ndarray] | None = None  # the previous alpha's state at this approach
+        for i, fit in enumerate(fits):
+            if stopped[i]:
+                here = None
+                continue
+            w0 = time.perf_counter()
+            starts: list[tuple[Any, Any]] = []
+            if last[i] is not None:
+                e_old, x_old, d_old = last[i]  # type: ignore[misc]
+                starts.append(((e_old[0] * np.sqrt(dj / d_old), e_old[1] * np.sqrt(dj / d_old)), x_old))
+            if here is not None:
+                starts.append(here)
+            if not starts:
+                starts.append((None, None))
+            load = f"alpha = {al[i]:g}, delta = {dj * a0 * 1e6:.4g} um"
+            res = None
+            for e0, x0 in starts:
+                try:
+                    res = fit.solve(dj, e0, x0, load)
+                    break
+                except (NewtonError, ContactError) as err:
+                    log.info("fitted state failed (%s): %s", load, err)
+            if res is None:
+                stopped[i], here = True, None
+                log.warning(
+                    "fitted_states: alpha = %g stops at delta = %.4g um (no converged state)", al[i], dj * a0 * 1e6
+                )
+                continue
+            pb, st, e, _, _ = res
+            ob = pb.observe(st)
+            out["force"][i, j] = ob["force"] * C * a0**2
+            out["contact_radius_probe"][i, j] = ob["contact_radius_probe"] * a0
+            out["contact_radius_plate"][i, j] = ob["contact_radius_plate"] * a0
+            out["wall_time"][i, j] = time.perf_counter() - w0
+            last[i] = (e, st.x, dj)
+            here = (e, st.x)
+    return dict(approach=d, alpha=np.asarray(al), **out)
+
+
+def _check_approach(d_max: float, a0: float, rp: float, smallest: bool = False) -> None:
+    """The approach (m) inside what the scene resolves: X_MIN <= delta / (2 a0) <= X_MAX (only the upper bound for
+    the largest of a run unless ``smallest``), the probe-ball depth below half its effective radius."""
+    x = d_max / (2 * a0)
+    if (smallest and x < X_MIN) or x > X_MAX or (not smallest and x < X_MIN):
+        raise ValueError(
+            f"the approach {d_max:g} m is {x:.3g} of the ball's diameter {2 * a0:g} m; the FE indentation "
+            f"covers {X_MIN:g} to {X_MAX:g} of it (check the units: m)"
+        )
+    d1_max = hertz_split(d_max / a0, rp / a0)[0] * a0
+    if d1_max > 0.5 * rp / (1 + rp / a0):
+        raise ValueError(
+            f"displacement {d_max:g} m pushes the probe (radius {rp:g} m) about {d1_max:g} m into the ball, more than "
+            "half its effective radius R_p a0 / (R_p + a0): beyond the contacts this scene resolves"
+        )
+
+
+def _record_protocol(spec, name: str, ramp_time, end_time, n_ramp: int):
+    """(record, step times, ramp time, end time) of a measured history ``(times, values)`` (``fem.protocols``)."""
+    unit = "N" if name == "force" else "m"
+    if len(spec) != 2:
+        raise ValueError(f"a measured {name} history is a pair (times in s, {name}s in {unit})")
+    rec = Record(spec[0], spec[1], name, unit)
+    top = float(np.max(rec.values))
+    if not top > 0:
+        raise ValueError(f"the {name} history (times, {name}s) is 0 throughout: nothing presses the ball")
+    if name == "force" and np.any(rec.values[1:] <= 0):
+        raise ValueError(
+            "the force history (N) must stay > 0 after its first sample: the probe scene has no unloaded state "
+            "(the ball would be free); use displacement=(times, approaches) for unloading"
+        )
+    end = float(rec.times[-1]) if end_time is None else float(end_time)
+    validate_positive("end_time", end, "s")
+    first = None
+    if ramp_time is not None:
+        validate_positive("ramp_time (the time scale of the first steps)", ramp_time, "s")
+        first = float(ramp_time) / n_ramp
+    times = record_schedule(rec, end, cap=top / n_ramp, first=first, growth=1.25 if name == "force" else 1.5)
+    tr = float(ramp_time) if ramp_time is not None else float(rec.times[int(np.argmax(rec.values))])
+    return rec, times, min(tr, end), end
+
+
+def _force_target(force, ramp_time: float) -> Callable[[float], float]:
+    """The prescribed probe force F(t) (N) of ``force=`` a number (a ramp to it, then held) or a callable."""
+    if callable(force):
+        f0 = float(force(0.0))
+        if f0 != 0.0:
+            raise ValueError(f"the force history must start at 0 N at t = 0 (first contact); F(0) = {f0:g} N")
+
+        def target(t: float) -> float:
+            f = float(force(t))
+            if not np.isfinite(f) or (t > 0 and f <= 0):
+                raise ValueError(
+                    f"the force F(t = {t:g} s) = {f!r} N must be finite and > 0 after t = 0 (the probe pushes; the "
+                    "probe scene has no unloaded state)"
+                )
+            return f
+
+        return target
+    validate_positive("force (the held probe force)", force, "N")
+    F = float(force)
+    return lambda t: F * min(float(t) / ramp_time, 1.0)
+
+
 @dataclass
 class IndentationResult:
     """:func:`indent`'s result, one entry per converged step (SI: s, m, N).
@@ -368,7 +541,8 @@ def indent(
     C: float,
     alpha: float,
     branches: Sequence = (),
-    displacement: float | Callable[[float], float],
+    displacement: float | Callable[[float], float] | tuple | None = None,
+    force: float | Callable[[float], float] | tuple | None = None,
     ramp_time: float | None = None,
     end_time: float | None = None,
     kappa: float = 2.2e9,
@@ -379,6 +553,7 @@ def indent(
     n_hold: int | None = None,
     n_static: int | None = None,
     rtol: float = 1e-10,
+    sizing_approach: float | None = None,
 ) -> IndentationResult:
     """Press a rigid frictionless sphere on the top of the Fung ball resting on a rigid frictionless plate.
 
@@ -393,7 +568,21 @@ def indent(
         branches: [(beta_m, tau_m), ...]: energy factors (dimensionless) and relaxation times (s); () elastic.
         displacement: the approach delta (m; X_MIN <= delta / (2 a0) <= X_MAX) reached at ``ramp_time`` by a
             linear ramp and then held to ``end_time``; or a callable delta(t) (m, t in s, delta(0) = 0; each step
-            then moves the probe by at most a sixth of the history's largest value, halving steps until it does).
+            then moves the probe by at most a sixth of the history's largest value, halving steps until it does);
+            or a measured history ``(times, approaches)`` (s, m; times strictly increasing from 0, approaches >= 0
+            from 0): linear between the samples, held after the last, its steps from ``fem.protocols.
+            record_schedule`` (on the kinks that matter, moving the probe by at most max / n_ramp, growing by 1.5
+            after every kink; ``end_time`` defaults to the last sample, ``ramp_time`` (optional) sets the first step
+            ramp_time / n_ramp).
+        force: instead of ``displacement`` (exactly one of them; N; time runs with node-by-node contact): probe
+            force control. A number F ramped linearly to F at ``ramp_time`` and held to ``end_time`` (creep); a
+            callable F(t) (N, F(0) = 0, > 0 after; ``ramp_hold_schedule`` steps, halved while a step changes the
+            force by more than the ramp's largest step); or ``(times, forces)`` (a measured history as above, > 0
+            after the first sample: the probe scene has no unloaded state, the ball would be free). Every step
+            solves for the approach whose probe force is F(t) to 1e-7 (``fem.protocols.force_controlled``, around
+            the displacement-controlled step); ``approach`` (m) is then the observable. The mesh is sized for the
+            relaxed small-strain approach of the largest force (the Hertz series law with C) times 1.1, or
+            ``sizing_approach``. ``n_hold`` defaults to 40 (the creep moves the probe through the hold).
         ramp_time: end of the ramp (s; ignored when ``static``).
         end_time: end of the hold (s; ignored when ``static``).
         kappa: bulk modulus (Pa).
@@ -407,6 +596,9 @@ def indent(
         n_ramp, n_hold, n_static: ramp steps (default 6), geometric hold steps (default 20), static states
             (default 8).
         rtol: Newton's relative residual tolerance.
+        sizing_approach: the approach (m) the node-by-node mesh is sized for (default: the run's largest approach;
+            under force control see ``force``): equal values give equal meshes, so a force-controlled run and a
+            displacement run can be compared without the edge quantisation between them.
 
     Returns:
         ``IndentationResult``.
@@ -424,14 +616,48 @@ def indent(
     beta = np.array([float(b) for b, _ in br])
     tau = np.array([float(t) for _, t in br])
     a0, rp, C = float(radius), float(probe_radius), float(C)
-    if not static:
-        if ramp_time is None or end_time is None:
-            raise ValueError("ramp_time and end_time (s) are needed unless static=True")
-        validate_positive("ramp_time", ramp_time, "s")
-        validate_positive("end_time", end_time, "s")
-        if end_time < ramp_time:
-            raise ValueError(f"end_time ({end_time} s) must be >= ramp_time ({ramp_time} s)")
-    if callable(displacement):
+    if (displacement is None) == (force is None):
+        raise ValueError("give exactly one of displacement (the approach, m) and force (the probe force, N)")
+    if force is not None and (static or contact != "nodal"):
+        raise ValueError(
+            "force control (force=) is a time run with node-by-node contact: static=False, contact='nodal'"
+        )
+    n_r = n_ramp or 6
+    record = displacement if displacement is not None else force
+    if isinstance(record, (tuple, list)):
+        if static:
+            raise ValueError("static=True needs the final approach as a number (m), not a measured history")
+        proto = _record_protocol(record, "force" if force is not None else "approach", ramp_time, end_time, n_r)
+    else:
+        proto = None
+        if not static:
+            if ramp_time is None or end_time is None:
+                raise ValueError("ramp_time and end_time (s) are needed unless static=True")
+            validate_positive("ramp_time", ramp_time, "s")
+            validate_positive("end_time", end_time, "s")
+            if end_time < ramp_time:
+                raise ValueError(f"end_time ({end_time} s) must be >= ramp_time ({ramp_time} s)")
+    target: Callable[[float], float] | None = None  # the prescribed probe force (N) of t
+    too_large = None
+    if force is not None:
+        if proto is not None:
+            target, times, tr, end = proto
+        else:
+            assert ramp_time is not None and end_time is not None
+            tr, end = float(ramp_time), float(end_time)
+            target = _force_target(force, tr)
+            times = ramp_hold_schedule(tr, end, n_ramp=n_r, n_hold=n_hold or 40)
+            if callable(force):
+                cap = max(abs(target(b) - target(a)) for a, b in zip(times[:-1], times[1:]) if a < tr) * (1 + 1e-9)
+                too_large = lambda t0, t1: abs(target(t1) - target(t0)) > cap  # type: ignore[misc]
+        f_max = max(target(t) for t in np.r_[times, np.linspace(0.0, end, 201)])
+        r_s = a0 * ((rp / (a0 + rp)) ** (-1.0 / 3.0) + 1.0) ** -3.0  # the series radius (m), reduced.indentation
+        d_max = 1.1 * (f_max / (32.0 / 3.0 * C * np.sqrt(r_s))) ** (2.0 / 3.0)
+        delta_fn: Callable[[float], float] = lambda t: 0.0
+    elif proto is not None:
+        delta_fn, times, tr, end = proto
+        d_max = float(np.max(delta_fn.values))  # type: ignore[attr-defined]
+    elif callable(displacement):
         if static:
             raise ValueError("static=True needs the final approach as a number (m), not a function of time")
         assert ramp_time is not None and end_time is not None
@@ -442,26 +668,18 @@ def indent(
         delta_fn = displacement
     else:
         validate_positive("displacement (the approach of the probe)", displacement, "m")
-        d_max = float(displacement)
-        tr = float(ramp_time) if ramp_time is not None else 1.0
-        delta_fn = lambda t: d_max * min(float(t) / tr, 1.0)
-    x_max = d_max / (2 * a0)
-    if not X_MIN <= x_max <= X_MAX:
-        raise ValueError(
-            f"the largest approach {d_max:g} m is {x_max:.3g} of the ball's diameter {2 * a0:g} m; the FE indentation "
-            f"covers {X_MIN:g} to {X_MAX:g} of it (check the units: m)"
-        )
-    d1_max = hertz_split(d_max / a0, rp / a0)[0] * a0
-    if d1_max > 0.5 * rp / (1 + rp / a0):
-        raise ValueError(
-            f"displacement {d_max:g} m pushes the probe (radius {rp:g} m) about {d1_max:g} m into the ball, more than "
-            "half its effective radius R_p a0 / (R_p + a0): beyond the contacts this scene resolves"
-        )
+        d_max = float(displacement)  # type: ignore[arg-type]
+        tr_ = float(ramp_time) if ramp_time is not None else 1.0
+        delta_fn = lambda t: d_max * min(float(t) / tr_, 1.0)
+    _check_approach(d_max, a0, rp)
+    if sizing_approach is not None:
+        validate_positive("sizing_approach (the approach the mesh is sized for)", sizing_approach, "m")
+        _check_approach(float(sizing_approach), a0, rp)
     if contact not in ("nodal", "fitted"):
         raise ValueError(f"contact must be 'nodal' or 'fitted', got {contact!r}")
     if contact == "fitted" and not static:
         raise ValueError("contact='fitted' (a mesh per state, its edges on nodes) needs static=True")
-    m = make_mesh(mesh, a0, rp, d_max)
+    m = make_mesh(mesh, a0, rp, d_max if sizing_approach is None else float(sizing_approach))
     mat = Material(1.0, float(alpha), float(kappa) / C)
     prob = IndentProblem(m, mat, rp / a0, beta, tau, rtol)
     too_large = None
@@ -469,13 +687,16 @@ def indent(
         n = n_static or 8
         times = np.linspace(0.0, 1.0, n + 1)[1:]
         dfun: Callable[[float], float] = lambda t: d_max * t
-    else:
-        assert ramp_time is not None and end_time is not None
-        times = ramp_hold_schedule(float(ramp_time), float(end_time), n_ramp=n_ramp or 6, n_hold=n_hold or 20)
+    elif force is None:
         dfun = delta_fn
-        if callable(displacement):
-            dd = d_max / (n_ramp or 6)
-            too_large = lambda t0, t1: abs(float(delta_fn(t1)) - float(delta_fn(t0))) > dd * (1 + 1e-12)
+        if proto is None:
+            assert ramp_time is not None and end_time is not None
+            times = ramp_hold_schedule(float(ramp_time), float(end_time), n_ramp=n_r, n_hold=n_hold or 20)
+            if callable(displacement):
+                dd = d_max / n_r
+                too_large = lambda t0, t1: abs(float(delta_fn(t1)) - float(delta_fn(t0))) > dd * (1 + 1e-12)
+    else:
+        dfun = delta_fn
 
     def dscaled(t: float) -> float:
         d = float(dfun(t))
@@ -484,6 +705,8 @@ def indent(
         return d / a0
 
     def load_of(t: float) -> str:
+        if target is not None:
+            return f"t = {t:.6g} s, F = {target(t):.6g} N"
         return f"delta = {dfun(t) * 1e6:.4g} um" if static else f"t = {t:.6g} s, delta = {dfun(t) * 1e6:.4g} um"
 
     def step(t0: float, old: IndentState, t1: float, prev: TimedState[IndentState] | None):
@@ -507,7 +730,27 @@ def indent(
             runs.append((float(t), pb, st_f, its, time.perf_counter() - w0))
         m = runs[-1][1].m
     else:
-        for st in march(step, prob.initial(), times, too_large=too_large):
+        stepper: Callable[[float, IndentState, float, TimedState[IndentState] | None], tuple[IndentState, int]]
+        stepper = step
+        if target is not None:
+            ftarget = target
+            k_s = 32.0 / 3.0 * np.sqrt(prob.r_series)  # scaled: F / (C a0^2) = k_s (delta / a0)^1.5 (Hertz)
+
+            def step_to(t0: float, old: IndentState, t1: float, prev, d1: float | None):
+                if d1 is None:  # a target <= 0: refused by the force checks before
+                    raise ValueError("the probe scene has no unloaded state (probe force 0 N)")
+                return prob.step(old, float(d1), t1 - t0, prev.state if prev is not None else None, load_of(t1))
+
+            stepper = force_controlled(
+                step_to,
+                lambda st: prob.observe(st)["force"] * 32.0 / (3.0 * k_s),  # in the Hertz form (32/3) u^1.5
+                lambda st: st.delta,
+                lambda st: 0.0,
+                lambda t: ftarget(t) / (C * a0**2) * 32.0 / (3.0 * k_s),
+                load_of,
+                stiffness=1.0 + float(np.sum(beta)),
+            )
+        for st in march(stepper, prob.initial(), times, too_large=too_large):
             runs.append((st.time, prob, st.state, st.newton_iterations, st.wall_time))
     L2 = C * a0**2
     cols: dict[str, list] = {}
@@ -542,8 +785,9 @@ def indent(
             alpha=float(alpha),
             kappa=float(kappa),
             branches=tuple((float(b), float(t)) for b, t in br),
-            ramp_time=None if static else float(ramp_time),  # type: ignore[arg-type]
-            end_time=None if static else float(end_time),  # type: ignore[arg-type]
+            ramp_time=None if static else float(tr if (proto is not None or force is not None) else ramp_time),  # type: ignore[arg-type]
+            end_time=None if static else float(end if (proto is not None or force is not None) else end_time),  # type: ignore[arg-type]
+            control="force" if force is not None else "displacement",
             mesh=mesh,
             contact=contact,
         ),

@@ -25,14 +25,39 @@ d_i / delta = R_i^(-1/3) / (R_1^(-1/3) + R_2^(-1/3)) (:func:`contact_depths`). L
 R_1 -> R_p, R_2^(-1/3) -> 0, so R_s -> R_p and F = (4/3) E* sqrt(R_p) delta^(3/2) (the half-space Hertz
 law); two plates on a ball (reduced.spheroid's Hertz law) is the case R_1 = R_2 = a0, R_s = a0 / 8.
 
-Validity: small strain only (Hertz: contact radii small against R_1 and a0; linear elasticity, so the Fung
-exponent ``alpha`` does not enter and is not identifiable from this law: it is accepted, checked and
-unused, for the FE-calibrated correction table that does not exist yet for this scene). The expected error
-is that of Hertz against finite strain: for the ball between two plates (reduced.spheroid) Hertz is 3 %
-soft of the FE at 1 % compression (delta / (2 a0) = 0.01), 4 % at 5 %, 30 % at 30 %; expect the same
-order here at the same contact-depth ratios d_i / R_i. Eager calls reject a probe-contact depth beyond
-its effective radius (d_1 >= R_1) or a plate-contact depth beyond the ball's radius (d_2 >= a0), where
-the law means nothing.
+Validity of the Hertz law: small strain only (contact radii small against R_1 and a0; linear elasticity, so the
+Fung exponent ``alpha`` does not enter it). Against the converged FE (``fem.indentation``) it is 1.66 % soft at
+x = delta / (2 a0) = 0.005 for R_p = a0 (the finite-strain correction grows like sqrt(x): 0.236 sqrt(x)). Eager
+calls reject a probe-contact depth beyond its effective radius (d_1 >= R_1) or a plate-contact depth beyond the
+ball's radius (d_2 >= a0), where the law means nothing.
+
+FE-calibrated table (``law="table"``; ``law="auto"``, the default, uses it where it applies)
+------------------------------------------------------------------------------------------------
+F_eq = F_Hertz,series(delta) h(y, alpha, rho), rho = R_p / a0, y = d_1 / R_1 = 2 x share(rho) / r_1(rho)
+(:func:`depth_ratio`: the probe contact's small-strain depth in units of its effective radius, the quantity
+that bounds what the scene resolves, so one y grid serves every probe size). h comes from static FE runs on
+contact-edge-fitted meshes (``python -m tissuemech.compare.calibrate_indentation``, shipped as
+``reduced/data/indentation_master.npz`` with its metadata: FE level, the discretisation error against a finer
+level at check points, the command), h = 1 at y = 0, interpolated by natural cubic splines in ln(rho), then in
+s = sqrt(y) and alpha (:class:`MasterTable`; the same sqrt rule as the plate table: h - 1 grows like sqrt(y)).
+The shipped grid: rho = 0.05, 0.1, 0.2, 0.4, 1; alpha = 0, 0.5, 1.5; y = 0 ... 0.1 (x up to 0.0032 for R_p =
+a0 / 20, 0.045 for R_p = a0; the fitted-edge FE of a stiffening ball under a small probe stops converging not far
+beyond). Each node is the Richardson extrapolation of levels 1 and 2 (observed order 2.84 in the zone's element
+count, measured over levels 1-3 at three geometries): against the extrapolation of levels 2 and 3 at 12 check
+points (rho 0.05 and 0.2, alpha 0 and 1.5, y 0.025-0.1) it is within 6.6e-6 (level 2 alone: 6.4e-4 off at R_p =
+a0 / 20). Off the nodes (R_p / a0 = 0.27, alpha = 0.75, x = 0.0102) the table is 5.1e-6 from the converged FE
+(Richardson over levels 2-4, observed order 3.8; ``tests/data/indentation_reference.json``). Generation: 14 min
+for level 2 with the level-3 check at rho = 0.2, 4 min for level 1 with the check at rho = 0.05 (2 processes on a
+shared, heavily loaded 2-core machine).
+Its range: rho and alpha inside the grid (:func:`master_table`: ``rho_range``, ``alpha_range``) and x up to
+``x_max(rho)``. ``law="table"`` raises outside it (InputError naming the quantity and its range). ``law="auto"``
+takes the table when radius and probe_radius are concrete numbers with R_p / a0, alpha and the largest approach
+inside it, and the Hertz law otherwise: a half-space (``radius=math.inf``) or a probe outside the rho range
+(silently: the Hertz law's own domain), an approach or alpha beyond the table (with a ``UserWarning``: the law is
+then up to a few % soft, and a fit whose approaches cross x_max would see the two laws), several geometries in
+one call, or a geometry traced under jit/grad (the table is sliced at one concrete rho; ``law="table"`` raises
+there). Under jit with traced C / alpha / approaches the table's range is checked at run time by
+``reduced.spheroid`` (its messages speak of the equivalent ball's x' = delta / (2 a'), a' = 8 R_s).
 
 Viscoelasticity (the lumped convolution of :mod:`tissuemech.reduced.spheroid`)
 ----------------------------------------------------------------------------
@@ -41,7 +66,8 @@ Viscoelasticity (the lumped convolution of :mod:`tissuemech.reduced.spheroid`)
 with energy factors beta_m (-) and relaxation times tau_m (s). reduced.spheroid's Hertz law for a ball of
 radius a' between two plates is F = C a'^2 (32/3) (delta / (2 a'))^(3/2) = (32/3) C sqrt(a'/8) delta^(3/2):
 the law above with a' = 8 R_s. :func:`force` therefore calls ``spheroid.force(..., radius=8 R_s,
-equilibrium="hertz")`` (the check d_1 < R_1 keeps delta < 16 R_s = 2 a', inside that law's range), so the
+equilibrium="hertz")`` (or the table's law at this rho, :meth:`MasterTable.law`; the check d_1 < R_1 keeps
+delta < 16 R_s = 2 a', inside that law's range), so the
 spheroid's quadrature (ramp and hold, exact kernel) and its diffrax path (any history) are reused, not copied.
 
 Loading (``displacement``)
@@ -59,7 +85,11 @@ Every function is jit / vmap / grad-able in float64 (parameters broadcast: outpu
 
 from __future__ import annotations
 
+import functools
+import json
+import warnings
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 import jax.numpy as jnp
@@ -67,6 +97,7 @@ import numpy as np
 
 import tissuemech.reduced  # noqa: F401  (float64 in JAX)
 from tissuemech.reduced import spheroid
+from tissuemech.reduced.interp import second_derivative_map, spline_weights
 from tissuemech.reduced.material import probe_share
 from tissuemech.reduced.validation import (
     InputError,
@@ -77,9 +108,23 @@ from tissuemech.reduced.validation import (
     validate_times,
 )
 
-__all__ = ["series_radius", "contact_depths", "equilibrium_force", "force", "history"]
+__all__ = [
+    "series_radius",
+    "contact_depths",
+    "equilibrium_force",
+    "force",
+    "history",
+    "depth_ratio",
+    "x_of_depth_ratio",
+    "MasterTable",
+    "master_table",
+    "LAWS",
+    "DATA_FILE",
+]
 
 HERTZ_PREFACTOR = 32.0 / 3.0  # F = (4/3) E* sqrt(R) d^1.5 with E* = 8 C: (32/3) C sqrt(R) d^1.5
+DATA_FILE = Path(__file__).resolve().parent / "data" / "indentation_master.npz"
+LAWS = ("auto", "table", "hertz")
 
 
 def _check_radii(radius: Any, probe_radius: Any) -> None:
@@ -140,18 +185,28 @@ def _check_depth(dmax: Any, radius: Any, probe_radius: Any) -> None:
         )
 
 
-def equilibrium_force(displacement: Any, *, radius: Any, probe_radius: Any, C: Any, alpha: Any = 0.0) -> jnp.ndarray:
-    """Elastic (long-time) force F_eq = (32/3) C sqrt(R_s) delta^(3/2) in N (module doc: two Hertz contacts).
+def equilibrium_force(
+    displacement: Any, *, radius: Any, probe_radius: Any, C: Any, alpha: Any = 0.0, law: str = "auto"
+) -> jnp.ndarray:
+    """Elastic (long-time) force F_eq in N: the two-Hertz-contacts law (32/3) C sqrt(R_s) delta^(3/2) times the
+    FE-calibrated h(y, alpha, rho) (module doc).
 
     displacement  approach delta of the probe since first contact (m), >= 0 (negative: no contact, 0 N).
     radius        ball radius a0 (m), ``math.inf`` for a half-space.   probe_radius  R_p (m).
-    C, alpha      Fung parameters (Pa, -); alpha is unused by the small-strain law (checked only).
+    C, alpha      Fung parameters (Pa, -); alpha enters through the table only.
+    law           "auto" (default: the table where R_p / a0 is inside it, else Hertz), "table" or "hertz".
     """
     if not is_traced(displacement, radius, probe_radius, C, alpha):
         _check_radii(radius, probe_radius)
         validate_material(C, alpha)
         dv = validate_finite("displacement (approach of the probe since contact)", displacement, "m")
         _check_depth(dv, radius, probe_radius)
+    tab = _geometry_law(law, radius, probe_radius, _concrete_max(displacement), alpha)
+    if tab is not None:
+        table, rho = tab
+        a_equiv = 8.0 * series_radius(radius, probe_radius)
+        d = jnp.maximum(jnp.asarray(displacement, dtype=jnp.float64), 0.0)
+        return spheroid.equilibrium_force(d, radius=a_equiv, C=C, alpha=alpha, equilibrium=table.law(rho))
     d = jnp.maximum(jnp.asarray(displacement, dtype=jnp.float64), 0.0)
     rs = series_radius(radius, probe_radius)
     return HERTZ_PREFACTOR * jnp.asarray(C, dtype=jnp.float64) * jnp.sqrt(rs) * d * jnp.sqrt(d)
@@ -179,6 +234,181 @@ def history(times: Any, approaches: Any) -> tuple[jnp.ndarray, jnp.ndarray]:
                 f"approaches (m): the history starts at first contact, approach 0 m at the first time; got {d[0]:.4g} m"
             )
     return jnp.asarray(times, dtype=jnp.float64), jnp.asarray(approaches, dtype=jnp.float64)
+
+
+# ---------------------------------------------------------------- the FE-calibrated table h(y, alpha, rho)
+
+
+def depth_ratio(x: Any, rho: Any) -> np.ndarray:
+    """y = d_1 / R_1 = 2 x share(rho) / r_1(rho): the probe contact's small-strain depth d_1 (``contact_depths``)
+    over its effective radius R_1, at x = delta / (2 a0) and rho = R_p / a0 (r_1 = R_1 / a0; NumPy, eager)."""
+    rho = np.asarray(rho, dtype=float)
+    return 2.0 * np.asarray(x, dtype=float) * np.asarray(probe_share(1.0, rho)) / (rho / (1.0 + rho))
+
+
+def x_of_depth_ratio(y: Any, rho: Any) -> np.ndarray:
+    """x = delta / (2 a0) at the depth ratio y and rho = R_p / a0 (the inverse of :func:`depth_ratio`)."""
+    rho = np.asarray(rho, dtype=float)
+    return np.asarray(y, dtype=float) * (rho / (1.0 + rho)) / (2.0 * np.asarray(probe_share(1.0, rho)))
+
+
+class MasterTable:
+    """The FE-calibrated correction h(y, alpha, rho) = F_eq / F_Hertz,series (module doc, "FE-calibrated table").
+
+    ``y`` (n_y,) depth ratios from 0 (:func:`depth_ratio`), ``alpha`` (n_a,), ``rho`` (n_r,) = R_p / a0, ``h``
+    (n_r, n_a, n_y) with h = 1 at y = 0; ``metadata`` (the generator's JSON: levels, ``discretisation_error``...).
+    h is interpolated by natural cubic splines in ln(rho) (:meth:`slice`), then in s = sqrt(y) and alpha (the
+    plate table's ``spheroid.MasterCurve``, through which :func:`force` runs)."""
+
+    def __init__(self, y: Any, alpha: Any, rho: Any, h: Any, metadata: dict | None = None):
+        self.y, self.alpha, self.rho = (np.asarray(v, dtype=float) for v in (y, alpha, rho))
+        self.h = np.asarray(h, dtype=float)
+        if self.y.ndim != 1 or self.y.size < 3 or self.y[0] != 0 or np.any(np.diff(self.y) <= 0):
+            raise ValueError("indentation table: y must be >= 3 increasing depth ratios from 0")
+        if self.h.shape != (self.rho.size, self.alpha.size, self.y.size) or not np.all(np.isfinite(self.h)):
+            raise ValueError(
+                f"indentation table: h needs finite values of shape (n_rho, n_alpha, n_y) = "
+                f"({self.rho.size}, {self.alpha.size}, {self.y.size}); got {self.h.shape}"
+            )
+        if self.rho.size < 2 or np.any(np.diff(self.rho) <= 0) or self.rho[0] <= 0:
+            raise ValueError("indentation table: rho = R_p / a0 must be >= 2 increasing positive values")
+        self.metadata = dict(metadata or {})
+        self.y_max = float(self.y[-1])
+        self.alpha_range = (float(self.alpha[0]), float(self.alpha[-1]))
+        self.rho_range = (float(self.rho[0]), float(self.rho[-1]))
+        self._L = second_derivative_map(np.log(self.rho), "natural")
+        self._laws: dict[float, spheroid.FEMTable] = {}
+
+    def covers(self, rho: float) -> bool:
+        """Whether rho = R_p / a0 is inside the table's rho range."""
+        lo, hi = self.rho_range
+        return bool(lo * (1 - 1e-12) <= rho <= hi * (1 + 1e-12))
+
+    def x_max(self, rho: float) -> float:
+        """The largest x = delta / (2 a0) of the table at rho (its last depth ratio)."""
+        return float(x_of_depth_ratio(self.y_max, rho))
+
+    def slice(self, rho: float) -> np.ndarray:
+        """h at the (alpha, y) nodes for this rho: (n_a, n_y), a natural cubic spline in ln(rho) of the slices."""
+        w = np.asarray(spline_weights(np.log(self.rho), self._L, float(np.log(rho))))
+        return np.tensordot(w, self.h, axes=1)
+
+    def law(self, rho: float) -> spheroid.FEMTable:
+        """The equilibrium law at rho as ``reduced.spheroid``'s table law for the equivalent ball of radius
+        a' = 8 R_s (:func:`force`'s module doc): x' = delta / (2 a') = x / (8 r_s), f' = (32/3) x'^1.5 h."""
+        key = float(rho)
+        if key not in self._laws:
+            if len(self._laws) > 64:
+                self._laws.clear()
+            rs = float(series_radius(1.0, key))
+            xp = x_of_depth_ratio(self.y, key) / (8.0 * rs)
+            H = self.slice(key)
+            mc = spheroid.MasterCurve(
+                xp, np.asarray(spheroid.hertz_f(xp)) * H, alpha=self.alpha, metadata=self.metadata, h=H
+            )
+            self._laws[key] = spheroid.FEMTable(mc)
+        return self._laws[key]
+
+    def __call__(self, x: Any, alpha: Any = 0.0, rho: float = 1.0) -> np.ndarray:
+        """h at x = delta / (2 a0), alpha and one rho (eager, inside the table; NumPy)."""
+        self.check(np.max(x), alpha, rho)
+        xs = np.asarray(x, dtype=float) / (8.0 * float(series_radius(1.0, float(rho))))
+        mc = self.law(rho).master
+        return np.asarray(mc.f(xs, alpha)) / np.asarray(spheroid.hertz_f(xs))
+
+    def check(self, x_max: Any, alpha: Any, rho: float) -> None:
+        """Raise InputError where x up to ``x_max``, ``alpha`` (eager values) or ``rho`` is outside the table."""
+        lo, hi = self.rho_range
+        if not self.covers(rho):
+            raise InputError(
+                f"probe_radius / radius = {rho:.4g} is outside the calibrated indentation table (R_p / a0 in "
+                f"[{lo:g}, {hi:g}]); use law='hertz' (the small-strain two-contact law)"
+            )
+        xm = self.x_max(rho)
+        xv = None if is_traced(x_max) else float(np.max(np.asarray(x_max, dtype=float)))
+        if xv is not None and xv > xm * (1 + 1e-9):
+            raise InputError(
+                f"displacement (approach of the probe): delta / (2 a0) = {xv:.4g} is beyond the calibrated indentation "
+                f"table at R_p / a0 = {rho:.4g} (up to {xm:.4g}: the probe contact {self.y_max:g} of its effective "
+                "radius deep); use law='hertz' (small strain) or a smaller approach (m)"
+            )
+        if not is_traced(alpha):
+            av = np.asarray(alpha, dtype=float)
+            a_lo, a_hi = self.alpha_range
+            if av.size and (np.min(av) < a_lo - 1e-12 or np.max(av) > a_hi + 1e-12):
+                raise InputError(
+                    f"alpha (Fung exponent, -) = {np.max(av):g} is outside the calibrated indentation table (alpha in "
+                    f"[{a_lo:g}, {a_hi:g}]); use law='hertz' (alpha does not enter it)"
+                )
+
+
+@functools.lru_cache(maxsize=4)
+def master_table(path: str | None = None) -> MasterTable:
+    """The FE-calibrated indentation table shipped with the package (``reduced/data/indentation_master.npz``, made
+    by ``python -m tissuemech.compare.calibrate_indentation``) or read from ``path``."""
+    p = Path(path) if path is not None else DATA_FILE
+    if not p.exists():
+        raise FileNotFoundError(
+            f"no calibrated indentation table at {p}. Generate it with `python -m "
+            "tissuemech.compare.calibrate_indentation --install`, or use law='hertz'."
+        )
+    with np.load(p, allow_pickle=False) as z:
+        meta = json.loads(str(z["metadata"])) if "metadata" in z.files else {}
+        return MasterTable(z["y"], z["alpha"], z["rho"], z["h"], metadata=meta)
+
+
+def _concrete_max(v: Any) -> float | None:
+    """max(v) as a float for concrete values, None for traced ones."""
+    return None if is_traced(v) else float(np.max(np.asarray(v, dtype=float)))
+
+
+def _geometry_law(
+    law: str, radius: Any, probe_radius: Any, d_max: float | None = None, alpha: Any = 0.0
+) -> tuple[MasterTable, float] | None:
+    """(table, rho) when ``law`` resolves to the table at this geometry, None for the Hertz law (module doc).
+
+    ``d_max``: the largest approach (m) when concrete. ``law="table"`` raises outside the table (InputError naming
+    the quantity); ``law="auto"`` takes the Hertz law outside its rho range silently (the law's own domain: a
+    half-space, a probe beyond the grid) and beyond its approach or alpha range with a ``UserWarning``."""
+    if law not in LAWS:
+        raise InputError(f"law must be one of {LAWS}, got {law!r}")
+    if law == "hertz":
+        return None
+    if is_traced(radius, probe_radius):
+        if law == "table":
+            raise InputError(
+                "law='table' needs concrete radius and probe_radius (m), not traced ones (the table is sliced at "
+                "rho = R_p / a0 once); pass them as numbers, or use law='hertz'"
+            )
+        return None
+    rho = np.unique(np.asarray(probe_radius, dtype=float) / np.asarray(radius, dtype=float))
+    if rho.size != 1:
+        if law == "auto":
+            return None  # several geometries in one call: the Hertz law broadcasts over them
+        raise InputError(
+            f"law='table': one geometry per call (radius and probe_radius, m, as single values; got shapes "
+            f"{np.shape(radius)} and {np.shape(probe_radius)}); loop over the geometries, or use law='hertz'"
+        )
+    r = float(rho.reshape(-1)[0])
+    if law == "auto" and not DATA_FILE.exists():
+        return None  # a checkout without the generated table: the small-strain law
+    table = master_table()
+    if law == "auto" and not table.covers(r):
+        return None
+    x_max = 0.0 if d_max is None else d_max / (2.0 * float(np.max(np.asarray(radius, dtype=float))))
+    if law == "table":
+        table.check(x_max, alpha, r)
+        return table, r
+    try:
+        table.check(x_max, alpha, r)
+    except InputError as err:
+        warnings.warn(
+            f"law='auto' uses the small-strain Hertz law here: {err.args[0].split('; use')[0]}",
+            UserWarning,
+            stacklevel=3,
+        )
+        return None
+    return table, r
 
 
 class _PiecewiseLinear:
@@ -218,6 +448,7 @@ def force(
     max_steps: int = 65536,
     solver: Any = None,
     adjoint: Any = "reverse",
+    law: str = "auto",
 ) -> jnp.ndarray:
     r"""Probe force F(t) in N of the lumped generalized-Maxwell ball under a spherical probe (module doc).
 
@@ -229,6 +460,9 @@ def force(
                   measured history ``(times, approaches)`` (s, m), piecewise linear, held after its end.
     rtol, atol, max_steps, solver, adjoint   diffrax options of the measured-history path
                   (``adjoint="forward"`` for ``jax.jacfwd``).
+    law           equilibrium law: "auto" (default: the FE-calibrated table where R_p / a0 is inside it and radius
+                  and probe_radius are concrete; else the Hertz law), "table" (raises outside the table: R_p / a0,
+                  alpha, delta / (2 a0)) or "hertz" (the small-strain two-contact law).
     Returns F (N), shape ``broadcast(params).shape + t.shape``. Raises ValueError (eager) for bad inputs.
     """
     measured = isinstance(displacement, tuple)
@@ -250,9 +484,14 @@ def force(
                 raise InputError("ramp_time (s) is needed with a numeric displacement (linear ramp, then hold)")
             validate_positive("ramp_time (duration of the loading ramp)", ramp_time, "s")
             _check_depth(displacement, radius, probe_radius)
+    tab = _geometry_law(law, radius, probe_radius, _concrete_max(approaches if measured else displacement), alpha)
+    equilibrium: Any = "hertz"
+    if tab is not None:
+        table, rho = tab
+        equilibrium = table.law(rho)
     rs = series_radius(radius, probe_radius)
-    a_equiv = 8.0 * rs  # the spheroid's Hertz law with this radius and C' = C sqrt(8 R_s / a') = C (module doc)
-    common = dict(radius=a_equiv, C=C, alpha=alpha, branches=branches, equilibrium="hertz")
+    a_equiv = 8.0 * rs  # the spheroid's law with this radius and C' = C sqrt(8 R_s / a') = C (module doc)
+    common = dict(radius=a_equiv, C=C, alpha=alpha, branches=branches, equilibrium=equilibrium)
     if measured:
         return spheroid.force(
             t,

@@ -23,7 +23,7 @@ def _static(x, probe_radius=A0, level=1, alpha=0.0, n_static=1, contact="fitted"
 
 
 def _series(r, probe_radius=A0):
-    return np.asarray(ri.equilibrium_force(r.approach, radius=A0, probe_radius=probe_radius, C=C))
+    return np.asarray(ri.equilibrium_force(r.approach, radius=A0, probe_radius=probe_radius, C=C, law="hertz"))
 
 
 def test_full_section_mesh_is_the_whole_ball():
@@ -145,6 +145,46 @@ def test_ramp_hold_relaxes_to_the_static_force():
     assert r.parameters["branches"] == ((1.0, 1.0),)
 
 
+def test_force_control_reproduces_the_displacement_run():
+    """A probe force held at the displacement run's end force F gives back its approach (same mesh: the same
+    sizing approach), to the force control's tolerance; with a branch the probe creeps to the same state."""
+    kw = dict(radius=A0, probe_radius=A0, C=C, alpha=0.0, mesh=0, ramp_time=1.0, n_ramp=3)
+    d = 2 * A0 * 0.003
+    r = indent(**kw, displacement=d, end_time=2.0, n_hold=2, sizing_approach=d)
+    F = r.force[-1]
+    f = indent(**kw, force=F, end_time=2.0, n_hold=2, sizing_approach=d)
+    assert f.parameters["control"] == "force" and f.force[-1] == pytest.approx(F, rel=2e-7)
+    assert f.approach[-1] == pytest.approx(d, rel=1e-6)
+    c = indent(**kw, force=F, branches=[(1.0, 0.2)], end_time=8.0, n_hold=12, sizing_approach=d)
+    k = c.time >= 1.0
+    assert np.all(np.diff(c.approach[k]) > 0) and c.approach[k][0] < 0.95 * d  # creeps (tau = 0.2 ramp_time)
+    assert c.approach[-1] == pytest.approx(d, rel=1e-5)
+    # a measured force history (times, forces) held after its last sample: the same end state
+    h = indent(**kw, force=(np.array([0.0, 1.0, 2.0]), np.array([0.0, F, F])), sizing_approach=d)
+    assert h.time[-1] == 2.0 and h.approach[-1] == pytest.approx(d, rel=1e-6)
+
+
+def test_measured_approach_history_is_the_ramp():
+    kw = dict(radius=A0, probe_radius=A0, C=C, alpha=0.0, mesh=0, branches=[(1.0, 0.5)], n_ramp=3)
+    d = 2 * A0 * 0.002
+    r = indent(**kw, displacement=d, ramp_time=1.0, end_time=3.0, n_hold=4)
+    h = indent(**kw, displacement=(np.array([0.0, 1.0, 3.0]), np.array([0.0, d, d])), ramp_time=1.0)
+    assert h.time[-1] == 3.0 and h.approach[-1] == pytest.approx(d, rel=1e-12)
+    assert h.force[-1] == pytest.approx(r.force[-1], rel=1e-4)  # other steps: the branch's time error only
+
+
+def test_fitted_states_continue_in_approach_and_alpha():
+    from tissuemech.fem.indentation import fitted_states
+
+    d = 2 * A0 * np.array([0.002, 0.004])
+    s = fitted_states(radius=A0, probe_radius=A0, C=C, alphas=[0.0, 0.5], approaches=d, mesh=0)
+    one = _static(0.004, level=0, alpha=0.5)
+    assert s["force"][1, -1] == pytest.approx(one.force[-1], rel=2e-6)
+    assert s["force"][1, -1] > s["force"][0, -1] > s["force"][0, 0] > 0  # alpha stiffens
+    with pytest.raises(ValueError, match="increasing"):
+        fitted_states(radius=A0, probe_radius=A0, C=C, alphas=[0.0], approaches=d[::-1], mesh=0)
+
+
 @pytest.mark.slow
 def test_half_space_limit():
     """A small probe (R_p = a0 / 20): the force follows the series law to 1 % and the probe contact alone
@@ -180,6 +220,10 @@ def test_refinement_converges():
         (dict(contact="fitted", static=False, ramp_time=1.0, end_time=2.0), "static=True"),
         (dict(contact="penalty"), "contact"),
         (dict(probe_radius=1e-6, displacement=4e-6), "effective radius"),
+        (dict(force=1e-9), "exactly one of displacement"),
+        (dict(displacement=None, force=1e-9), "force control"),
+        (dict(displacement=None, force=(np.array([0.0, 1.0, 2.0]), np.array([0.0, 1e-9, 0.0])), static=False), "> 0"),
+        (dict(displacement=(np.array([0.0, 1.0]), np.array([0.0, 1e-6]))), "static=True needs"),
     ],
 )
 def test_bad_inputs(kw, match):

@@ -1,6 +1,8 @@
 """reduced.indentation: two Hertz contacts in series, the half-space limit, the lumped relaxation, gradients."""
 
+import json
 import math
+from pathlib import Path
 
 import diffrax
 import jax
@@ -18,7 +20,7 @@ TSIT5 = diffrax.Tsit5()  # the explicit solver compiles in half the time of the 
 def test_two_contacts_in_series_closed_form():
     # same force through both Hertz contacts: d_i = (F / k_i)^(2/3), k_i = (4/3) E* sqrt(R_i), E* = 8 C
     d = 1.2e-6
-    F = float(ind.equilibrium_force(d, radius=A0, probe_radius=RP, C=C))
+    F = float(ind.equilibrium_force(d, radius=A0, probe_radius=RP, C=C, law="hertz"))
     estar = 8.0 * C  # E = 6 C (mu = 2 C, incompressible), E* = E / (1 - 1/4)
     r1, r2 = RP * A0 / (RP + A0), A0
     k1, k2 = (4 / 3) * estar * math.sqrt(r1), (4 / 3) * estar * math.sqrt(r2)
@@ -34,10 +36,10 @@ def test_half_space_limit_and_plates():
     assert half == pytest.approx((4 / 3) * 8 * C * math.sqrt(RP) * d**1.5, rel=1e-13)
     # a0 -> inf: the deficit is the ball-plate contact, 1 - F/F_half ~ (3/2) (R_p / a0)^(1/3) (slow, 1/3 power)
     for a0 in (1e-2, 1e1, 1e4):
-        big = float(ind.equilibrium_force(d, radius=a0, probe_radius=RP, C=C))
+        big = float(ind.equilibrium_force(d, radius=a0, probe_radius=RP, C=C, law="hertz"))
         assert 1 - big / half == pytest.approx(1.5 * (RP / a0) ** (1 / 3), rel=3 * (RP / a0) ** (1 / 3))
     # R_1 = R_2 = a0 (a probe as large as... a plate is R_p -> inf): the spheroid's two-plate Hertz law
-    plates = float(ind.equilibrium_force(d, radius=A0, probe_radius=1e9, C=C))
+    plates = float(ind.equilibrium_force(d, radius=A0, probe_radius=1e9, C=C, law="hertz"))
     ref = float(spheroid.equilibrium_force(d, radius=A0, C=C, alpha=0.0, equilibrium="hertz"))
     assert plates == pytest.approx(ref, rel=1e-6)
 
@@ -45,7 +47,9 @@ def test_half_space_limit_and_plates():
 def test_relaxation_after_ramp_matches_quadrature():
     beta, tau, tr, d = 1.5, 2.0, 1.0, 1e-6
     t = np.array([0.5, 1.0, 3.0, 10.0])
-    F = np.asarray(ind.force(t, radius=A0, probe_radius=RP, C=C, branches=[(beta, tau)], displacement=d, ramp_time=tr))
+    F = np.asarray(
+        ind.force(t, radius=A0, probe_radius=RP, C=C, branches=[(beta, tau)], displacement=d, ramp_time=tr, law="hertz")
+    )
     K = (32 / 3) * C * math.sqrt(float(ind.series_radius(A0, RP)))  # F_eq = K delta^1.5
 
     def ref(tt):
@@ -65,9 +69,11 @@ def test_measured_history_linear_equilibrium_closed_form():
     dh = D * np.minimum(th / tr, 1.0) ** (2 / 3)
     t = np.array([0.25, 0.5, 1.0, 2.0, 5.0])
     F = np.asarray(
-        ind.force(t, radius=A0, probe_radius=RP, C=C, branches=[(beta, tau)], displacement=(th, dh), solver=TSIT5)
+        ind.force(
+            t, radius=A0, probe_radius=RP, C=C, branches=[(beta, tau)], displacement=(th, dh), solver=TSIT5, law="hertz"
+        )
     )
-    Fm = float(ind.equilibrium_force(D, radius=A0, probe_radius=RP, C=C))
+    Fm = float(ind.equilibrium_force(D, radius=A0, probe_radius=RP, C=C, law="hertz"))
     rate = Fm / tr
     ramp = lambda s: rate * s + beta * tau * rate * (1 - np.exp(-s / tau))
     ref = np.where(t <= tr, ramp(t), Fm + (ramp(tr) - Fm) * np.exp(-(t - tr) / tau))
@@ -77,7 +83,7 @@ def test_measured_history_linear_equilibrium_closed_form():
 @pytest.mark.slow
 def test_history_agrees_with_ramp_and_hold():
     t = np.linspace(0.0, 20.0, 41)
-    kw = dict(radius=A0, probe_radius=RP, C=C, branches=[(2.0, 3.0)])
+    kw = dict(radius=A0, probe_radius=RP, C=C, branches=[(2.0, 3.0)], law="hertz")
     F = np.asarray(ind.force(t, **kw, displacement=1e-6, ramp_time=1.0))
     th = np.array([0.0, 1.0, 20.0])
     G = np.asarray(ind.force(t, **kw, displacement=(th, np.array([0.0, 1e-6, 1e-6])), solver=TSIT5))
@@ -90,7 +96,7 @@ def test_gradients_against_finite_differences():
     def total(p):
         c, beta, tau, rp = p
         return ind.force(
-            t, radius=A0, probe_radius=rp, C=c, branches=[(beta, tau)], displacement=1e-6, ramp_time=1.0
+            t, radius=A0, probe_radius=rp, C=c, branches=[(beta, tau)], displacement=1e-6, ramp_time=1.0, law="hertz"
         ).sum()
 
     p0 = np.array([C, 1.2, 2.0, RP])
@@ -121,6 +127,7 @@ def test_history_jacobian_against_finite_differences():
             displacement=(th, dh),
             adjoint="forward",
             solver=TSIT5,
+            law="hertz",
         )
 
     p0 = np.array([C, 1.2, 2.0])
@@ -137,7 +144,7 @@ def test_vmap_and_jit():
     f = jax.jit(
         jax.vmap(
             lambda c: ind.force(
-                t, radius=A0, probe_radius=RP, C=c, branches=[(1.0, 1.0)], displacement=1e-6, ramp_time=1.0
+                t, radius=A0, probe_radius=RP, C=c, branches=[(1.0, 1.0)], displacement=1e-6, ramp_time=1.0, law="hertz"
             )
         )
     )
@@ -162,3 +169,107 @@ def test_bad_inputs_name_quantity_and_unit(kwargs, words):
     kw.update(kwargs)
     with pytest.raises(ValueError, match=words.replace("(", r"\(")):
         ind.force(np.array([0.5]), **kw)
+
+
+# ---------------------------------------------------------------- the FE-calibrated table
+
+
+def _synthetic_table():
+    y = np.array([0.0, 0.0125, 0.025, 0.05, 0.075, 0.1])
+    alpha, rho = np.array([0.0, 0.5, 1.5]), np.array([0.05, 0.2, 1.0])
+    c = lambda r, a: 0.05 + 0.02 * np.log(r) + 0.01 * a  # a smooth h - 1 = c sqrt(y)
+    h = np.array([[1.0 + c(r, a) * np.sqrt(y) for a in alpha] for r in rho])
+    return ind.MasterTable(y, alpha, rho, h, metadata={"discretisation_error": 1e-5}), c
+
+
+def test_master_table_reproduces_its_nodes_and_raises_outside():
+    tab, c = _synthetic_table()
+    for r in tab.rho:
+        x = ind.x_of_depth_ratio(tab.y[1:], r)
+        assert np.allclose(ind.depth_ratio(x, r), tab.y[1:], rtol=1e-14)
+        for a in tab.alpha:
+            assert np.allclose(tab(x, a, r), 1.0 + c(r, a) * np.sqrt(tab.y[1:]), rtol=1e-12)
+    # between the nodes the splines (ln rho, sqrt y, alpha) follow the smooth h
+    r, a = 0.45, 0.8
+    x = ind.x_of_depth_ratio(np.array([0.04, 0.09]), r)
+    assert np.allclose(tab(x, a, r), 1.0 + c(r, a) * np.sqrt([0.04, 0.09]), rtol=2e-4)
+    with pytest.raises(ValueError, match=r"probe_radius / radius = 2 is outside .* law='hertz'"):
+        tab.check(0.001, 0.0, 2.0)
+    with pytest.raises(ValueError, match=r"delta / \(2 a0\) = .* beyond the calibrated indentation table"):
+        tab.check(float(tab.x_max(0.2)) * 1.01, 0.0, 0.2)
+    with pytest.raises(ValueError, match=r"alpha \(Fung exponent, -\) = 2 is outside"):
+        tab.check(0.001, 2.0, 0.2)
+
+
+def test_table_law_is_the_equilibrium_of_the_lumped_force():
+    tab = ind.master_table()
+    assert tab.metadata["discretisation_error"] < 2e-5 and tab.y[0] == 0.0
+    rho, a = float(tab.rho[2]), float(tab.alpha[1])
+    a0 = 50e-6
+    d = 2 * a0 * float(ind.x_of_depth_ratio(tab.y[3], rho))  # a node
+    kw = dict(radius=a0, probe_radius=rho * a0, C=C, alpha=a)
+    F = float(ind.equilibrium_force(d, **kw, law="table"))
+    hz = float(ind.equilibrium_force(d, **kw, law="hertz"))
+    assert F / hz == pytest.approx(tab.h[2, 1, 3], rel=1e-12) and F > hz
+    assert float(ind.equilibrium_force(d, **kw)) == F  # auto: the table inside its range
+    # elastic ball: the lumped force is the equilibrium law at every time, branches relax to it
+    t = np.array([0.5, 1.0, 50.0])
+    Fe = np.asarray(ind.force(t, **kw, displacement=d, ramp_time=1.0))
+    assert np.allclose(Fe[1:], F, rtol=1e-10) and Fe[0] < F
+    Fb = np.asarray(ind.force(t, **kw, branches=[(1.0, 0.5)], displacement=d, ramp_time=1.0))
+    assert Fb[1] > F and Fb[2] == pytest.approx(F, rel=1e-10)
+
+
+def test_auto_law_outside_the_table_and_under_jit():
+    tab = ind.master_table()
+    d = 0.2e-6
+    half = float(ind.equilibrium_force(d, radius=math.inf, probe_radius=RP, C=C))  # half-space: Hertz
+    assert half == pytest.approx((4 / 3) * 8 * C * math.sqrt(RP) * d**1.5, rel=1e-13)
+    big = 2 * tab.rho_range[1]  # a probe larger than the table's
+    kw = dict(radius=A0, probe_radius=big * A0, C=C)
+    assert float(ind.equilibrium_force(d, **kw)) == float(ind.equilibrium_force(d, **kw, law="hertz"))
+    with pytest.raises(ValueError, match="outside the calibrated indentation table"):
+        ind.equilibrium_force(d, **kw, law="table")
+    deep = dict(radius=A0, probe_radius=RP, C=C, displacement=1e-6, ramp_time=1.0)  # y = 0.15: beyond the table
+    with pytest.raises(ValueError, match=r"delta / \(2 a0\) = .* beyond the calibrated indentation table"):
+        ind.force(np.array([1.0]), **deep, law="table")
+    with pytest.warns(UserWarning, match="Hertz law here: displacement"):
+        auto = float(ind.force(np.array([1.0]), **deep)[0])
+    assert auto == float(ind.force(np.array([1.0]), **deep, law="hertz")[0])
+    with pytest.raises(ValueError, match="alpha .* outside the calibrated indentation table"):
+        ind.equilibrium_force(d, radius=A0, probe_radius=RP, C=C, alpha=2.0, law="table")
+    with pytest.raises(ValueError, match="law must be one of"):
+        ind.equilibrium_force(d, radius=A0, probe_radius=RP, C=C, law="fem")
+    # a traced geometry: auto is the Hertz law, 'table' refuses
+    f = jax.jit(lambda rp: ind.equilibrium_force(d, radius=A0, probe_radius=rp, C=C))
+    assert float(f(RP)) == pytest.approx(float(ind.equilibrium_force(d, radius=A0, probe_radius=RP, C=C, law="hertz")))
+    with pytest.raises(ValueError, match="law='table' needs concrete radius and probe_radius"):
+        jax.jit(lambda rp: ind.equilibrium_force(d, radius=A0, probe_radius=rp, C=C, law="table"))(RP)
+    # traced C and alpha with a concrete geometry: the table, gradients through it
+    g = jax.grad(lambda c, a: ind.equilibrium_force(d, radius=A0, probe_radius=RP, C=c, alpha=a), argnums=(0, 1))
+    dc, da = g(C, 0.5)
+    F = float(ind.equilibrium_force(d, radius=A0, probe_radius=RP, C=C, alpha=0.5))
+    assert float(dc) == pytest.approx(F / C, rel=1e-12) and float(da) > 0  # alpha stiffens
+
+
+REFERENCE = Path(__file__).parent / "data" / "indentation_reference.json"
+
+
+@pytest.mark.slow
+def test_table_against_converged_fe_off_the_nodes():
+    """Reduced (table) vs the FE's Richardson limit over levels at a point between the table's nodes in x, alpha
+    and rho (tests/data/indentation_reference.json); the level-2 FE state is recomputed here."""
+    from tissuemech.fem.indentation import fitted_states
+
+    ref = json.loads(REFERENCE.read_text())
+    tab = ind.master_table()
+    rho, a, y = ref["rho"], ref["alpha"], ref["y"]
+    assert not np.any(np.isclose(tab.rho, rho)) and not np.any(np.isclose(tab.alpha, a))
+    assert not np.any(np.isclose(tab.y, y))
+    a0, c = ref["radius"], ref["C"]
+    d = ref["approach"]
+    F = float(ind.equilibrium_force(d, radius=a0, probe_radius=rho * a0, C=c, alpha=a, law="table"))
+    assert abs(F / ref["richardson_force"] - 1) < 5e-4  # measured: 5.1e-6
+    lv = ref["levels"]["2"]
+    r = fitted_states(radius=a0, probe_radius=rho * a0, C=c, alphas=[0.0, a], approaches=lv["approaches"], mesh=2)
+    assert float(r["force"][1, -1]) == pytest.approx(lv["force"], rel=1e-7)

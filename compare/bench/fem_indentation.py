@@ -53,7 +53,7 @@ def static_ratio(
         radius=A0, probe_radius=probe_radius, C=C, alpha=alpha, displacement=2 * A0 * x, static=True, mesh=level,
         n_static=n, contact=contact,
     )  # fmt: skip
-    ref = float(ri.equilibrium_force(r.approach[-1], radius=A0, probe_radius=probe_radius, C=C))
+    ref = float(ri.equilibrium_force(r.approach[-1], radius=A0, probe_radius=probe_radius, C=C, law="hertz"))
     return r.force[-1] / ref, r, time.perf_counter() - t
 
 
@@ -101,7 +101,7 @@ def quantisation(level: int, n: int = 16) -> None:
     for contact in ("nodal", "fitted"):
         _, r, _ = static_ratio(0.005, A0, level, n_static=n, contact=contact)
         x = r.approach / (2 * A0)
-        q = r.force / np.asarray(ri.equilibrium_force(r.approach, radius=A0, probe_radius=A0, C=C))
+        q = r.force / np.asarray(ri.equilibrium_force(r.approach, radius=A0, probe_radius=A0, C=C, law="hertz"))
         keep = x >= 0.0025 - 1e-12
         B = np.stack([np.ones(keep.sum()), np.sqrt(x[keep]), x[keep]], 1)
         resid = q[keep] - B @ np.linalg.lstsq(B, q[keep], rcond=None)[0]
