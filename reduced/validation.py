@@ -29,7 +29,6 @@ from typing import Any, SupportsInt, cast
 import numpy as np
 
 try:  # jax is a core dependency; keep this module importable for pure-NumPy callers anyway
-    import equinox as eqx
     import jax
     import jax.numpy as jnp
 except ImportError:  # pragma: no cover
@@ -325,6 +324,8 @@ def traced_checks(out: Any, checks: Sequence[tuple[Any, str]]) -> Any:
             if bool(flag):
                 raise InputError(message)
         return out
+    import equinox as eqx  # here, not at import: equinox costs a command that never traces ~0.1-0.4 s to import
+
     flags = jnp.stack(anys)
     out = jax.tree_util.tree_map(lambda v: v if isinstance(v, jax.Array) else jnp.asarray(v), out)
     return eqx.branched_error_if(out, jnp.any(flags), jnp.argmax(flags), [m + _TRACED for _, m in checks])

@@ -5,7 +5,9 @@ Rows come from ``compare.bench.reduced_blastula.rows()`` and ``compare.bench.red
 this module adds the ``import tissuemech.reduced`` time (measured in a fresh interpreter) and prints them.
 A first table (issue 14) sets the eager public blastula calls against their jitted form, in one run
 (``reduced_blastula.api_rows``), times the whole ``tissuemech blastula`` process (``cli_rows``) and the
-one-point calls with asynchronous and with inline JAX dispatch (``dispatch_rows``).
+one-point calls with asynchronous and with inline JAX dispatch (``dispatch_rows``); a third (issue 40) times the
+exact ``pressure`` and ``inner_stretch`` on 1e6 random shells against their targets, with the pressure program's
+roofline (``workload_rows``).
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ def main(argv: Sequence[str] | None = None) -> list[dict]:
     print(f"import tissuemech.reduced: {import_time():.2f} s (fresh interpreter, best of 3)")
     print_rows(reduced_blastula.api_rows() + reduced_blastula.cli_rows())
     print_rows(reduced_blastula.dispatch_rows())
+    print_rows(reduced_blastula.workload_rows())  # issue 40 item 6: random shells, roofline of the pressure
     rows = list(reduced_blastula.rows()) + list(reduced_spheroid.rows())
     print_rows(rows)
     return rows

@@ -20,6 +20,7 @@ with the speed-up. Timings on a shared 2-core CPU are pessimistic.
 from __future__ import annotations
 
 import argparse
+import math
 import time
 from collections.abc import Callable, Sequence
 
@@ -427,6 +428,126 @@ def import_rows(repeats: int = 3) -> list[dict]:
     return rows
 
 
+# issue 40 item 6: workload-honest rows (random shells, not one geometry)
+SHELL_RATIO = (1.03, 1.6)  # B/A of the random shells
+SHELL_STRETCH = (1.01, 3.0)  # inner stretch, below each shell's limit stretch (the rising branch)
+SHELL_ALPHA = (0.0, 0.3)
+PRESSURE_TARGET = 1e7  # points/s, exact pressure on random shells
+INVERSE_TARGET = 1e6  # points/s, inner_stretch on random shells
+TRANSCENDENTALS = ("exponential", "log", "log-plus-one", "exponential-minus-one", "power", "tanh", "sqrt")
+
+
+def random_shells(n: int, seed: int = 0) -> dict[str, np.ndarray | float]:
+    """n random shells and states on their rising branch: A = 50 um, B/A uniform in ``SHELL_RATIO``, alpha uniform
+    in ``SHELL_ALPHA``, C = 200 Pa, inner stretch uniform between 1.01 and min(3, the shell's limit stretch - 1e-3);
+    the pressure at each state. States whose pressure the inverse does not bring back to the drawn stretch (a
+    shell whose curve dips below a slope of zero between the limit search's grid nodes: ~1e-4 of the draws) are
+    redrawn, five rounds at most, then set to the smallest stretch. Keys: A, B, C, alpha, stretch, pressure."""
+    from tissuemech.reduced import blastula as bl
+
+    rng = np.random.default_rng(seed)
+    A, C = 50e-6, 200.0
+    B = A * rng.uniform(*SHELL_RATIO, n)
+    al = rng.uniform(*SHELL_ALPHA, n)
+    lim = np.asarray(bl.limit_point(inner_radius=A, outer_radius=B, C=C, alpha=al).inner_stretch)
+    top = np.where(np.isnan(lim), SHELL_STRETCH[1], np.minimum(SHELL_STRETCH[1], lim - 1e-3))
+    la = SHELL_STRETCH[0] + (top - SHELL_STRETCH[0]) * rng.uniform(0.0, 1.0, n)
+    for round_ in range(6):
+        p = np.asarray(bl.pressure(la, inner_radius=A, outer_radius=B, C=C, alpha=al))
+        back, ok = bl.inner_stretch_solve(p, inner_radius=A, outer_radius=B, C=C, alpha=al)
+        bad = ~(np.asarray(ok) & (np.abs(np.asarray(back) / la - 1.0) <= 1e-9))
+        if not bad.any():
+            break
+        fresh = SHELL_STRETCH[0] + (top[bad] - SHELL_STRETCH[0]) * rng.uniform(0.0, 1.0, int(bad.sum()))
+        la[bad] = fresh if round_ < 5 else SHELL_STRETCH[0]
+    return dict(A=A, B=B, C=C, alpha=al, stretch=la, pressure=p)
+
+
+def transcendentals_per_point(n: int = 4096) -> dict[str, float]:
+    """Transcendental calls (and divisions) per point of the compiled one-panel pressure program (the program an
+    eager ``pressure`` call runs), counted in XLA's optimised HLO on n random shells: the arithmetic's floor."""
+    import re
+
+    import jax
+
+    from tissuemech.reduced import blastula as bl
+
+    sh = random_shells(n, seed=1)
+    fn = jax.jit(lambda x, b, a: bl.pressure(x, inner_radius=sh["A"], outer_radius=b, C=sh["C"], alpha=a))
+    text = fn.lower(sh["stretch"], sh["B"], sh["alpha"]).compile().as_text()
+    ops = TRANSCENDENTALS + ("divide",)
+    counts: dict[str, float] = {}
+    for m in re.finditer(r"= f64\[([\d,]*)\][^ ]* (" + "|".join(ops) + r")\(", text):
+        size = math.prod(int(v) for v in m.group(1).split(",") if v)
+        counts[m.group(2)] = counts.get(m.group(2), 0.0) + size / n
+    return counts
+
+
+def exp_seconds(m: int = 4_000_000, repeats: int = 5) -> float:
+    """Seconds per float64 exponential of XLA on this machine (jit(exp) over m values, best of ``repeats``)."""
+    import jax
+
+    x = jnp.asarray(np.random.default_rng(0).uniform(-2.0, 2.0, m))
+    f = jax.jit(jnp.exp)
+    jax.block_until_ready(f(x))
+    best = np.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        jax.block_until_ready(f(x))
+        best = min(best, time.perf_counter() - t0)
+    return best / m
+
+
+def workload_rows(n: int = 1_000_000, repeats: int = 3, seed: int = 0) -> list[dict]:
+    """Issue 40 item 6 on random shells (:func:`random_shells`): eager ``pressure`` and ``inner_stretch`` at n
+    points (best of ``repeats``, interleaved), their targets, the pressure program's transcendental calls per point
+    and the roofline they set with this machine's measured float64 exponential: points/s <= 1 / (calls x time per
+    call), one core."""
+    import jax
+
+    from tissuemech.reduced import blastula as bl
+
+    sh = random_shells(n, seed)
+    kw = dict(inner_radius=sh["A"], outer_radius=sh["B"], C=sh["C"], alpha=sh["alpha"])
+    fwd = lambda: bl.pressure(sh["stretch"], **kw)
+    inv = lambda: bl.inner_stretch(sh["pressure"], **kw)
+    for f in (fwd, inv):
+        jax.block_until_ready(f())
+    ts: list[list[float]] = [[], []]
+    for _ in range(repeats):
+        for i, f in enumerate((fwd, inv)):
+            t0 = time.perf_counter()
+            jax.block_until_ready(f())
+            ts[i].append(time.perf_counter() - t0)
+    rate_p, rate_i = n / min(ts[0]), n / min(ts[1])
+    err_i = float(np.max(np.abs(np.asarray(inv()) / sh["stretch"] - 1.0)))
+    calls = transcendentals_per_point()
+    n_tr = sum(v for k, v in calls.items() if k in TRANSCENDENTALS)
+    t_exp = exp_seconds()
+    roof = 1.0 / (n_tr * t_exp)
+    what = f"{n:.0e} random shells (B/A {SHELL_RATIO[0]:g}-{SHELL_RATIO[1]:g}, alpha {SHELL_ALPHA[0]:g}-{SHELL_ALPHA[1]:g})"
+    return [
+        dict(
+            function=f"pressure, {what}",
+            points=n,
+            eager_points_per_s=rate_p,
+            target=f">= {PRESSURE_TARGET:.0e} points/s",
+            met="yes" if rate_p >= PRESSURE_TARGET else "NO",
+            note=f"roofline {roof:.3g} points/s: {n_tr:.0f} transcendental calls per point ("
+            + ", ".join(f"{v:.0f} {k}" for k, v in calls.items())
+            + f") x {t_exp * 1e9:.2f} ns per float64 exp (measured, jit(exp) on 4e6 values)",
+        ),
+        dict(
+            function=f"inner_stretch, {what}",
+            points=n,
+            eager_points_per_s=rate_i,
+            target=f">= {INVERSE_TARGET:.0e} points/s",
+            met="yes" if rate_i >= INVERSE_TARGET else "NO",
+            note=f"{rate_p / rate_i:.1f} pressure calls' time per inverse; max |lambda/drawn - 1| = {err_i:.1e}",
+        ),
+    ]
+
+
 def base_fwd(rows_so_far: list[dict]) -> float:
     return rows_so_far[0]["baseline_points_per_s"]
 
@@ -444,6 +565,9 @@ def main(argv: Sequence[str] | None = None) -> list[dict]:
     print_rows(api)
     api += dispatch_rows()
     print_rows(api[-len(_api_cases(1, np.random.default_rng(1))) :])
+    work = workload_rows(args.n)
+    print_rows(work)
+    api += work
     if args.api_only:
         return api
     r = rows(args.n, args.baseline)

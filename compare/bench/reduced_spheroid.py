@@ -174,7 +174,7 @@ def _interleaved(fns: Sequence, repeats: int) -> list[float]:
     return [float(np.median(t)) for t in times]
 
 
-def api_rows(n_curves: int = 1000, n_points: int = 1_000_000, repeats: int = 7, seed: int = 0) -> list[dict]:
+def api_rows(n_curves: int = 2000, n_points: int = 1_000_000, repeats: int = 7, seed: int = 0) -> list[dict]:
     """Eager vs jit of the public functions (issue 14 targets), ratios from interleaved medians."""
     import jax
 
@@ -188,7 +188,7 @@ def api_rows(n_curves: int = 1000, n_points: int = 1_000_000, repeats: int = 7, 
             jitted = jax.jit(lambda t, c, fn=fn: fn(t, C=c, **kw))
             te, tj = _interleaved(
                 [lambda fn=fn, C=C: fn(TIMES, C=C, **kw), lambda jitted=jitted, C=C: jitted(TIMES, C)],
-                repeats,  # 1000 curves: ~0.2 s a call; fewer repeats left +-20 % noise in the ratio
+                repeats,  # 2000 curves (issue 40): ~0.4 s a call; fewer repeats left +-20 % noise in the ratio
             )
             out.append(
                 dict(

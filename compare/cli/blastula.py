@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import threading
 import time
 from argparse import Namespace
 from typing import Any
@@ -13,7 +14,7 @@ from tissuemech.compare import cases
 from tissuemech.compare.cases import UM
 from tissuemech.compare.cli.common import CLIError, figure_path, positive, save_figure
 
-__all__ = ["add_parser", "run", "blastula_curves", "blastula_table"]
+__all__ = ["add_parser", "run", "blastula_curves", "blastula_table", "preload_plotting"]
 
 
 def add_parser(sub: Any) -> argparse.ArgumentParser:
@@ -138,6 +139,25 @@ def _print_blastula(curves: list[dict[str, Any]], inner_radius: float) -> None:
             print(f"  {where}: p_max = {lim.pressure:.2f} Pa at lambda_a = {lim.inner_stretch:.4f}")
 
 
+def preload_plotting() -> threading.Thread:
+    """Import matplotlib's pyplot and the scene plots in a background thread (started before the table is
+    computed; join it before plotting). The table's first calls compile JAX programs, and XLA compiles without
+    holding Python's global lock: on a machine with a free second core the plotting imports (~0.5 s) then overlap
+    the compilations instead of following them. An import error is left for the main thread's own import to raise."""
+
+    def load() -> None:
+        try:
+            import matplotlib.pyplot  # noqa: F401
+
+            import tissuemech.compare.plots.scenes  # noqa: F401
+        except Exception:  # raised again, with its traceback, where the main thread imports it
+            pass
+
+    thread = threading.Thread(target=load, name="tissuemech-preload-plotting", daemon=True)
+    thread.start()
+    return thread
+
+
 def blastula_table(args: Namespace) -> None:
     """``tissuemech blastula``: table of the Fig. 4/5 sets, limit pressures, PNG plot."""
     out = figure_path("--out", args.out)
@@ -150,10 +170,12 @@ def blastula_table(args: Namespace) -> None:
     if args.step > args.max_pressure:
         raise CLIError(f"--step {args.step:g} Pa must not exceed --max-pressure {args.max_pressure:g} Pa")
     A = args.inner_radius_um * UM
+    plotting = preload_plotting()
     curves = blastula_curves(args.C, A, args.max_pressure, args.step)
     _print_blastula(curves, A)
     fem_runs = _blastula_fem(curves, args.C, A) if getattr(args, "fem", False) else {}
 
+    plotting.join()
     from tissuemech.compare.plots.scenes import blastula_figure
 
     fig = blastula_figure(curves, C=args.C, inner_radius=A, max_pressure=args.max_pressure, fem_runs=fem_runs)
