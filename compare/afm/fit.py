@@ -5,7 +5,9 @@ Model: :func:`tissuemech.reduced.indentation.force`, a rigid sphere (``probe_rad
 delta(t) of the curve (:func:`tissuemech.compare.afm.contact.indentation`: the loading ramp in contact, then
 the hold with the tip's creep), with parameters C (Pa), beta_m (-), tau_m (s). The Fung exponent alpha is
 not identifiable from one indentation depth at small strain (the Hertz law does not depend on it): it is
-fixed at 0 and not fitted. Only the force over the hold is fitted (the ramp enters through the history);
+fixed at 0 and not fitted. The law is the Hertz series law (``law="hertz"``): AFM depths (delta / R_s ~ 0.75 in the
+example records) lie far beyond the FE-calibrated indentation table's reach (delta / R_s <= 0.1).
+Only the force over the hold is fitted (the ramp enters through the history);
 the model's force over the ramp is returned too, as a check (:attr:`CurveFit.ramp_model`).
 
 Geometry: beta_m and tau_m do not depend on R_p and a0 (the Hertz law scales F by sqrt(R_s) only, module doc
@@ -189,6 +191,7 @@ def _predict(theta, t, d, radius, probe_radius, nb):
         C=p[0],
         alpha=0.0,
         branches=branches,
+        law="hertz",
         displacement=(t, d),
         adjoint="forward",
         rtol=RTOL,
@@ -248,7 +251,9 @@ def fit_curve(
         raise InputError(f"radius (of the indented ball, in m) must be positive or math.inf; got {radius!r}")
     names = parameter_names(n_branches)
     t, d, f, hold = resample(ind, n_ramp=n_ramp, n_hold=n_hold)
-    probe_model.equilibrium_force(float(np.max(d)), radius=radius, probe_radius=probe_radius, C=1.0)  # depth check
+    probe_model.equilibrium_force(
+        float(np.max(d)), radius=radius, probe_radius=probe_radius, C=1.0, law="hertz"
+    )  # depth check
     rs = float(probe_model.series_radius(radius, probe_radius))
     theta0 = np.asarray(initial, dtype=float) if initial is not None else _initial(t, d, f, hold, rs, n_branches)
     if initial is not None:
