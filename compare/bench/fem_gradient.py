@@ -25,21 +25,27 @@ Time runs (default level, node-by-node contact; the Maxwell history's sensitivit
 ``--only-time`` runs just these), the largest over the steps of |grad - FD| / max |FD|, measured 2026-12-04 on the
 shared 2-core box at load average 20-27 (wall times 4-8x the CPU times; the ratios side by side agree in both):
 
-* Fig. 10 relaxation (force): 2.3e-11 (C), 7.4e-9 (alpha), 1.9e-9 (beta), 4.4e-9 (tau); 4 gradients cost 1.98x
-  and 2.22x the plain run in two benchmark runs (CPU 1.99x, 2.21x; was 3.7x);
+* Fig. 10 relaxation (force): 5.9e-12 (C), 9.6e-9 (alpha), 1.9e-9 (beta), 4.4e-9 (tau); 4 gradients cost 1.90x
+  the plain run (CPU 2.01x; was 3.7x, then 1.98-2.22x before the two changes below);
 * relaxation at alpha = 1.4 with two branches (tau 0.2 s and 20 s, 40 um in 1 s, 8 + 20 fixed steps: the adaptive
   schedule depends on beta and tau, so whole runs of a central difference would not share their steps) (force):
-  <= 8.4e-9 for C, alpha, beta_1, tau_1, beta_2, tau_2; 6 gradients 1.85x (CPU 1.81x);
+  <= 8.4e-9 for C, alpha, beta_1, tau_1, beta_2, tau_2; 6 gradients 1.89x (CPU 1.81x);
 * creep under force control (3 uN, the same material, 6 + 12 steps) (approach, midplane radius, nominal stress):
   <= 1.2e-7 (the nominal stress's differences carry the force tolerance, 1e-10 at rtol 1e-13); 6 gradients
-  1.09x (CPU 1.08x; the plain run 8.4 s CPU: several trials per step). ``--only-time`` takes ~2.5 min CPU.
+  1.14x (CPU 1.10x; the plain run 9 s CPU: several trials per step). ``--only-time`` takes ~2.5 min CPU.
 
-The 1.5x aimed at is not reached for displacement control: per step the sensitivities cost one tangent assembly
+(Last measured 2026-12-04 01:27-01:38 UTC, load average 14-21.) Two changes since the first measurement: the
+refinement's minimal-residual coefficients come from the scaled normal equations instead of ``numpy.linalg.lstsq``
+(OpenBLAS's threaded LAPACK took 0.1-0.4 s per call on the loaded box: a Fig. 10 run with gradients spent 12.9 of
+its 17 s profiled there) and the solves' tolerance is 1e-7 instead of 1e-8 (no new factorisation on Fig. 10; CPU
+ratio 1.98x against 2.11x in one side-by-side run of both, 5 repeats each; the accuracy above is at 1e-7). The
+1.5x aimed at is not reached for displacement control: per step the sensitivities cost one tangent assembly
 (Newton's quasi-Newton steps assemble none), the closed-form stress derivatives (``fem.sensitivity.
-IsoLinearisation``: no difference quotients any more) and 2-4 block solves of the minimal-residual refinement
-from the last factorisation; the plain step is ~6 cheap Broyden iterations. Under force control each step runs
-several trials, and the sensitivities' fresh factorisations, handed to Newton, save it iterations. Time runs on
-fitted meshes (the replayed history's sensitivity across the meshes) are not done.
+IsoLinearisation``: no difference quotients any more) and 3-5 block solves of the minimal-residual refinement
+from the last factorisation; the plain step is ~5 cheap Broyden iterations (~14 ms CPU each way on Fig. 10).
+Under force control each step runs several trials, and the sensitivities' fresh factorisations, handed to Newton,
+save it iterations. Time runs on fitted meshes (the replayed history's sensitivity across the meshes) are not
+done.
 """
 
 from __future__ import annotations
