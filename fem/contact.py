@@ -284,6 +284,7 @@ class ContactProblem(Protocol):
     free: np.ndarray
     plane: RigidPlane
     floor: float
+    long_time: float  # weight of the long-time Fung term in the algorithmic stress (0: a Maxwell liquid)
 
     def admissible(self, x: np.ndarray) -> str | None: ...
 
@@ -814,7 +815,7 @@ def fitted_stepper(
         def visc(prob: P):
             """The step's algorithmic terms (iso_scale, extra_S) at the Gauss points of prob's mesh."""
             if history in ("replay", "transfer", "chain"):
-                return ve.algorithmic(on(prob), beta, tau, dt)
+                return ve.algorithmic(on(prob), beta, tau, dt, prob.long_time)
             key = ("extra", id(prob))
             if key not in cache:
                 here = s_old.visco
@@ -824,7 +825,7 @@ def fitted_stepper(
                     f_old = prob.asm.f_at(s_old.x) if prob.m is m_old else deformation_at(m_old, s_old.x, prob.m)
                     S_n = cm.iso_second_piola(f_old, prob.mat.C, prob.mat.alpha)
                     here = ve.MaxwellState(gauss_transfer(H, prob.m, continuous=True)(s_old.visco.Q), S_n)
-                cache[key] = ve.algorithmic(here, beta, tau, dt)
+                cache[key] = ve.algorithmic(here, beta, tau, dt, prob.long_time)
             return cache[key]
 
         def updated(prob: P, x: np.ndarray, e_new: float, held: bool) -> tuple[ve.MaxwellState, AxiMesh | None, float]:
@@ -864,7 +865,7 @@ def fitted_stepper(
             visco0 = s_old.visco if history == "replay" else on(prob)  # replay: it lives on this mesh
             if visco0 is not s_old.visco:  # anchored elsewhere: S_iso^n evaluated on this mesh, Q_m interpolated
                 visco0 = visco0._replace(S_iso=prob.asm.iso_S(s_old.x, prob.mat))
-            iso_scale, extra = ve.algorithmic(visco0, beta, tau, dt)
+            iso_scale, extra = ve.algorithmic(visco0, beta, tau, dt, prob.long_time)
             sol = prob.solve(s_old, d1, iso_scale, extra, guess, load_of_t(t1))
             visco = ve.update(visco0, beta, tau, dt, prob.asm.iso_S(sol.x, prob.mat))
             st = PlateState(sol.x, sol.active, visco, d1, sol.residual, iso_scale, extra, sol.sets)
