@@ -35,6 +35,8 @@ from tissuemech.fem.contact import (
     PlateStep,
     RigidPlane,
     contact_treatment,
+    edge_slope,
+    edge_slope_change,
     first_state,
     fitted_stepper,
     nodal_step,
@@ -320,16 +322,20 @@ class BallProblem(SceneProblem):
         KUU, KfU = K[U][:, U], K[fixed][:, U]
         dxU = sens.solve_all(KUU, {n: v[U] for n, v in dr.items()}, f"delta = {s.delta:.6g} (of 2 a0)", factored)
         F = -float(np.sum(s.residual[fixed]))
-        d = {}
+        d, fulls = {}, {}
         for n, v in dr.items():
             dN = -(v[fixed] + KfU @ dxU[n])  # change of every held node's multiplier
             full = np.zeros_like(x)
             full[U] = dxU[n]
-            d[n] = (float(dN.sum()), float(full[2 * self.equator]), float(dN[-1]))
+            d[n], fulls[n] = (float(dN.sum()), float(full[2 * self.equator]), float(dN[-1])), full
         if moved is None:
             return {n: (v[0], v[1]) for n, v in d.items()}
         N_edge = -float(s.residual[fixed[-1]])
         dphi = {n: (v[2] - N_edge / F * v[0]) / F for n, v in d.items()}
+        if self.asm.surface is not None and self.asm.surface.gamma > 0:  # the edge condition of a tension: dz/dr = 0
+            n_act = act.size  # fem.contact.edge_slope; on the moved meshes the held displacement moves with X
+            dphi = {n: edge_slope_change(self.plane, x, n_act, fulls[n]) for n in d}
+            dphi["edge"] += (edge_slope(hi.plane, xh, n_act) - edge_slope(lo.plane, xl, n_act)) / (2 * h)
         de = {n: -dphi[n] / dphi["edge"] for n in dr if n != "edge"}
         Fe, re = d["edge"][0], d["edge"][1]
         return {n: (d[n][0] + Fe * de[n], d[n][1] + re * de[n]) for n in de}
