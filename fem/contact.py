@@ -338,6 +338,7 @@ class EdgeSearch(Generic[P]):
         self.k = int(FITTED_LEVELS[level][3])
         self.slope = 0.0
         self._cache: dict[float, P] = {}
+        self._laplace: np.ndarray | None = None
         self.linear = Reuse(Symmetric())  # one factorisation kept across the fitted meshes (same size and pattern)
 
     def problem(self, edge: float) -> P:
@@ -348,6 +349,20 @@ class EdgeSearch(Generic[P]):
                 self._cache.pop(next(iter(self._cache)))
             self._cache[key] = self.make_problem(fitted_mesh(self.a0, self.level, key))
         return self._cache[key]
+
+    def laplace_state(self, prob: P) -> np.ndarray:
+        """The free ball's equilibrium under its surface tension (u ~ 0, the Laplace pressure 2 gamma / a0 in the
+        mixed field), solved once on ``prob``'s mesh: every fitted mesh has the same dofs, and the state is nearly
+        mesh-independent (a uniform pressure, no deformation but the volumetric one)."""
+        if self._laplace is None or self._laplace.shape[0] != prob.asm.ndof:
+            gam = prob.asm.surface.gamma if prob.asm.surface is not None else 0.0
+            fun = lambda x: prob.asm.internal(x, prob.mat, tangent="lazy")
+            res = newton(
+                fun, np.zeros(prob.asm.ndof), free=prob.free, ref_norm=max(gam, 1e-12), rtol=self.rtol, xtol=1e-9,
+                atol=prob.floor, admissible=prob.admissible, max_iter=25,
+            )  # fmt: skip
+            self._laplace = res.x
+        return self._laplace
 
     def _state(self, prob: P, d: float, guesses, load, visc=None) -> tuple[EdgeState, int, float]:
         pl, n_act = prob.plane, 2 * self.k + 1
@@ -360,7 +375,10 @@ class EdgeSearch(Generic[P]):
         affine = np.zeros(prob.asm.ndof)  # a uniform squeeze: always admissible
         affine[0 : prob.asm.n_u : 2], affine[1 : prob.asm.n_u : 2] = 0.5 * d * X[0], -d * X[1]
         err = None
-        for g in [*guesses, affine]:
+        tension = prob.asm.surface is not None and prob.asm.surface.gamma > 0
+        # with a tension the round ball at its Laplace pressure (the contact zone pressed onto the plate) is closer
+        # than the squeeze (whose residual is the tension's, gamma / (C a0) times larger than the elastic one)
+        for g in [*guesses, *([self.laplace_state(prob)] if tension else []), affine]:
             if g is None or g.shape[0] != prob.asm.ndof:
                 continue  # none, or a state of a fitted mesh with other dofs (its numbers mean nothing here)
             xg = pl.impose(g, 1.0 - d, act)
