@@ -329,7 +329,11 @@ class EdgeSearch(Generic[P]):
     is the state where both Signorini conditions hold at the edge (N_e = 0, next gaps > 0), so the force is a
     smooth function of the approach and of the mesh. (The force is not stationary in the edge position on a
     finite mesh, d ln F / d ln edge ~ -0.13 on level 0 at delta = 0.4 a0: parameter sensitivities carry the
-    edge's motion, ``BallProblem.sensitivities``.)"""
+    edge's motion, ``BallProblem.sensitivities``.)
+
+    With a surface tension the edge condition is instead :func:`edge_slope` = 0 (the surface leaves the plate
+    tangentially: the contact pressure jumps at the edge, so N_e does not vanish there), the first state starts
+    from the free ball's Laplace state (:meth:`laplace_state`) and a failed first edge guess is halved."""
 
     def __init__(
         self, radius: float, level: int, make_problem: Callable[[AxiMesh], P], rtol: float, tol: float = EDGE_TOL

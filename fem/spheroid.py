@@ -293,7 +293,9 @@ class BallProblem(SceneProblem):
         dln e/dtheta = -(dphi/dtheta) / (dphi/dln e), every term from the converged tangent (the mesh's motion
         enters as a central difference of the residual ASSEMBLY on the moved meshes, the state held). The force is
         not stationary in e on a finite mesh (dln F/dln e ~ -0.13 on level 0 at delta = 0.4 a0): without this
-        term the sensitivity to alpha is ~5 % off. Elastic states only (a time step's branch stresses depend on
+        term the sensitivity to alpha is ~5 % off. With a surface tension phi is the edge slope dz/dr instead
+        (``fem.contact.edge_slope``), its derivative exact in the state and a central difference in the mesh.
+        Elastic states only (a time step's branch stresses depend on
         the whole history). ``factored``: a solve with Newton's factorisation of (or near) this state's tangent at
         the held plate, refined against the exact tangent (``fem.sensitivity.refined``)."""
         x, mat = s.x, self.mat
@@ -487,8 +489,10 @@ def compress(
             gamma_SL - gamma_SV = -gamma cos 180 deg), so the surface keeps its tension where it touches the
             plate (with no tension there the free surface would pull the contact line outward unopposed, the
             Young angle of a 90 deg wetting plate). The plate force then includes the Laplace pressure
-            2 gamma / a0 of the undeformed ball acting on the contact disc; the liquid limit (C -> 0) is
-            ``tissuemech.reduced.drop``.
+            2 gamma / a0 of the undeformed ball acting on the contact disc; the liquid limit (C -> 0, or C = 0 with
+            branches held long) is ``tissuemech.reduced.drop``. On fitted meshes the contact edge is then where the
+            surface leaves the plate tangentially (``fem.contact.edge_slope``; the edge node's multiplier does not
+            vanish: the contact pressure jumps there).
         gradient: also return the exact sensitivities of the observables at every state,
             ``result.gradient = {"C": {"force": dF/dC (N/Pa), "midplane_radius": (m/Pa), "nominal_stress":
             (1/1)}, "alpha": {...per unit alpha}, "surface_tension": {...per N/m}, "beta" / "tau" (one branch;
