@@ -284,6 +284,7 @@ class ContactProblem(Protocol):
     free: np.ndarray
     plane: RigidPlane
     floor: float
+    long_time: float  # weight of the long-time Fung term in the algorithmic stress (0: a Maxwell liquid)
 
     def admissible(self, x: np.ndarray) -> str | None: ...
 
@@ -328,7 +329,11 @@ class EdgeSearch(Generic[P]):
     is the state where both Signorini conditions hold at the edge (N_e = 0, next gaps > 0), so the force is a
     smooth function of the approach and of the mesh. (The force is not stationary in the edge position on a
     finite mesh, d ln F / d ln edge ~ -0.13 on level 0 at delta = 0.4 a0: parameter sensitivities carry the
-    edge's motion, ``BallProblem.sensitivities``.)"""
+    edge's motion, ``BallProblem.sensitivities``.)
+
+    With a surface tension the edge condition is instead :func:`edge_slope` = 0 (the surface leaves the plate
+    tangentially: the contact pressure jumps at the edge, so N_e does not vanish there), the first state starts
+    from the free ball's Laplace state (:meth:`laplace_state`) and a failed first edge guess is halved."""
 
     def __init__(
         self, radius: float, level: int, make_problem: Callable[[AxiMesh], P], rtol: float, tol: float = EDGE_TOL
@@ -337,6 +342,7 @@ class EdgeSearch(Generic[P]):
         self.k = int(FITTED_LEVELS[level][3])
         self.slope = 0.0
         self._cache: dict[float, P] = {}
+        self._laplace: np.ndarray | None = None
         self.linear = Reuse(Symmetric())  # one factorisation kept across the fitted meshes (same size and pattern)
 
     def problem(self, edge: float) -> P:
@@ -347,6 +353,20 @@ class EdgeSearch(Generic[P]):
                 self._cache.pop(next(iter(self._cache)))
             self._cache[key] = self.make_problem(fitted_mesh(self.a0, self.level, key))
         return self._cache[key]
+
+    def laplace_state(self, prob: P) -> np.ndarray:
+        """The free ball's equilibrium under its surface tension (u ~ 0, the Laplace pressure 2 gamma / a0 in the
+        mixed field), solved once on ``prob``'s mesh: every fitted mesh has the same dofs, and the state is nearly
+        mesh-independent (a uniform pressure, no deformation but the volumetric one)."""
+        if self._laplace is None or self._laplace.shape[0] != prob.asm.ndof:
+            gam = prob.asm.surface.gamma if prob.asm.surface is not None else 0.0
+            fun = lambda x: prob.asm.internal(x, prob.mat, tangent="lazy")
+            res = newton(
+                fun, np.zeros(prob.asm.ndof), free=prob.free, ref_norm=max(gam, 1e-12), rtol=self.rtol, xtol=1e-9,
+                atol=prob.floor, admissible=prob.admissible, max_iter=25,
+            )  # fmt: skip
+            self._laplace = res.x
+        return self._laplace
 
     def _state(self, prob: P, d: float, guesses, load, visc=None) -> tuple[EdgeState, int, float]:
         pl, n_act = prob.plane, 2 * self.k + 1
@@ -359,7 +379,10 @@ class EdgeSearch(Generic[P]):
         affine = np.zeros(prob.asm.ndof)  # a uniform squeeze: always admissible
         affine[0 : prob.asm.n_u : 2], affine[1 : prob.asm.n_u : 2] = 0.5 * d * X[0], -d * X[1]
         err = None
-        for g in [*guesses, affine]:
+        tension = prob.asm.surface is not None and prob.asm.surface.gamma > 0
+        # with a tension the round ball at its Laplace pressure (the contact zone pressed onto the plate) is closer
+        # than the squeeze (whose residual is the tension's, gamma / (C a0) times larger than the elastic one)
+        for g in [*guesses, *([self.laplace_state(prob)] if tension else []), affine]:
             if g is None or g.shape[0] != prob.asm.ndof:
                 continue  # none, or a state of a fitted mesh with other dofs (its numbers mean nothing here)
             xg = pl.impose(g, 1.0 - d, act)
@@ -387,6 +410,8 @@ class EdgeSearch(Generic[P]):
             F = float(N[act].sum())
             st = EdgeState(res.x, act, r, iso_scale, extra)
             phi = float(N[n_act - 1]) / max(F, 1e-300)
+            if prob.asm.surface is not None and prob.asm.surface.gamma > 0:  # tension: no kink at the edge
+                phi = edge_slope(pl, res.x, n_act)
             # a tensile node inside the last contact element: the zone is too large (a spurious root of
             # N_edge = 0 with the element lifting off in its middle): report it as negative
             inner = float(np.min(N[max(n_act - 3, 0) : n_act - 1])) / max(F, 1e-300)
@@ -410,8 +435,20 @@ class EdgeSearch(Generic[P]):
         tol = self.tol
         lo, hi = EDGE_MIN, FITTED_EDGE_MAX  # phi(lo) > 0 > phi(hi) (bounds until evaluated)
         e_a = float(np.clip(edge0, lo, hi))
-        st_a, its, phi_a = self._state(self.problem(e_a), d, [x0], load, visc)
+        prob_a = self.problem(e_a)
+        tension = prob_a.asm.surface is not None and prob_a.asm.surface.gamma > 0
         n = 1
+        for shrink in range(SHRINK_TRIES + 1):
+            try:
+                st_a, its, phi_a = self._state(self.problem(e_a), d, [x0], load, visc)
+                break
+            except NewtonError:
+                # with a surface tension the contact disc is smaller than the Hertz guess (the drop's is 0.24 of it
+                # as delta -> 0) and Newton from a too-large flattened zone diverges (the tension pulls the kink): a
+                # failed first edge counts as too large, the edge is halved
+                if not tension or shrink == SHRINK_TRIES:
+                    raise
+                hi, e_a, n = e_a, max(0.5 * e_a, EDGE_MIN), n + 1
         if abs(phi_a) < tol:
             return EdgeSolution(self.problem(e_a), st_a, e_a, its, n)
         lo, hi = (e_a, hi) if phi_a > 0 else (lo, e_a)
@@ -420,7 +457,13 @@ class EdgeSearch(Generic[P]):
         e_b = float(np.clip(e_a * (1.0 + step), lo, hi))
         best = [abs(phi_a)]  # |phi| per pass: a search whose best |phi| stalls is stuck (see below)
         for _ in range(30):
-            st_b, it, phi_b = self._state(self.problem(e_b), d, [st_a.x, x0], load, visc)
+            try:
+                st_b, it, phi_b = self._state(self.problem(e_b), d, [st_a.x, x0], load, visc)
+            except NewtonError:
+                if not tension or e_b <= e_a or n >= 12:  # (tension: a failed trial beyond e_a counts as too large)
+                    raise
+                hi, e_b, n = min(hi, e_b), 0.5 * (e_a + min(hi, e_b)), n + 1
+                continue
             its, n = its + it, n + 1
             best.append(abs(phi_b))
             if abs(phi_b) < tol:
@@ -439,7 +482,7 @@ class EdgeSearch(Generic[P]):
                 e_new = float(np.clip(e_new, EDGE_MIN, FITTED_EDGE_MAX))
             if hi - lo < 1e-12 * hi:
                 break
-            if n >= 6 and min(best[-3:]) > 0.5 * min(best[:-3]):
+            if len(best) >= 6 and min(best[-3:]) > 0.5 * min(best[:-3]):
                 # stalled (issue 14): the best |phi| of the last 3 passes is not half the earlier best. phi
                 # jumps across the bracket (a spurious state on one side), so the secant only creeps; the
                 # caller cuts the step, as it would after the 30 passes (3 of 4 passes of the fine level 3
@@ -452,6 +495,39 @@ class EdgeSearch(Generic[P]):
             hint="the approach may be beyond the meshable range; use contact='nodal' or a ball_section mesh",
         )
 
+
+def edge_slope(plane: RigidPlane, x: np.ndarray, n_act: int) -> float:
+    """dz/dr of the deformed boundary at the contact edge node (candidate ``n_act - 1``), on the first free quadratic
+    edge (candidates n_act - 1, n_act, n_act + 1): the edge condition of a surface with tension.
+
+    With a surface tension gamma the contact pressure jumps at the edge (the wetted surface is flat, the free one
+    curved: on a liquid drop it falls from the Laplace pressure to 0), so the edge node's multiplier does not vanish
+    there and N_edge = 0 puts the edge too far out (3.5 % of the contact radius on the drop at 10 % compression,
+    level 0; from gamma / (C a0) ~ 5 on it found no root at all). The edge node carries no concentrated line force
+    instead: the surface leaves the plate tangentially (the 180 deg contact angle of a non-wetting plate; for an
+    elastic body without tension the same smooth contact as Hertz's), i.e. no kink between the flat wetted edge and
+    the free one: dz/dr = 0 at the edge. Positive (the free surface rises into the plate): the zone is too small."""
+    dr, dz = _edge_tangent(plane, x, n_act, True)
+    return float(dz / dr)
+
+
+def _edge_tangent(plane: RigidPlane, x: np.ndarray, n_act: int, reference: bool) -> tuple[float, float]:
+    """2 d(r, z)/dxi at xi = -1 of the first free edge (``reference``: of X + x, else of the increment x alone)."""
+    nodes = plane.nodes[n_act - 1 : n_act + 2]
+    r, z = x[2 * nodes], x[2 * nodes + 1]
+    if reference:
+        r, z = r + plane.R[n_act - 1 : n_act + 2], z + plane.Z[n_act - 1 : n_act + 2]
+    return float(-3 * r[0] + 4 * r[1] - r[2]), float(-3 * z[0] + 4 * z[1] - z[2])
+
+
+def edge_slope_change(plane: RigidPlane, x: np.ndarray, n_act: int, dx: np.ndarray) -> float:
+    """The change of :func:`edge_slope` at the state x along the increment dx (its exact directional derivative)."""
+    dr, dz = _edge_tangent(plane, x, n_act, True)
+    ddr, ddz = _edge_tangent(plane, dx, n_act, False)
+    return (ddz * dr - dz * ddr) / dr**2
+
+
+SHRINK_TRIES = 4  # halvings of a failed first edge guess with a surface tension (EdgeSearch.solve)
 
 # Newton iterations allowed from the uniform-squeeze guess (the first contact): where it converges it takes 5-8
 # (levels 0-3, the static curves and Fig. 10 runs); on level 4 the first static step (20 um) wandered for 25
@@ -814,7 +890,7 @@ def fitted_stepper(
         def visc(prob: P):
             """The step's algorithmic terms (iso_scale, extra_S) at the Gauss points of prob's mesh."""
             if history in ("replay", "transfer", "chain"):
-                return ve.algorithmic(on(prob), beta, tau, dt)
+                return ve.algorithmic(on(prob), beta, tau, dt, prob.long_time)
             key = ("extra", id(prob))
             if key not in cache:
                 here = s_old.visco
@@ -824,7 +900,7 @@ def fitted_stepper(
                     f_old = prob.asm.f_at(s_old.x) if prob.m is m_old else deformation_at(m_old, s_old.x, prob.m)
                     S_n = cm.iso_second_piola(f_old, prob.mat.C, prob.mat.alpha)
                     here = ve.MaxwellState(gauss_transfer(H, prob.m, continuous=True)(s_old.visco.Q), S_n)
-                cache[key] = ve.algorithmic(here, beta, tau, dt)
+                cache[key] = ve.algorithmic(here, beta, tau, dt, prob.long_time)
             return cache[key]
 
         def updated(prob: P, x: np.ndarray, e_new: float, held: bool) -> tuple[ve.MaxwellState, AxiMesh | None, float]:
@@ -864,7 +940,7 @@ def fitted_stepper(
             visco0 = s_old.visco if history == "replay" else on(prob)  # replay: it lives on this mesh
             if visco0 is not s_old.visco:  # anchored elsewhere: S_iso^n evaluated on this mesh, Q_m interpolated
                 visco0 = visco0._replace(S_iso=prob.asm.iso_S(s_old.x, prob.mat))
-            iso_scale, extra = ve.algorithmic(visco0, beta, tau, dt)
+            iso_scale, extra = ve.algorithmic(visco0, beta, tau, dt, prob.long_time)
             sol = prob.solve(s_old, d1, iso_scale, extra, guess, load_of_t(t1))
             visco = ve.update(visco0, beta, tau, dt, prob.asm.iso_S(sol.x, prob.mat))
             st = PlateState(sol.x, sol.active, visco, d1, sol.residual, iso_scale, extra, sol.sets)

@@ -21,6 +21,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from tissuemech.fem import sensitivity as sens
+from tissuemech.fem import viscoelastic as ve
 from tissuemech.fem.contact import (
     AFFINE_MAX_ITER,
     EDGE_MAX,
@@ -34,6 +35,8 @@ from tissuemech.fem.contact import (
     PlateStep,
     RigidPlane,
     contact_treatment,
+    edge_slope,
+    edge_slope_change,
     first_state,
     fitted_stepper,
     nodal_step,
@@ -52,6 +55,7 @@ from tissuemech.fem.protocols import FORCE_TOL, Record, force_controlled, record
 from tissuemech.fem.stepping import Adaptive, Fixed, Step, TimedState
 from tissuemech.fem.surface import SurfaceTension
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
+from tissuemech.fem.viscoelastic import Branch
 from tissuemech.reduced.material import (
     hertz_plate_f,
     validate_branches,
@@ -78,6 +82,7 @@ __all__ = [
     "Observation",
     "BallProblem",
     "PlateState",
+    "Branch",
 ]
 
 # level -> (n_core, n_radial, surface grading, n_contact, n_equator) of ``fitted_mesh`` (``fem.mesh``): node
@@ -214,8 +219,11 @@ class BallProblem(SceneProblem):
     surface nodes off the midplane, ``equator`` the node at (R, Z) = (a0, 0), ``floor`` the round-off
     floor of the residual (``fem.problem.roundoff_floor``, unit force scale)."""
 
-    def __init__(self, m: AxiMesh, mat: Material, beta, tau, rtol: float, surface_tension: float = 0.0):
+    def __init__(
+        self, m: AxiMesh, mat: Material, beta, tau, rtol: float, surface_tension: float = 0.0, long_time: float = 1.0
+    ):
         super().__init__(m, mat, "mixed", beta, tau)
+        self.long_time = float(long_time)  # weight of the long-time Fung term (0: a Maxwell liquid, fem.viscoelastic)
         if surface_tension:  # scaled gamma / (C a0) on the whole outer surface (see ``compress``)
             self.asm.surface = SurfaceTension(m.X, m.edges["outer"], surface_tension)
         self.sym = m.nodes["symmetry"]
@@ -229,6 +237,13 @@ class BallProblem(SceneProblem):
         self.rtol = rtol
         self.floor = roundoff_floor(mat.kappa, 1.0, SPHEROID_MARGIN)
         self.linear = Reuse(Symmetric())  # the factorisation kept across this mesh's solves (quasi-Newton first)
+
+    def maxwell_factors(self, visco, dt: float | None):
+        """(iso_scale, extra_S) of a step of dt [s] (``fem.problem.SceneProblem.maxwell_factors``) with the long-time
+        term's weight ``long_time`` (iso_scale = long_time + sum_m beta_m g_m; static: (long_time, None))."""
+        if dt is None:
+            return self.long_time, None
+        return ve.algorithmic(visco, self.beta, self.tau, dt, self.long_time)
 
     def solve(self, s0: PlateState, d1: float, iso_scale, extra, guess, load):
         """Equilibrium with exact contact under the plate at h = 1 - d1 (scaled), from ``guess``, with the
@@ -278,7 +293,9 @@ class BallProblem(SceneProblem):
         dln e/dtheta = -(dphi/dtheta) / (dphi/dln e), every term from the converged tangent (the mesh's motion
         enters as a central difference of the residual ASSEMBLY on the moved meshes, the state held). The force is
         not stationary in e on a finite mesh (dln F/dln e ~ -0.13 on level 0 at delta = 0.4 a0): without this
-        term the sensitivity to alpha is ~5 % off. Elastic states only (a time step's branch stresses depend on
+        term the sensitivity to alpha is ~5 % off. With a surface tension phi is the edge slope dz/dr instead
+        (``fem.contact.edge_slope``), its derivative exact in the state and a central difference in the mesh.
+        Elastic states only (a time step's branch stresses depend on
         the whole history). ``factored``: a solve with Newton's factorisation of (or near) this state's tangent at
         the held plate, refined against the exact tangent (``fem.sensitivity.refined``)."""
         x, mat = s.x, self.mat
@@ -307,16 +324,20 @@ class BallProblem(SceneProblem):
         KUU, KfU = K[U][:, U], K[fixed][:, U]
         dxU = sens.solve_all(KUU, {n: v[U] for n, v in dr.items()}, f"delta = {s.delta:.6g} (of 2 a0)", factored)
         F = -float(np.sum(s.residual[fixed]))
-        d = {}
+        d, fulls = {}, {}
         for n, v in dr.items():
             dN = -(v[fixed] + KfU @ dxU[n])  # change of every held node's multiplier
             full = np.zeros_like(x)
             full[U] = dxU[n]
-            d[n] = (float(dN.sum()), float(full[2 * self.equator]), float(dN[-1]))
+            d[n], fulls[n] = (float(dN.sum()), float(full[2 * self.equator]), float(dN[-1])), full
         if moved is None:
             return {n: (v[0], v[1]) for n, v in d.items()}
         N_edge = -float(s.residual[fixed[-1]])
         dphi = {n: (v[2] - N_edge / F * v[0]) / F for n, v in d.items()}
+        if self.asm.surface is not None and self.asm.surface.gamma > 0:  # the edge condition of a tension: dz/dr = 0
+            n_act = act.size  # fem.contact.edge_slope; on the moved meshes the held displacement moves with X
+            dphi = {n: edge_slope_change(self.plane, x, n_act, fulls[n]) for n in d}
+            dphi["edge"] += (edge_slope(hi.plane, xh, n_act) - edge_slope(lo.plane, xl, n_act)) / (2 * h)
         de = {n: -dphi[n] / dphi["edge"] for n in dr if n != "edge"}
         Fe, re = d["edge"][0], d["edge"][1]
         return {n: (d[n][0] + Fe * de[n], d[n][1] + re * de[n]) for n in de}
@@ -376,11 +397,18 @@ def compress(
 
     Args:
         radius: the ball's radius a0 (m).
-        C: Fung stiffness of the relaxed (long-time) material (Pa).
-        alpha: Fung exponent (dimensionless).
+        C: Fung stiffness of the relaxed (long-time) material C_inf (Pa); 0 for a viscoelastic liquid (a Maxwell
+            liquid: every branch a ``Branch`` with its modulus, at least one), whose stress relaxes completely under
+            held plates so that the aggregate creeps toward the drop its surface tension holds.
+        alpha: Fung exponent (dimensionless; the branches share it).
         kappa: bulk modulus (Pa).
-        branches: [(beta_m, tau_m), ...]: energy factors beta_m >= 0 (dimensionless) and relaxation
-            times tau_m > 0 (s); empty for elastic.
+        branches: [(beta_m, tau_m), ...]: energy factors beta_m >= 0 (dimensionless, C_m = beta_m C) and relaxation
+            times tau_m > 0 (s); or ``Branch(modulus=C_m [Pa], tau=tau_m [s])`` (``fem.viscoelastic.Branch``, also
+            ``fem.spheroid.Branch``), each branch by its own Fung stiffness, which C = 0 needs; empty for elastic.
+            The engine scales stresses by C if C > 0 (the numbers of both spellings agree) and by the instantaneous
+            sum_m C_m if C = 0 (``fem.viscoelastic.relative_branches``); a liquid takes neither ``static=True`` nor
+            ``gradient=True`` (ValueError). ``parameters`` then holds C = 0, the branches as ``Branch`` and
+            ``reference_modulus`` (Pa).
         displacement: the total approach delta (m, 2e-6 a0 <= delta < 1.6 a0: below ``X_MIN`` = 1e-6 of the
             diameter the contact force nears round-off) of the two plates, reached at ``ramp_time`` by a linear
             ramp and then held to ``end_time``; or a callable delta(t) (m, t in s, delta(0) = 0): ``ramp_time`` is
@@ -462,8 +490,10 @@ def compress(
             gamma_SL - gamma_SV = -gamma cos 180 deg), so the surface keeps its tension where it touches the
             plate (with no tension there the free surface would pull the contact line outward unopposed, the
             Young angle of a 90 deg wetting plate). The plate force then includes the Laplace pressure
-            2 gamma / a0 of the undeformed ball acting on the contact disc; the liquid limit (C -> 0) is
-            ``tissuemech.reduced.drop``.
+            2 gamma / a0 of the undeformed ball acting on the contact disc; the liquid limit (C -> 0, or C = 0 with
+            branches held long) is ``tissuemech.reduced.drop``. On fitted meshes the contact edge is then where the
+            surface leaves the plate tangentially (``fem.contact.edge_slope``; the edge node's multiplier does not
+            vanish: the contact pressure jumps there).
         gradient: also return the exact sensitivities of the observables at every state,
             ``result.gradient = {"C": {"force": dF/dC (N/Pa), "midplane_radius": (m/Pa), "nominal_stress":
             (1/1)}, "alpha": {...per unit alpha}, "surface_tension": {...per N/m}, "beta" / "tau" (one branch;
@@ -500,9 +530,23 @@ def compress(
             equilibrium was not reached (tighten rtol).
     """
     validate_positive("radius (the spheroid radius a0)", radius, "m")
-    validate_material(C, alpha, kappa)
     validate_nonnegative("surface_tension (gamma)", surface_tension, "N/m")
-    br = validate_branches(branches)
+    long_time = 1.0  # the long-time term's weight (0: a Maxwell liquid)
+    if _by_moduli(C, branches):  # a Maxwell liquid (C = 0) or branches given by their moduli (fem.viscoelastic)
+        rel = ve.relative_branches(C, branches)
+        validate_material(rel.reference, alpha, kappa)
+        C, long_time = rel.reference, rel.long_time  # C from here on: the reference modulus of the scaling
+        br = tuple(zip(rel.beta.tolist(), rel.tau.tolist()))
+    else:
+        validate_material(C, alpha, kappa)
+        br = validate_branches(branches)
+    if long_time == 0.0 and (static or gradient):
+        raise ValueError(
+            ("static=True" if static else "gradient=True")
+            + " needs a long-time modulus C > 0 Pa: a Maxwell liquid (C = 0) has no elastic state, its stress "
+            "relaxes completely under held plates; run it in time (ramp_time, end_time) and hold the plates for many "
+            "relaxation times (its long-time state is the drop, tissuemech.reduced.drop)"
+        )
     if static:
         br = ()
     beta = np.array([float(b) for b, _ in br])
@@ -591,7 +635,7 @@ def compress(
     gam = float(surface_tension) / (C * a0)  # the elastocapillary number gamma / (C a0)
     fit = None
     if isinstance(treat, FittedEdge) and level is not None:
-        make = lambda m: BallProblem(m, mat, beta, tau, rtol, gam)
+        make = lambda m: BallProblem(m, mat, beta, tau, rtol, gam, long_time)
         fit = (
             _SensingSearch(a0, level, make, rtol, tol=treat.tol)
             if gradient
@@ -655,8 +699,9 @@ def compress(
     if fc:  # an outer iteration on the approach per step (fem.protocols)
         assert proto is not None
         steps = _force_steps(
-            fit, treat, lambda: _nodal_start(mesh, a0, mat, beta, tau, rtol, gam), beta, tau,
+            fit, treat, lambda: _nodal_start(mesh, a0, mat, beta, tau, rtol, gam, long_time), beta, tau,
             lambda t: proto.target(t) / (C * a0**2), times, too_large, load_of, sensed, min(FORCE_TOL, 1e3 * rtol),
+            long_time,
         )  # fmt: skip
     elif fit is not None:  # every state / step on its own fitted mesh
         if static:
@@ -668,7 +713,7 @@ def compress(
                 **({"hold": PROTOCOL_HOLD} if proto is not None else {}),
             )  # fmt: skip
     else:
-        start = _nodal_start(mesh, a0, mat, beta, tau, rtol, gam)
+        start = _nodal_start(mesh, a0, mat, beta, tau, rtol, gam, long_time)
 
         def step(
             t0: float, old: PlateStep[BallProblem], t1: float, prev: TimedState[PlateStep[BallProblem]] | None
@@ -761,10 +806,13 @@ def compress(
         gradient=grad,
         parameters=dict(
             radius=a0,
-            C=C,
+            C=C if long_time else 0.0,
             alpha=float(alpha),
             kappa=float(kappa),
-            branches=tuple((float(b), float(t)) for b, t in br),
+            branches=tuple((float(b), float(t)) for b, t in br)
+            if long_time
+            else tuple(Branch(float(b) * C, float(t)) for b, t in br),
+            **({} if long_time else {"reference_modulus": C}),
             ramp_time=None if static else float(ramp_time),
             end_time=None if static else float(end_time),
             contact=modes,
@@ -1147,10 +1195,21 @@ def _protocol_parameters(proto: _Protocol, times: np.ndarray, touching: np.ndarr
     return dict(control=proto.kind, contact_lost=tuple(lost), contact_regained=tuple(regained))
 
 
-def _nodal_start(mesh, a0: float, mat: Material, beta, tau, rtol: float, gam: float) -> PlateStep[BallProblem]:
+def _by_moduli(C, branches) -> bool:
+    """Whether the material is given by branch moduli (``fem.viscoelastic.Branch``) or has C = 0 (a liquid)."""
+    zero = isinstance(C, (int, float, np.integer, np.floating)) and not isinstance(C, bool) and C == 0
+    try:
+        return zero or any(isinstance(b, Branch) for b in branches or ())
+    except TypeError:  # not iterable: validate_branches names it
+        return False
+
+
+def _nodal_start(
+    mesh, a0: float, mat: Material, beta, tau, rtol: float, gam: float, long_time: float = 1.0
+) -> PlateStep[BallProblem]:
     """The reference state of node-by-node contact on one fixed mesh (the pole node active)."""
     m0 = make_mesh(mesh, a0)
-    prob = BallProblem(m0, mat, beta, tau, rtol, gam)
+    prob = BallProblem(m0, mat, beta, tau, rtol, gam, long_time)
     n0 = prob.asm.ndof
     pole = np.argmin(np.hypot(prob.plane.R, prob.plane.Z - 1.0))
     active0 = np.zeros(prob.plane.nodes.size, bool)
@@ -1159,7 +1218,20 @@ def _nodal_start(mesh, a0: float, mat: Material, beta, tau, rtol: float, gam: fl
     return PlateStep(s0, prob, float("nan"))
 
 
-def _force_steps(fit, treat, nodal_start, beta, tau, f_of_t, times, too_large, load_of, wrap=None, tol=FORCE_TOL):
+def _force_steps(
+    fit,
+    treat,
+    nodal_start,
+    beta,
+    tau,
+    f_of_t,
+    times,
+    too_large,
+    load_of,
+    wrap=None,
+    tol=FORCE_TOL,
+    long_time: float = 1.0,
+):
     """The march under the prescribed (scaled) plate force f_of_t(t): every step an outer iteration on the approach
     around the displacement-controlled step (``fem.protocols.force_controlled``), on fitted meshes or node by node.
     ``wrap(start, step)``: the march's step function from the start state and the force-controlled step (node by
@@ -1181,7 +1253,7 @@ def _force_steps(fit, treat, nodal_start, beta, tau, f_of_t, times, too_large, l
         top_approach,
         f_of_t,
         load_of,
-        stiffness=1.0 + float(np.sum(beta)),
+        stiffness=long_time + float(np.sum(beta)),
         tol=tol,
     )
     if wrap is not None and fit is None:

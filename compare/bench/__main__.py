@@ -16,6 +16,7 @@ SUITES = {
     "fem-gradient": "tissuemech.compare.bench.fem_gradient",
     "fem-indentation": "tissuemech.compare.bench.fem_indentation",
     "fem-protocols": "tissuemech.compare.bench.fem_protocols",
+    "fem-liquid": "tissuemech.compare.bench.fem_liquid",
     "fit-dense": "tissuemech.compare.bench.fit_dense",
     "scan-kernel": "tissuemech.compare.bench.scan_kernel",
     # checks run one by one (not part of "all")
@@ -30,6 +31,7 @@ SEPARATE = (
     "fem-indentation",
     "fem-gradient",
     "fem-protocols",
+    "fem-liquid",
 )  # not part of "all"
 
 
