@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -277,7 +278,7 @@ def _run_protocols(args: argparse.Namespace, radius: float) -> None:
     print("wrote " + ", ".join(written))
 
 
-def _initial(args: argparse.Namespace, names: list[str]) -> dict[str, float] | None:
+def _initial(args: argparse.Namespace, names: Sequence[str]) -> dict[str, float] | None:
     """``--initial NAME=VALUE ...`` as a dict (SI), or None when not given."""
     if args.initial is None:
         return None
