@@ -125,3 +125,16 @@ def test_design_model_is_checked():
         predict(Protocol(), model="exact")
     with pytest.raises(ValueError, match="model must be 'reduced'"):
         scan_second_level(50e-6, model="FE")
+
+
+def test_design_command_truth_and_fe_options_are_checked(tmp_path, capsys):
+    """``tissuemech design --truth``/``--model fe``: a malformed guess or --check with the FE stops in one line."""
+    from tissuemech.compare.cli import main
+
+    out = str(tmp_path / "d.png")
+    assert main(["design", "--truth", "C=150", "alpha=x", "beta=0.4", "tau=200", "--out", out]) == 2
+    assert "--truth 'alpha=x'" in capsys.readouterr().err
+    assert main(["design", "--truth", "C=150", "alpha=0.2", "beta=0.4", "C=200", "--out", out]) == 2
+    assert "each of C, alpha, beta, tau once" in capsys.readouterr().err
+    assert main(["design", "--model", "fe", "--check", "3", "--out", out]) == 2
+    assert "--check" in capsys.readouterr().err
