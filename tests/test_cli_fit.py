@@ -160,7 +160,8 @@ def test_fe_model_recovers_fe_made_records_off_the_table(tmp_path, capsys):
         y = r.nominal_stress * (1 + 0.01 * rng.standard_normal(r.time.size))
         f = tmp_path / f"fe_{d:g}um.csv"
         f.write_text(
-            f"# displacement_um: {d:g}\ntime [s], stress [Pa]\n" + "".join(f"{a!r},{b!r}\n" for a, b in zip(r.time, y))
+            f"# displacement_um: {d:g}\ntime [s], stress [Pa]\n"
+            + "".join(f"{a:.17g},{b:.17g}\n" for a, b in zip(r.time, y))
         )
         files.append(str(f))
     out = tmp_path / "res"
