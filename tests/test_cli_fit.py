@@ -116,3 +116,63 @@ def test_old_fit_cli_module_is_an_alias():
 
     assert fit_cli.read_table is fit.read_table and fit_cli.load_records is fit.load_records
     assert fit_cli.add_parser is command.add_parser and fit_cli.run is command.run
+
+
+def test_fe_model_says_what_it_does_not_support(tmp_path, capsys):
+    """`--model fe` refuses, before any FE run, what its path does not fit yet (each in one line saying what to do):
+    force files, creep/history files, the Hertz law, a model-error or misfit term, a malformed --initial."""
+    files = [str(EXAMPLES / "spheroid_50um.csv"), str(EXAMPLES / "spheroid_200um.csv")]
+    base = ["fit", *files, "--radius-um", "500", "--ramp-time", "0.2", "--model", "fe", "--out", str(tmp_path / "o")]
+    _one_line_error(capsys, [*base, "--equilibrium", "hertz"], "--model fe does not support", "--model reduced")
+    _one_line_error(capsys, [*base, "--misfit", "0.002"], "--misfit")
+    _one_line_error(capsys, [*base, "--initial", "C=150", "alpha=0.2"], "--initial", "missing ['beta', 'tau']")
+    _one_line_error(capsys, [*base, "--initial", "C150"], "NAME=VALUE")
+    force = tmp_path / "force.csv"
+    force.write_text("time [s], force [uN]\n0.1,1.0\n0.2,2.0\n1,1.5\n10,1.2\n100,1.1\n")
+    _one_line_error(
+        capsys,
+        ["fit", str(force), "--radius-um", "500", "--ramp-time", "0.2", "--displacement-um", "50", "--model", "fe"],
+        "nominal stress",
+        "force.csv",
+    )
+    creep = tmp_path / "creep.csv"
+    creep.write_text("time [s], approach [um], force [uN]\n0.1,1,1\n0.2,2,2\n1,2.1,2\n10,2.2,2\n100,2.3,2\n")
+    _one_line_error(capsys, ["fit", str(creep), "--radius-um", "500", "--ramp-time", "0.2", "--model", "fe"], "creep")
+    # --initial belongs to the FE path
+    _one_line_error(capsys, [*base[:-4], "--initial", "C=1", "alpha=1", "beta=1", "tau=1"], "--initial", "--model fe")
+
+
+@pytest.mark.slow
+def test_fe_model_recovers_fe_made_records_off_the_table(tmp_path, capsys):
+    """`tissuemech fit --model fe` on two FE-made CSV records at alpha = 1.8 (off the plate table; coarse mesh, 1 %
+    noise, at the FE's step times), started from the reduced fit (alpha at its bound 1.5): every 95 % interval holds
+    the truth; fit.json (model "fe", the reduced fit's format), fit.png and one progress line per FE evaluation."""
+    from tissuemech.compare.fit import step_times
+    from tissuemech.fem import spheroid as fs
+
+    truth = dict(C=150.0, alpha=1.8, beta=0.6, tau=30.0)
+    rng = np.random.default_rng(3)
+    files = []
+    for d in (20.0, 40.0):
+        r = fs.compress(radius=100e-6, C=150.0, alpha=1.8, branches=[(0.6, 30.0)], displacement=d * 1e-6,
+                        ramp_time=1.0, end_time=300.0, mesh="coarse", contact="nodal", n_ramp=6, n_hold=20)  # fmt: skip
+        np.testing.assert_allclose(r.time, step_times(ramp_time=1.0, end_time=300.0))
+        y = r.nominal_stress * (1 + 0.01 * rng.standard_normal(r.time.size))
+        f = tmp_path / f"fe_{d:g}um.csv"
+        f.write_text(
+            f"# displacement_um: {d:g}\ntime [s], stress [Pa]\n"
+            + "".join(f"{a:.17g},{b:.17g}\n" for a, b in zip(r.time, y))
+        )
+        files.append(str(f))
+    out = tmp_path / "res"
+    argv = ["fit", *files, *"--radius-um 100 --ramp-time 1 --model fe --mesh coarse".split(), "--out", str(out)]
+    assert main(argv) == 0
+    cap = capsys.readouterr()
+    assert "starting from the reduced fit's estimate" in cap.out and "Identifiability" in cap.out
+    assert "model: the FE" in cap.out and "FE evaluation 1:" in cap.err
+    d = json.loads((out / "fit.json").read_text())
+    assert d["model"] == "fe" and d["inputs"]["mesh"] == "coarse" and d["success"]
+    for k, v in truth.items():
+        lo, hi = d["intervals_95"][k]
+        assert lo <= v <= hi and hi / lo < 1.2, (k, lo, v, hi)
+    assert (out / "fit.png").stat().st_size > 10_000

@@ -178,3 +178,15 @@ def test_chunked_evaluation_equals_one_call():
     want = scan.spheroid(points=sp_pts, **kw)
     pd.testing.assert_frame_equal(got.drop(columns="sigma [Pa]"), want.drop(columns="sigma [Pa]"))
     assert np.array_equal(got.attrs["time [s]"], want.attrs["time [s]"])
+
+
+@pytest.mark.slow
+def test_scan_fe_sensitivities_beyond_the_table(tmp_path):
+    """``--fe-sensitivities N``: alpha 1.6-2.0 (beyond the plate table; the scan on the Hertz law) gets the FE's
+    sensitivity chart next to the reduced one."""
+    from tissuemech.compare.cli import main as cli_main
+
+    out = tmp_path / "s"
+    argv = "scan spheroid --alpha 1.6:2.0 --beta 0.4:1.0 --n 2 --design grid --equilibrium hertz --no-progress"
+    assert cli_main([*argv.split(), "--fe-sensitivities", "2", "--out", str(out)]) == 0
+    assert (out / "sensitivity_fe.png").stat().st_size > 10_000 and (out / "sensitivity.png").exists()

@@ -93,3 +93,48 @@ def test_design_command_and_its_old_module_path(tmp_path, capsys):
     assert out.stat().st_size > 10_000
     assert old.main(["--out", str(tmp_path / "no" / "d.png")]) == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_fe_design_agrees_with_the_reduced_one_and_reaches_beyond_the_table():
+    """``predict(model="fe")`` (the FE's exact sensitivities, coarse mesh, at the protocol's times) gives the
+    reduced model's predicted sd where both exist (measured on the default protocol: C, beta, tau within 0.22 %,
+    alpha within 1.4 %: the coarse mesh's alpha-dependence), and a prediction at alpha = 1.8 with a level at x = 0.45,
+    which the reduced model refuses."""
+    from tissuemech.compare.fit.design import Protocol, predict, scan_second_level
+
+    pc = Protocol()
+    red, fe = predict(pc), predict(pc, model="fe", mesh="coarse")
+    for n, tol in dict(C=5e-3, alpha=3e-2, beta=5e-3, tau=5e-3).items():
+        assert fe.sd[n] == pytest.approx(red.sd[n], rel=tol), (n, fe.sd[n], red.sd[n])
+    stiff = dict(C=150.0, alpha=1.8, beta=0.4, tau=200.0)
+    deep = Protocol(levels=(50e-6, 450e-6))
+    with pytest.raises(ValueError, match="alpha"):
+        predict(deep, stiff)
+    pr = predict(deep, stiff, model="fe", mesh="coarse")
+    assert all(0 < w < 0.5 for w in pr.width.values()), pr.width
+    df = scan_second_level(50e-6, Protocol(), stiff, candidates=[250e-6, 450e-6], model="fe", mesh="coarse")
+    assert list(df["second um"]) == pytest.approx([250.0, 450.0])
+    assert df["alpha width %"].iloc[1] < df["alpha width %"].iloc[0]  # a deeper second level pins alpha better
+
+
+def test_design_model_is_checked():
+    from tissuemech.compare.fit.design import Protocol, predict, scan_second_level
+
+    with pytest.raises(ValueError, match="model must be 'reduced'"):
+        predict(Protocol(), model="exact")
+    with pytest.raises(ValueError, match="model must be 'reduced'"):
+        scan_second_level(50e-6, model="FE")
+
+
+def test_design_command_truth_and_fe_options_are_checked(tmp_path, capsys):
+    """``tissuemech design --truth``/``--model fe``: a malformed guess or --check with the FE stops in one line."""
+    from tissuemech.compare.cli import main
+
+    out = str(tmp_path / "d.png")
+    assert main(["design", "--truth", "C=150", "alpha=x", "beta=0.4", "tau=200", "--out", out]) == 2
+    assert "--truth 'alpha=x'" in capsys.readouterr().err
+    assert main(["design", "--truth", "C=150", "alpha=0.2", "beta=0.4", "C=200", "--out", out]) == 2
+    assert "each of C, alpha, beta, tau once" in capsys.readouterr().err
+    assert main(["design", "--model", "fe", "--check", "3", "--out", out]) == 2
+    assert "--check" in capsys.readouterr().err

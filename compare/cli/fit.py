@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -98,6 +99,27 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         default=None,
         help="the held force of creep files in uN (default: the median of each file's force column over the hold)",
     )
+    f.add_argument(
+        "--model",
+        choices=["reduced", "fe"],
+        default="reduced",
+        help="the model fitted: reduced (default: the lumped model on the FE-calibrated table, milliseconds) or fe "
+        "(the finite elements themselves, compress(gradient=True) per record and iteration: beyond the table, alpha > "
+        "1.5 or deep compression, or as a check of a reduced fit; relaxation records of nominal stress only)",
+    )
+    f.add_argument(
+        "--mesh",
+        default="default",
+        help="--model fe: the FE mesh level (coarse, default, fine, ...; default %(default)s)",
+    )
+    f.add_argument(
+        "--initial",
+        nargs="+",
+        metavar="NAME=VALUE",
+        default=None,
+        help="--model fe: starting values in SI (C=150 alpha=1.2 beta=0.4 tau=200; every parameter); default: the "
+        "reduced fit's estimate, or the rough guess from the curves where the reduced model cannot fit the records",
+    )
     f.add_argument("--out", default="fit-results", help="folder for fit.json and fit.png (default: %(default)s)")
     f.add_argument("--no-figure", action="store_true", help="skip fit.png")
     return f
@@ -113,6 +135,10 @@ def run(args: argparse.Namespace) -> None:
         raise ValueError(f"--branches must be at least 1; got {args.branches}")
     output_folder("--out", args.out)  # before the fit
     radius = args.radius_um * UM
+    if args.model == "fe":
+        return _run_fe(args, radius)
+    if args.initial is not None:
+        raise ValueError("--initial is for --model fe (the reduced fit finds its own start)")
     if args.protocol != "relaxation" and any(_has_approach(p) for p in args.files):
         return _run_protocols(args, radius)
     if args.protocol in ("creep", "history"):
@@ -248,5 +274,111 @@ def _run_protocols(args: argparse.Namespace, radius: float) -> None:
 
         fig = protocol_figure(recs, res, radius=radius, ramp_time=args.ramp_time, equilibrium=args.equilibrium)
         save_figure(fig, str(out / "fit.png"))
+        written.append(str(out / "fit.png"))
+    print("wrote " + ", ".join(written))
+
+
+def _initial(args: argparse.Namespace, names: Sequence[str]) -> dict[str, float] | None:
+    """``--initial NAME=VALUE ...`` as a dict (SI), or None when not given."""
+    if args.initial is None:
+        return None
+    out = {}
+    for item in args.initial:
+        name, sep, value = item.partition("=")
+        try:
+            out[name.strip()] = float(value) if sep else float("nan")
+        except ValueError:
+            raise ValueError(f"--initial {item!r}: expected NAME=VALUE with a number, e.g. C=150") from None
+        if not sep:
+            raise ValueError(f"--initial {item!r}: expected NAME=VALUE, e.g. C=150")
+    if set(out) != set(names):
+        raise ValueError(
+            f"--initial must give every parameter ({', '.join(names)}); missing {sorted(set(names) - set(out))}, "
+            f"unknown {sorted(set(out) - set(names))}"
+        )
+    return out
+
+
+def _run_fe(args: argparse.Namespace, radius: float) -> None:
+    """``tissuemech fit --model fe``: :func:`tissuemech.compare.fit.fe_relaxation` on relaxation records of nominal
+    stress, started from ``--initial`` or the reduced fit (fit.json, fit.png, progress lines as the FE runs)."""
+    import logging
+    import sys
+
+    import numpy as np
+
+    from tissuemech.compare import fit
+
+    unsupported = []
+    if args.protocol in ("creep", "history") or any(_has_approach(p) for p in args.files):
+        unsupported.append("creep and measured-history records (files with approach and force columns)")
+    if args.equilibrium != "fem":
+        unsupported.append(f"--equilibrium {args.equilibrium} (the FE has no equilibrium law to choose)")
+    if args.model_error != "auto" or args.misfit > 0:
+        unsupported.append("--model-error and --misfit (the FE is taken as exact, the noise as white)")
+    if unsupported:
+        raise ValueError(
+            "--model fe does not support " + "; ".join(unsupported) + " yet: use --model reduced for those"
+        )
+    disps = None if args.displacement_um is None else [d * UM for d in args.displacement_um]
+    recs, forces = fit.load_records(
+        list(args.files), radius=radius, displacements=disps, ramp_time=args.ramp_time, quantity=args.quantity
+    )
+    if any(forces):
+        raise ValueError(
+            "--model fe fits nominal stress (Pa) records; the plate-force files "
+            f"{[f for f, k in zip(args.files, forces) if k]} are not supported yet: convert them to nominal stress "
+            "or use --model reduced"
+        )
+    names = fit.parameter_names(args.branches)
+    initial = _initial(args, names)
+    if initial is None:
+        try:
+            start = fit.relaxation(recs, intervals="wald", **_options(args, radius))
+            initial = dict(start.params)
+            how = "the reduced fit's estimate"
+        except (ValueError, RuntimeError) as err:
+            guess = fit.initial_guess([fit.Record(*r) for r in recs], radius, args.ramp_time, args.branches)
+            initial = dict(zip(names, map(float, guess)))
+            how = f"the rough guess from the curves (the reduced fit cannot: {str(err).splitlines()[0]})"
+        print("starting from " + how + ": " + ", ".join(f"{n} = {v:.4g}" for n, v in initial.items()))
+    # progress: one line per FE evaluation (on stderr, as the command's other progress lines)
+    logger = logging.getLogger("tissuemech.compare.fit.fe")
+    handler = None
+    if not logger.isEnabledFor(logging.INFO) or not logging.getLogger().handlers:
+        handler = logging.StreamHandler(sys.stderr)
+        handler.setFormatter(logging.Formatter("%(message)s"))
+        logger.addHandler(handler)
+        old_level = logger.level
+        logger.setLevel(logging.INFO)
+    try:
+        res = fit.fe_relaxation(
+            recs, radius=radius, ramp_time=args.ramp_time, initial=initial, n_branches=args.branches,
+            mesh=args.mesh, progress=True,
+        )  # fmt: skip
+    finally:
+        if handler is not None:
+            logger.removeHandler(handler)
+            logger.setLevel(old_level)
+    out = _write_json(
+        res,
+        args,
+        {
+            "files": [str(f) for f in args.files],
+            "model": "fe",
+            "mesh": args.mesh,
+            "initial": initial,
+            "radius_m": radius,
+            "displacement_m": [r[2] for r in recs],
+            "ramp_time_s": args.ramp_time,
+            "quantity": ["stress_Pa" for _ in recs],
+            "n_points": [int(np.size(r[0])) for r in recs],
+        },
+    )
+    written = [str(out / "fit.json")]
+    if not args.no_figure:
+        from tissuemech.compare.plots.fit import fe_fit_figure
+
+        save_figure(fe_fit_figure(recs, res, ramp_time=args.ramp_time), str(out / "fit.png"))
         written.append(str(out / "fit.png"))
     print("wrote " + ", ".join(written))

@@ -44,6 +44,8 @@ __all__ = [
     "Protocol",
     "Prediction",
     "level_fisher",
+    "fe_level_fisher",
+    "FE_X_MAX",
     "predict",
     "scan_second_level",
     "recommend",
@@ -195,7 +197,14 @@ def level_fisher(
     )
     m = np.asarray(res_fn(jnp.asarray(theta))) * scale + ones  # residual = (m - 1) / scale
     J = np.asarray(jac_fn(jnp.asarray(theta))) * scale
-    s = protocol.noise * np.max(np.abs(m))
+    return _record_fisher(J, m, protocol.noise, model_error, level, truth)
+
+
+def _record_fisher(
+    J: np.ndarray, m: np.ndarray, noise: float, model_error: float, level: float, truth: dict
+) -> np.ndarray:
+    """The Fisher matrix of one record (module doc) from its model ``m`` (Pa) and ``J = dm / dlog p``."""
+    s = noise * np.max(np.abs(m))
     if not (np.all(np.isfinite(J)) and np.all(np.isfinite(m))):
         raise ValueError(
             f"the model is not finite at compression level {level * 1e6:.4g} um and truth {truth}: no prediction"
@@ -206,6 +215,43 @@ def level_fisher(
         c = float(m @ m) / s**2 + 1.0 / model_error**2
         A = A - np.outer(b, b) / c
     return A
+
+
+FE_X_MAX = 0.5  # the FE design's candidate levels reach delta/(2 a0) = 0.5 (the reduced table stops at 0.36)
+
+
+def fe_level_fisher(
+    level: float,
+    protocol: Protocol,
+    truth: dict[str, float] = DEFAULT_TRUTH,
+    *,
+    mesh: Any = "coarse",
+    model_error: float = 0.0,
+    n_ramp: int = 10,
+    n_hold: int = 60,
+) -> np.ndarray:
+    """:func:`level_fisher` with the FE as the model: ``fem.spheroid.compress(gradient=True)`` (node-by-node contact
+    on ``mesh``; its exact sensitivities of the nominal stress, linear between the FE's steps at the protocol's
+    times), where the reduced model's table does not reach (alpha beyond its range, levels beyond x = 0.36). One FE
+    run with gradients per call (seconds on the coarse mesh). ValueError (one line) for a bad protocol or truth or
+    a level at the ball's diameter."""
+    from tissuemech.fem import spheroid as fem_spheroid
+
+    protocol.validate()
+    truth = check_truth(truth, equilibrium=None)  # no table: any positive alpha
+    check_levels(level, protocol, equilibrium=None)
+    t = np.asarray(protocol.times, dtype=float)
+    r = fem_spheroid.compress(radius=float(protocol.radius), C=truth["C"], alpha=truth["alpha"],
+                              branches=[(truth["beta"], truth["tau"])], displacement=float(level),
+                              ramp_time=float(protocol.ramp_time), end_time=float(t.max()), mesh=mesh,
+                              contact="nodal", n_ramp=n_ramp, n_hold=n_hold, gradient=True)  # fmt: skip
+    tt = np.concatenate([[0.0], r.time])
+    m = np.interp(t, tt, np.concatenate([[0.0], r.nominal_stress]))
+    grad = r.gradient or {}
+    J = np.stack(
+        [np.interp(t, tt, np.concatenate([[0.0], grad[n]["nominal_stress"]])) * truth[n] for n in NAMES], axis=1
+    )
+    return _record_fisher(J, m, protocol.noise, model_error, level, truth)
 
 
 def _from_fisher(F: np.ndarray, protocol: Protocol, truth: dict[str, float]) -> Prediction:
@@ -226,18 +272,33 @@ def predict(
     *,
     equilibrium: Any = "fem",
     model_error: float = 0.0,
+    model: str = "reduced",
+    mesh: Any = "coarse",
 ) -> Prediction:
     """Predicted standard deviations of log p and 95 % interval widths of a protocol (module doc).
 
     truth        the parameters at which to evaluate (C Pa, alpha -, beta -, tau s): a prior guess.
     model_error  relative 1-sigma model error of the force per record (0: none; as in compare.fit).
+    model        "reduced" (default) or "fe": the FE's exact sensitivities (:func:`fe_level_fisher` on ``mesh``),
+                 for truths and levels beyond the reduced model's table (one FE run per level).
     Raises ValueError for an invalid protocol or a level beyond the master table.
     """
     protocol.validate()
+    if model == "fe":
+        truth = check_truth(truth, equilibrium=None)
+        check_levels(protocol.levels, protocol, equilibrium=None)
+        F = sum(fe_level_fisher(d, protocol, truth, mesh=mesh, model_error=model_error) for d in protocol.levels)
+        return _from_fisher(np.asarray(F), protocol, truth)
+    _check_model(model)
     truth = check_truth(truth, equilibrium)
     check_levels(protocol.levels, protocol, equilibrium)
     F = sum(level_fisher(d, protocol, truth, equilibrium=equilibrium, model_error=model_error) for d in protocol.levels)
     return _from_fisher(np.asarray(F), protocol, truth)
+
+
+def _check_model(model: str) -> None:
+    if model not in ("reduced", "fe"):
+        raise ValueError(f"model must be 'reduced' (the FE-calibrated lumped model) or 'fe'; got {model!r}")
 
 
 def _candidates(protocol: Protocol, n: int = 15, equilibrium: Any = "fem") -> np.ndarray:
@@ -253,18 +314,34 @@ def scan_second_level(
     *,
     candidates: Sequence[float] | None = None,
     model_error: float = 0.0,
+    model: str = "reduced",
+    mesh: Any = "coarse",
 ) -> pd.DataFrame:
     """Predicted relative 95 % widths (%) of each parameter for levels (first, second), second over
-    ``candidates`` (m; default 15 levels up to the table's end)."""
+    ``candidates`` (m; default 15 levels up to the table's end). ``model="fe"``: the FE's sensitivities
+    (:func:`fe_level_fisher` on ``mesh``, one FE run per level; default candidates 8 levels up to x =
+    :data:`FE_X_MAX`, beyond the table), for truths (alpha > 1.5) and levels the reduced model does not reach."""
+    _check_model(model)
     protocol.validate()
-    truth = check_truth(truth)
-    check_levels(first, protocol, what="first level")
-    cand = _candidates(protocol) if candidates is None else np.asarray(candidates, dtype=float).ravel()
-    check_levels(cand, protocol, what="candidate level")
-    F1 = level_fisher(first, protocol, truth, model_error=model_error)
+    fe = model == "fe"
+    law = None if fe else "fem"
+    truth = check_truth(truth, law)
+    check_levels(first, protocol, law, what="first level")
+    if candidates is None:
+        cand = np.linspace(0.04, FE_X_MAX, 8) * 2 * protocol.radius if fe else _candidates(protocol)
+    else:
+        cand = np.asarray(candidates, dtype=float).ravel()
+    check_levels(cand, protocol, law, what="candidate level")
+
+    def fisher(d: float) -> np.ndarray:
+        if fe:
+            return fe_level_fisher(d, protocol, truth, mesh=mesh, model_error=model_error)
+        return level_fisher(d, protocol, truth, model_error=model_error)
+
+    F1 = fisher(first)
     rows = []
     for d in cand:
-        pr = _from_fisher(F1 + level_fisher(float(d), protocol, truth, model_error=model_error), protocol, truth)
+        pr = _from_fisher(F1 + fisher(float(d)), protocol, truth)
         rows.append(
             {"first um": first * 1e6, "second um": d * 1e6, **{f"{n} width %": 100 * pr.width[n] for n in NAMES}}
         )

@@ -27,34 +27,47 @@ import numpy as np
 import scipy.optimize as so
 import scipy.stats as st
 
-from tissuemech.compare.fit.diagnostics import RecordDiagnostics, residual_diagnostics
+from tissuemech.compare.fit.diagnostics import residual_diagnostics
+from tissuemech.compare.fit.intervals import identifiability
 from tissuemech.compare.fit.model import parameter_names
 from tissuemech.compare.fit.records import Record, as_records
+from tissuemech.compare.fit.result import FitResult
 from tissuemech.reduced.material import validate_positive
 
 __all__ = ["fe_relaxation", "FEFitResult", "step_times"]
 
 log = logging.getLogger(__name__)
 
+WEIGHTS_TOL = 1e-3  # ftol = xtol of the unweighted pass (it only sets the per-record weights)
+FIT_TOL = 1e-6  # ftol = xtol of the weighted pass (relative change of the cost / of the log-parameters)
+
 
 @dataclass
-class FEFitResult:
-    """Outcome of :func:`fe_relaxation` (SI: C [Pa], alpha [-], beta(_m) [-], tau(_m) [s]).
+class FEFitResult(FitResult):
+    """Outcome of :func:`fe_relaxation`: a :class:`~tissuemech.compare.fit.FitResult` (``summary()``, ``to_dict()``,
+    ``interval_text``; SI: C [Pa], alpha [-], beta(_m) [-], tau(_m) [s]) with the FE's own parts.
 
-    params, intervals (95 % Wald, (lo, hi)), covariance (of the log-parameters), residual (RMS of the weighted
-    residuals times the pooled noise, Pa), noise (per record, Pa), diagnostics (per record: lag-1 and runs test),
-    nfev (FE runs with gradients), wall_time (s), success, message."""
+    params, intervals (95 % Wald, (lo, hi)), covariance (of the log-parameters, white noise), residual (RMS of the
+    residuals, Pa), noise (per record, Pa), diagnostics (per record: lag-1 and runs test), identifiability (the
+    Gauss-Newton Fisher matrix in log-parameters), nfev (FE evaluations, each one FE run with gradients per record),
+    wall_time (s), mesh (the FE mesh level), model (per record: the FE's nominal stress at the record's times, Pa),
+    curves (per record: the FE's step times (s) and nominal stress (Pa) at the estimate), success, message."""
 
-    params: dict[str, float]
-    intervals: dict[str, tuple[float, float]]
-    covariance: np.ndarray
-    residual: float
-    noise: list[float]
-    diagnostics: list[RecordDiagnostics] = field(default_factory=list)
-    nfev: int = 0
     wall_time: float = 0.0
-    success: bool = False
-    message: str = ""
+    mesh: str = "default"
+    model: tuple[np.ndarray, ...] = field(default=())
+    curves: tuple[tuple[np.ndarray, np.ndarray], ...] = field(default=())
+
+    def summary(self) -> str:
+        """:meth:`FitResult.summary` and a line on the FE model (mesh, FE evaluations, wall time)."""
+        return (
+            f"model: the FE (fem.spheroid.compress, mesh {self.mesh!r}, node-by-node contact, exact Jacobians), "
+            f"{self.nfev} FE evaluations, {self.wall_time:.1f} s\n" + super().summary()
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """:meth:`FitResult.to_dict` and ``model`` ("fe"), ``mesh``, ``wall_time_s``."""
+        return {**super().to_dict(), "model": "fe", "mesh": self.mesh, "wall_time_s": float(self.wall_time)}
 
 
 def step_times(*, ramp_time: float, end_time: float, n_ramp: int = 6, n_hold: int = 20) -> np.ndarray:
@@ -107,15 +120,17 @@ def fe_relaxation(
     betas = [n for n in names if n.startswith("beta")]
     taus = [n for n in names if n.startswith("tau")]
     cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+    curves: dict[bytes, list[tuple[np.ndarray, np.ndarray]]] = {}  # per point: the FE's (step times, stress)
     calls = [0]
 
     def model(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Stacked model (Pa) and its Jacobian in log-parameters (Pa) over all records."""
         key = np.asarray(z).tobytes()
-        if key in cache:
+        if key in cache:  # least_squares asks for the Jacobian after the residual, and the passes share points
             return cache[key]
         p = dict(zip(names, np.exp(z)))
         ys, Js = [], []
+        curves[key] = []
         for r in recs:
             res = fem_spheroid.compress(radius=radius, C=p["C"], alpha=p["alpha"],
                                         branches=[(p[b], p[t]) for b, t in zip(betas, taus)],
@@ -123,6 +138,7 @@ def fe_relaxation(
                                         end_time=float(np.max(r.time)), mesh=mesh, contact="nodal",
                                         n_ramp=n_ramp, n_hold=n_hold, gradient=True)  # fmt: skip
             tt = np.concatenate([[0.0], res.time])
+            curves[key].append((tt, np.concatenate([[0.0], res.nominal_stress])))
             ys.append(np.interp(r.time, tt, np.concatenate([[0.0], res.nominal_stress])))
             grad = res.gradient or {}
             cols = [
@@ -132,7 +148,6 @@ def fe_relaxation(
             Js.append(np.stack(cols, axis=1))
         calls[0] += 1
         out = (np.concatenate(ys), np.concatenate(Js))
-        cache.clear()
         cache[key] = out
         if progress:
             log.info("FE evaluation %d: %s", calls[0], ", ".join(f"{n} = {v:.5g}" for n, v in p.items()))
@@ -143,23 +158,27 @@ def fe_relaxation(
     split = np.cumsum(sizes)[:-1]
     scale = np.concatenate([np.full(n, np.max(np.abs(r.nominal_stress))) for n, r in zip(sizes, recs)])
 
-    def fit(z0: np.ndarray, w: np.ndarray) -> so.OptimizeResult:
+    def fit(z0: np.ndarray, w: np.ndarray, tol: float) -> so.OptimizeResult:
         return so.least_squares(
             lambda z: (model(z)[0] - data) * w,
             z0,
             jac=lambda z: model(z)[1] * w[:, None],
             method="trf",
             x_scale="jac",
+            ftol=tol,
+            xtol=tol,
             max_nfev=max_nfev,
         )
 
     z0 = np.log([float(initial[n]) for n in names])
-    first = fit(z0, 1.0 / scale)
+    # the unweighted pass only sets the records' weights: a loose tolerance (it stopped 1e-5 from its optimum after
+    # twice the FE runs); the weighted pass to FIT_TOL (the last runs moved C by 1e-5 of itself, 1/500 of its sd)
+    first = fit(z0, 1.0 / scale, WEIGHTS_TOL)
     r1 = model(first.x)[0] - data
     N = data.size
     noise = [float(np.sqrt(np.sum(part**2) / max(n - P * n / N, 1.0))) for part, n in zip(np.split(r1, split), sizes)]
     w = np.concatenate([np.full(n, 1.0 / max(s, 1e-300)) for n, s in zip(sizes, noise)])
-    second = fit(first.x, w)
+    second = fit(first.x, w, FIT_TOL)
     y, J = model(second.x)
     rw = (y - data) * w
     s2 = float(np.sum(rw**2) / max(N - P, 1))
@@ -173,15 +192,25 @@ def fe_relaxation(
     resid = y - data
     diags = [residual_diagnostics(part) for part in np.split(resid, split)]
     ok = bool(second.success) and bool(np.all(np.isfinite(sd)))
+    fisher = Jw.T @ Jw / max(s2, 1e-300)  # in units of the noise, as the reduced fit's
     return FEFitResult(
         params={n: float(v) for n, v in zip(names, est)},
         intervals=intervals,
-        covariance=cov,
         residual=float(np.sqrt(np.mean(resid**2))),
-        noise=noise,
-        diagnostics=diags,
-        nfev=calls[0],
-        wall_time=_time.perf_counter() - t_start,
+        identifiability=identifiability(fisher, tuple(names)),
+        covariance=cov,
         success=ok,
         message=str(second.message),
+        nfev=calls[0],
+        names=tuple(names),
+        kinds={n: "two-sided" for n in names},
+        methods={n: "wald" for n in names},
+        noise=tuple(noise),
+        dof=int(N - P),
+        diagnostics=tuple(diags),
+        errors="white",
+        wall_time=_time.perf_counter() - t_start,
+        mesh=str(mesh),
+        model=tuple(np.split(y, split)),
+        curves=tuple(curves[second.x.tobytes()]),
     )

@@ -9,7 +9,7 @@ import numpy as np
 
 from tissuemech.compare.plots import pyplot as _plt
 
-__all__ = ["fit_figure", "protocol_figure"]
+__all__ = ["fit_figure", "protocol_figure", "fe_fit_figure"]
 
 UM = 1e-6
 DISPLAY_SAMPLES = 4000  # records longer than this are drawn as bin means (compare.fit.compress.bin_record)
@@ -101,5 +101,29 @@ def protocol_figure(records: Sequence[Any], result: Any, *, radius: float, ramp_
         ax.legend(fontsize=7)
     txt = ", ".join(f"{nm} = {result.params[nm]:.4g}" for nm in result.names)
     fig.suptitle("tissuemech fit: " + txt, fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def fe_fit_figure(records: Sequence[tuple], result: Any, *, ramp_time: float):
+    """Data and model (top, symlog time axis) and residuals (bottom) of an FE-in-the-loop fit
+    (:func:`~tissuemech.compare.fit.fe_relaxation`): ``records`` as fitted (time s, nominal stress Pa, displacement
+    m), ``result`` its :class:`~tissuemech.compare.fit.FEFitResult` (the model lines are its FE step curves, the
+    residuals its model at the records' times). Returns the figure (nothing is shown or saved here)."""
+    plt = _plt()
+    p = result.params
+    fig, (ax, axr) = plt.subplots(2, 1, figsize=(7, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
+    for (t, y, d), m, (tt, ss) in zip(records, result.model, result.curves):
+        line = ax.plot(t, y, ".", ms=3, label=f"data, {d / UM:.4g} um")[0]
+        ax.plot(tt, ss, "-", color=line.get_color(), lw=1.2, label=f"FE model, {d / UM:.4g} um")
+        axr.plot(t, np.asarray(y) - m, ".", ms=3, color=line.get_color())
+    ax.set_xscale("symlog", linthresh=max(ramp_time, 1e-6))
+    ax.set_ylabel("nominal stress F / A_mid (Pa)")
+    txt = ", ".join(f"{n} = {p[n]:.4g}" for n in result.names)
+    ax.set_title(f"tissuemech fit --model fe (mesh {result.mesh}): " + txt, fontsize=8)
+    ax.legend(fontsize=7, ncol=2)
+    axr.axhline(0.0, color="k", lw=0.6)
+    axr.set_ylabel("residual (Pa)")
+    axr.set_xlabel("time (s)")
     fig.tight_layout()
     return fig

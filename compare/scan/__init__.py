@@ -10,7 +10,7 @@
   :func:`spot_check`), run through ``compare.batch``;
 * :mod:`.io`: the table as an ``xarray.Dataset`` / netCDF file and back (:func:`to_xarray`,
   :func:`from_xarray`, :func:`to_netcdf`);
-* :mod:`.sensitivity`: which parameter drives which summary (exact JAX derivatives);
+* :mod:`.sensitivity`: which parameter drives which summary (exact JAX derivatives; the FE's at spot-checks);
 * :mod:`.table`: the columns (:func:`column` ``"C"`` -> ``"C [Pa]"``, :func:`unit_of`, :data:`UNITS`).
 
 Figures of a scan: ``compare.plots.scan``; the command ``tissuemech scan``: ``compare.cli.scan``.
@@ -33,7 +33,12 @@ from tissuemech.compare.scan.evaluation import (
 )
 from tissuemech.compare.scan.fe_checks import FE_COLUMNS, design_points, select, spot_check, spread_indices
 from tissuemech.compare.scan.io import LONG_NAMES, from_xarray, to_netcdf, to_xarray
-from tissuemech.compare.scan.sensitivity import BLASTULA_SUMMARIES, SPHEROID_SUMMARIES, sensitivities
+from tissuemech.compare.scan.sensitivity import (
+    BLASTULA_SUMMARIES,
+    SPHEROID_SUMMARIES,
+    fe_sensitivities,
+    sensitivities,
+)
 from tissuemech.compare.scan.table import (
     BLASTULA_PARAMS,
     SPHEROID_PARAMS,
@@ -65,6 +70,7 @@ __all__ = [
     "from_xarray",
     "to_netcdf",
     "sensitivities",
+    "fe_sensitivities",
     "column",
     "unit_of",
     "unit_words",
