@@ -760,9 +760,10 @@ def _cached_table(kind: str, key: tuple):
 # (x to 0.06 and 0.12, alpha 0.2 and 0.8, tau 2 and 200 s, beta 0.4) within 4.1e-5 ... 7.0e-5 of the FE approach after
 # the ramp (the equilibrium table's own 3e-5 ... 6e-5 included), against 2.6e-4 ... 4.8e-4 with p = 0; the same p
 # reproduces the lumped ramp error measured against the FE (RAMP_ERROR, level 0) within 1-10 % for tau / ramp_time in
-# [0.1, 3] (sign, size and peak at tau ~ 0.3 ramp_time), and the converged FE (levels 2-3 at 40 hold steps less level 1's time error: an estimate) puts the
-# creep at 200 s within ~6e-5. -0.6 fits level 1 alone best (4.5e-5) but level 1's spatial error offsets part of the
-# effect; -0.8 over-corrects a reloading after an unloading (3e-4). ``tissuemech bench fem-protocols``.
+# [0.1, 3] (sign, size and peak at tau ~ 0.3 ramp_time), and the converged FE (an estimate: levels 2-3 at 40 hold
+# steps less level 1's time error) puts the creep at 200 s within ~6e-5. -0.6 fits level 1 alone best (4.5e-5) but
+# level 1's spatial error offsets part of the effect; -0.8 over-corrects a reloading after an unloading (3e-4).
+# ``tissuemech bench fem-protocols``.
 COUPLING = -0.7
 
 
