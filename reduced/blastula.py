@@ -667,8 +667,9 @@ def _slope_ratio(la, k, alpha):
     return left / right
 
 
-_GOLDEN_STEPS = 24  # golden-section steps of the dip search: the 2-cell interval (<= 1.8 %) to ~1e-7 relative,
-# the minimum slope ratio to ~1e-13 (f'' x 1e-14): only dips shallower than that (p dips by < ~1e-16) are missed
+_GOLDEN_STEPS = 24  # golden-section steps of the dip search: the 2-cell interval (<= 1.8 %) to ~3e-7 in lambda_a,
+# the minimum of the slope ratio r to ~r'' x 5e-14: only a dip whose relative slope stays above about -r'' x 5e-14
+# (a maximum that p exceeds again by round-off only) can still be missed
 _INV_PHI = (np.sqrt(5.0) - 1.0) / 2.0
 
 
