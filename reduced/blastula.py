@@ -639,10 +639,11 @@ class LimitPoint(NamedTuple):
 _LIMIT_CHUNK = 2048  # lanes per block of the grid scan: memory stays flat in N (256 x 2048 doubles a temporary)
 
 
-def _falling(la, k, alpha):
-    """dp/dla <= 0 (past the maximum), in a form with one exponential and no cube root:
-    g(la) <= g(lb) k la^2/lb^2  <=>  exp(alpha (q(la) - q(lb))) (la^3 + 1) la^-7 <= k (lb^3 + 1) lb^-7,
-    q(l) = 2 l^2 + l^-4, lb^3 = 1 + (la^3 - 1) k."""
+def _slope_sides(la, k, alpha):
+    """The two sides of dp/dla >= 0 in a form with one exponential and no cube root:
+    g(la) >= g(lb) k la^2/lb^2  <=>  exp(alpha (q(la) - q(lb))) (la^3 + 1) la^-7 >= k (lb^3 + 1) lb^-7,
+    q(l) = 2 l^2 + l^-4, lb^3 = 1 + (la^3 - 1) k. Returns (left, right), both > 0; left/right - 1 is the
+    relative slope (its sign is the sign of dp/dla)."""
     la2 = la * la
     la3 = la2 * la
     lb3 = 1.0 + (la3 - 1.0) * k
@@ -651,19 +652,90 @@ def _falling(la, k, alpha):
     ib4 = ib2 * ib2
     ila4 = 1.0 / (la2 * la2)
     dq = 2.0 * la2 + ila4 - 2.0 / ib2 - ib4
-    return jnp.exp(alpha * dq) * (la3 + 1.0) * ila4 * ila4 * la <= k * (lb3 + 1.0) * ib4 * ib2 * inv_lb
+    return jnp.exp(alpha * dq) * (la3 + 1.0) * ila4 * ila4 * la, k * (lb3 + 1.0) * ib4 * ib2 * inv_lb
+
+
+def _falling(la, k, alpha):
+    """dp/dla <= 0 (past the maximum), see :func:`_slope_sides`."""
+    left, right = _slope_sides(la, k, alpha)
+    return left <= right
+
+
+def _slope_ratio(la, k, alpha):
+    """left/right of :func:`_slope_sides`: < 1 exactly where dp/dla < 0 (inf where the Fung term overflows)."""
+    left, right = _slope_sides(la, k, alpha)
+    return left / right
+
+
+_GOLDEN_STEPS = 24  # golden-section steps of the dip search: the 2-cell interval (<= 1.8 %) to ~3e-7 in lambda_a,
+# the minimum of the slope ratio r to ~r'' x 5e-14: only a dip whose relative slope stays above about -r'' x 5e-14
+# (a maximum that p exceeds again by round-off only) can still be missed
+_INV_PHI = (np.sqrt(5.0) - 1.0) / 2.0
+
+
+def _argmin_positive(x):
+    """argmin over the last axis (< 256 entries) of positive floats (inf allowed) as ONE integer min: the index
+    replaces the 8 lowest mantissa bits (positive doubles order as their int64 bits), so the reduction fuses with
+    the scan that makes ``x`` (``jnp.argmin`` does not on XLA CPU: +40 % on the scan). Ties within 256 ulp go to
+    either index (the dip search needs only a node next to the minimum)."""
+    n = x.shape[-1]
+    assert n <= 256
+    bits = jax.lax.bitcast_convert_type(x, jnp.int64)
+    return jnp.min((bits & ~jnp.int64(255)) | jnp.arange(n, dtype=jnp.int64), axis=-1) & 255
+
+
+def _dip(j, k, alpha):
+    """Lanes whose grid shows no falling node: the minimum of the relative slope near the grid minimum
+    (golden section on the two grid cells around it). A dip of dp/dla narrower than a grid cell can fall
+    below zero between two rising nodes; then the refined minimum is past the maximum and the grid node
+    before it is not: a bracket. ``j``: index of the grid minimum of the relative slope per lane (1-D, as k and
+    alpha). Returns (lo, hi, found) of those brackets."""
+    grid = jnp.asarray(_LIMIT_GRID)
+    a = jnp.where(j > 0, jnp.take(grid, jnp.maximum(j - 1, 0)), 1.0)
+    b = jnp.take(grid, jnp.minimum(j + 1, grid.size - 1))
+    c = b - _INV_PHI * (b - a)
+    d = a + _INV_PHI * (b - a)
+    fc, fd = _slope_ratio(c, k, alpha), _slope_ratio(d, k, alpha)
+
+    def golden(_, state):
+        a, b, c, d, fc, fd = state
+        left = fc < fd  # the minimum is in [a, d]
+        a, b = jnp.where(left, a, c), jnp.where(left, d, b)
+        x = jnp.where(left, b - _INV_PHI * (b - a), a + _INV_PHI * (b - a))
+        fx = _slope_ratio(x, k, alpha)
+        c, d = jnp.where(left, x, d), jnp.where(left, c, x)
+        fc, fd = jnp.where(left, fx, fd), jnp.where(left, fc, fx)
+        return a, b, c, d, fc, fd
+
+    _, _, c, d, fc, fd = jax.lax.fori_loop(0, _GOLDEN_STEPS, golden, (a, b, c, d, fc, fd))
+    x = jnp.where(fc < fd, c, d)
+    found = jnp.minimum(fc, fd) < 1.0  # left < right there: dp/dla < 0, past the maximum
+    node = jnp.take(grid, j)
+    lo = jnp.where(x > node, node, a)  # a rising grid node (or lambda_a = 1) before the dip
+    return lo, x, found
 
 
 def _limit_bracket(k, alpha):
     """First root of dp/dla on (1, 10] (1-D k, alpha of one block; no gradient): scan of the
-    ``_LIMIT_GRID`` nodes, ``_BISECTIONS`` bisections, then safeguarded Newton steps on dp/dla.
+    ``_LIMIT_GRID`` nodes (lanes without a falling node: the dip search :func:`_dip` around the grid minimum
+    of the slope), ``_BISECTIONS`` bisections, then safeguarded Newton steps on dp/dla.
     Returns (stretch, exists)."""
     grid = jnp.asarray(_LIMIT_GRID)
-    falling = _falling(grid, k[:, None], alpha[:, None])
+    left, right = _slope_sides(grid, k[:, None], alpha[:, None])
+    falling = left <= right
     exists = jnp.any(falling, axis=-1)
     i = jnp.argmax(falling, axis=-1)  # first grid node past the maximum
+    j = _argmin_positive(left / right)  # the grid minimum of the relative slope (for the dip search)
     hi = jnp.take(grid, i)
     lo = jnp.where(i > 0, jnp.take(grid, jnp.maximum(i - 1, 0)), 1.0)
+    # no falling node: a narrow dip between two nodes (rare; blocks where every lane has one skip the search)
+    dip_lo, dip_hi, dip = jax.lax.cond(
+        jnp.all(exists),
+        lambda: (lo, hi, jnp.zeros_like(exists)),
+        lambda: _dip(j, k, alpha),
+    )
+    dip = dip & ~exists
+    lo, hi, exists = jnp.where(dip, dip_lo, lo), jnp.where(dip, dip_hi, hi), exists | dip
 
     def bisect(_, bounds):
         lo, hi = bounds
@@ -733,7 +805,9 @@ def limit_point(*, inner_radius: Array, outer_radius: Array, C: Array, alpha: Ar
 
     The maximum is the first root of the closed-form slope (Leibniz rule)
     dp/dlambda_a = g(lambda_a) - g(lambda_b) (A/B)^3 lambda_a^2/lambda_b^2 on 1 < lambda_a <= 10
-    (scan on a 256-node geometric grid, 12 bisections, 4 safeguarded Newton steps; the stretch is exact
+    (scan on a 256-node geometric grid; where no node has dp/dlambda_a <= 0, a golden-section search for the
+    minimum of the slope around the grid minimum, so that a dip below zero narrower than a grid cell is not
+    missed; 12 bisections, 4 safeguarded Newton steps; the stretch is exact
     to round-off, ~1e-14, for walls down to ~1e-3 of the inner radius; thinner walls lose digits as the slope's
     two terms cancel for A/B -> 1, ~3e-17 / (wall / A): 1.5e-11 at a wall of 1e-6 A, 3.4e-8 at 1e-9 A; p_max,
     stationary there, keeps ~1e-15).

@@ -151,6 +151,80 @@ def test_limit_point_seed_values():
     assert np.isfinite(arr.pressure[0]) and np.isnan(arr.pressure[1])
 
 
+# A shell whose slope dp/dlambda_a dips below zero (to ~-1.8e-3 Pa at lambda_a ~ 1.918) only between two nodes of
+# the 256-node search grid: the scan alone saw no falling node and returned None (and inner_stretch said "beyond
+# the largest inner stretch" just above p_max); about 1e-5 of random shells (B/A 1.03-1.6, alpha 0-0.3) are such.
+NARROW_DIP = dict(inner_radius=50e-6, outer_radius=66.30e-6, C=100.0, alpha=0.064363)
+
+
+def test_limit_point_narrow_dip_between_grid_nodes():
+    g = NARROW_DIP
+    grid = np.geomspace(1.0, bl.LIMIT_SEARCH_MAX_STRETCH, 257)[1:]
+    assert np.all(np.asarray(bl.pressure_derivative(grid, **g)) > 0)  # no grid node falls: the case is real
+    lim = bl.limit_point(**g)
+    assert lim is not None
+    la, pm = lim.inner_stretch, lim.pressure
+    assert 1.91 < la < 1.92
+    # a stationary point: |dp/dlambda| ~ 0 (relative to the slope's two terms, ~ p_max / lambda_a)
+    assert abs(float(bl.pressure_derivative(la, **g))) <= 1e-8 * pm / la
+    # a maximum: above every grid node and dense stretch before it, and p falls just past it
+    dense = np.linspace(1.0, la, 2001)
+    assert pm >= np.max(np.asarray(bl.pressure(np.concatenate([grid[grid < la], dense]), **g)))
+    assert float(bl.pressure(la + 5e-3, **g)) < pm
+    # the other paths agree: an array call, a jit call
+    arr = bl.limit_point(**{**g, "alpha": np.array([g["alpha"], 0.0])})
+    assert arr.pressure[0] == pytest.approx(pm, rel=1e-15)
+    assert arr.inner_stretch[0] == pytest.approx(la, rel=1e-13)
+    jit = jax.jit(lambda al: bl.limit_point(**{**g, "alpha": al}))(g["alpha"])
+    assert float(jit.pressure) == pytest.approx(pm, rel=1e-15)
+    assert float(jit.inner_stretch) == pytest.approx(la, rel=1e-13)
+
+
+def test_inner_stretch_at_a_narrow_dip_limit_point():
+    g = NARROW_DIP
+    lim = bl.limit_point(**g)
+    below = lim.pressure * (1 - 1e-10)
+    la = float(bl.inner_stretch(below, **g))
+    assert la < lim.inner_stretch and float(bl.pressure(la, **g)) == pytest.approx(below, rel=1e-12)
+    # just above p_max: the limit-pressure message (it said "beyond the largest inner stretch"), or a state on
+    # the far branch past the dip (the solver may find it: see inner_stretch_solve), never a wrong message
+    raised = 0
+    for dp in (1e-7, 1e-6, 1e-5):
+        try:
+            far = float(bl.inner_stretch(lim.pressure + dp, **g))
+        except ValueError as e:
+            assert "exceeds the limit pressure" in str(e)
+            raised += 1
+        else:
+            assert far > lim.inner_stretch
+            assert float(bl.pressure(far, **g)) == pytest.approx(lim.pressure + dp, rel=1e-12)
+    assert raised > 0
+
+
+def test_limit_point_misses_no_maximum():
+    """Random shells plus a family of narrow-dip shells: where the slope is negative at any of 2000 dense
+    stretches in (1, 10] there is a limit point, before the first such stretch, and p_max is at least the
+    pressure at every dense stretch before it; where there is none the slope is positive at all of them."""
+    rng = np.random.default_rng(5)
+    n = 300
+    ratio = np.concatenate([rng.uniform(1.03, 1.6, n), np.full(6, 66.30 / 50)])
+    alpha = np.concatenate([rng.uniform(0.0, 0.3, n), 0.064362 + 1e-6 * np.arange(6)])
+    Bs = A * ratio
+    lim = bl.limit_point(inner_radius=A, outer_radius=Bs, C=C, alpha=alpha)
+    assert np.sum(np.isfinite(lim.pressure[n:])) == 6  # the narrow dips
+    dense = np.geomspace(1.0, bl.LIMIT_SEARCH_MAX_STRETCH, 2001)[1:]
+    slope = np.asarray(bl.pressure_derivative(dense[:, None], inner_radius=A, outer_radius=Bs, C=C, alpha=alpha))
+    falls = np.any(slope <= 0, axis=0)
+    has = np.isfinite(lim.pressure)
+    assert np.all(has[falls])
+    assert np.all(slope[:, ~has] > 0)
+    first = dense[np.argmax(slope <= 0, axis=0)]
+    assert np.all(lim.inner_stretch[falls] <= first[falls])
+    p = np.asarray(bl.pressure(dense[:, None], inner_radius=A, outer_radius=Bs, C=C, alpha=alpha))
+    before = dense[:, None] <= lim.inner_stretch[None, :]
+    assert np.all(np.where(before, p, -np.inf).max(axis=0)[has] <= lim.pressure[has] * (1 + 1e-14))
+
+
 # ------------------------------------------------------------------ inverse
 
 
