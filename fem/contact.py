@@ -377,7 +377,15 @@ class EdgeSearch(Generic[P]):
         fun = lambda x: prob.asm.internal(x, prob.mat, extra_S=extra, iso_scale=iso_scale, tangent="lazy")
         X = prob.m.X
         affine = np.zeros(prob.asm.ndof)  # a uniform squeeze: always admissible
-        affine[0 : prob.asm.n_u : 2], affine[1 : prob.asm.n_u : 2] = 0.5 * d * X[0], -d * X[1]
+        if prob.asm.surface is not None and not any(g is not None and g.shape[0] == prob.asm.ndof for g in guesses):
+            # with a tension the squeeze starts from the free ball under its Laplace pressure 2 gamma / a0 (from
+            # q = 0 the first Newton steps of a fitted mesh's first state stall or diverge beyond gamma/(C a0) ~ 0.3)
+            affine = newton(
+                lambda x: prob.asm.internal(x, prob.mat, tangent="lazy"), affine, free=prob.free, ref_norm=1.0,
+                rtol=1e-12, atol=prob.floor, admissible=prob.admissible,
+            ).x  # fmt: skip
+        affine[0 : prob.asm.n_u : 2] += 0.5 * d * X[0]
+        affine[1 : prob.asm.n_u : 2] += -d * X[1]
         err = None
         tension = prob.asm.surface is not None and prob.asm.surface.gamma > 0
         # with a tension the round ball at its Laplace pressure (the contact zone pressed onto the plate) is closer

@@ -428,6 +428,11 @@ class EquilibriumLaw(_LawChecks):
         """x-values (dimensionless) of the law's kinks in smoothness over [0, X] (None: smooth)."""
         return None
 
+    def branch_curve(self, *, alpha: Any, radius: Any, C: Any, **params: Any) -> Callable[[Any], jnp.ndarray]:
+        """x -> the part of f(x) that drives the Maxwell branches (default the whole law; the elastocapillary law
+        ``reduced.capillary.Capillary``: its elastic plate part, a surface tension does not relax)."""
+        return self.curve(alpha=alpha, radius=radius, C=C, **params)
+
 
 class Hertz(EquilibriumLaw):
     """The small-strain Hertz plate law :func:`hertz_force` (two contacts, E* = 8 C) as a law object:
@@ -939,6 +944,7 @@ def _run(flat_t, params, betas, taus, static):
             stress,
             batch_axis,
             coupling,
+            p.get("surface_tension"),
         )
 
     if shape == ():
@@ -969,7 +975,7 @@ def _gauss_eta(nodes: int) -> tuple[np.ndarray, np.ndarray]:
 _CHUNK = 8  # ramp intervals integrated per step of the chunk loop (the rest of a chunk loop is skipped)
 
 
-def _ramp_hold_quadrature(t, f, X, tr, betas, taus, knots=None, batch_axis=None, nodes: int = 16):
+def _ramp_hold_quadrature(t, f, X, tr, betas, taus, knots=None, batch_axis=None, nodes: int = 16, fb=None):
     """Dimensionless F/(C a0^2) at times t for x(t) = X min(t/tr, 1), by exact-kernel quadrature.
 
     In ramp units s = t/tr (k_m = tr/tau_m), q_m(s) = beta_m int_0^s e^{-k_m (s-u)} phi(u) du with
@@ -993,7 +999,8 @@ def _ramp_hold_quadrature(t, f, X, tr, betas, taus, knots=None, batch_axis=None,
     skip stays a branch (not a select) under vmap.
     ``knots``: x-values where the equilibrium law is only piecewise smooth (a spline table's knots);
     they become interval ends too, so every Gauss rule sees a smooth integrand (callables: 16 even
-    points; Hertz: none needed)."""
+    points; Hertz: none needed). ``fb``: the law that drives the branches (default ``f``)."""
+    fb = f if fb is None else fb
     n = betas.shape[0]
     s = jnp.clip(t / tr, 0.0, 1.0)
     feq = f(X * s)
@@ -1022,7 +1029,7 @@ def _ramp_hold_quadrature(t, f, X, tr, betas, taus, knots=None, batch_axis=None,
         # u at the nodes: (n, K, G); log z = log1p(-(1 - z0)(1 - eta^2))
         u = s1[None, :, None] + jnp.log1p(-one_minus_z0[..., None] * (1.0 - eta**2)) / k[..., None]
         u = jnp.clip(u, s0[None, :, None], s1[None, :, None])
-        _, dfx = jax.jvp(f, (X * u,), (jnp.full(u.shape, X),))  # phi(u) = X f'(X u)
+        _, dfx = jax.jvp(fb, (X * u,), (jnp.full(u.shape, X),))  # phi(u) = X f'(X u)
         # weight (1 - z0)/k, safe as k D -> 0 (then -> D)
         wk = jnp.where(k * D > 1e-300, one_minus_z0 / k, D)
         I = wk * jnp.sum(dfx * w_eta, axis=-1)  # (n, K)
@@ -1055,8 +1062,10 @@ def _ramp_hold_quadrature(t, f, X, tr, betas, taus, knots=None, batch_axis=None,
     return feq + jnp.sum(q, axis=-1), ok
 
 
-def _ramp_hold(t, f, X, tr, betas, taus, o: ODE, solver: Any):
-    """Dimensionless F/(C a0^2) at times t (1-D, any order) for x(t) = X min(t/tr, 1)."""
+def _ramp_hold(t, f, X, tr, betas, taus, o: ODE, solver: Any, fb=None):
+    """Dimensionless F/(C a0^2) at times t (1-D, any order) for x(t) = X min(t/tr, 1) (``fb``: the law driving the
+    branches, default ``f``)."""
+    fb = f if fb is None else fb
     n = betas.shape[0]
     fX = f(X)
     scale = jnp.where(fX > 0, fX, 1.0)
@@ -1069,7 +1078,7 @@ def _ramp_hold(t, f, X, tr, betas, taus, o: ODE, solver: Any):
 
     def rhs(v, q, args):
         # s = v^2, ds = 2 v dv; dq/ds = -k q + beta X f'(X s) / f(X)
-        _, df = jax.jvp(f, (X * v * v,), (X * 2.0 * v,))
+        _, df = jax.jvp(fb, (X * v * v,), (X * 2.0 * v,))
         return -k * q * 2.0 * v + betas * df / scale
 
     vs = jnp.sqrt(s)
@@ -1095,9 +1104,11 @@ def _ramp_hold(t, f, X, tr, betas, taus, o: ODE, solver: Any):
     return feq + jnp.sum(q, axis=-1), sol.result == diffrax.RESULTS.successful
 
 
-def _history(t, f, x_of_t, betas, taus, jumps, o: ODE, solver: Any, coupling: float = 0.0):
-    """Dimensionless force for a general approach history x(t) (t sorted ascending inside). ``coupling`` p: the
-    branches gain p max(dx/dt, 0) (q_m - beta_m f(x)) (:data:`COUPLING`; while the approach grows only)."""
+def _history(t, f, x_of_t, betas, taus, jumps, o: ODE, solver: Any, coupling: float = 0.0, fb=None):
+    """Dimensionless force for a general approach history x(t) (t sorted ascending inside; ``fb``: the law driving
+    the branches, default ``f``). ``coupling`` p: the branches gain p max(dx/dt, 0) (q_m - beta_m fb(x))
+    (:data:`COUPLING`; while the approach grows only)."""
+    fb = f if fb is None else fb
     t = jnp.where(jnp.isfinite(t) & (t >= 0), t, 0.0)  # refused times (traced) are reported on the result
     n = betas.shape[0]
     feq = f(x_of_t(t))
@@ -1108,10 +1119,10 @@ def _history(t, f, x_of_t, betas, taus, jumps, o: ODE, solver: Any, coupling: fl
 
     def rhs(tt, q, args):
         if coupling == 0.0:
-            _, df = jax.jvp(lambda s: f(x_of_t(s)), (tt,), (jnp.ones_like(tt),))
+            _, df = jax.jvp(lambda s: fb(x_of_t(s)), (tt,), (jnp.ones_like(tt),))
             return -q / taus + betas * df / scale
         x, dx = jax.jvp(x_of_t, (tt,), (jnp.ones_like(tt),))
-        fx, dfx = jax.jvp(f, (x,), (dx,))
+        fx, dfx = jax.jvp(fb, (x,), (dx,))
         return -q / taus + betas * dfx / scale + coupling * jnp.maximum(dx, 0.0) * (q - betas * fx / scale)
 
     order = jnp.argsort(t)
@@ -1154,33 +1165,40 @@ def _curve(
     stress: bool,
     batch_axis=None,
     coupling: float = 0.0,
+    surface_tension=None,
 ):
-    """Force (N) or nominal stress (Pa) at flat times t for scalar parameters (``law``/``mid``: law objects).
+    """Force (N) or nominal stress (Pa) at flat times t for scalar parameters (``law``/``mid``: law objects;
+    ``surface_tension``: gamma (N/m) for an elastocapillary law, whose branches the elastic part drives).
 
-    ``coupling`` p != 0 on a ramp and hold (the approach never falls): the branches integrate A(x) = f(x) e^{-p x} and
+    ``coupling`` p != 0 on a ramp and hold (the approach never falls): the branches integrate A(x) = fb(x) e^{-p x} and
     act through B(x) = e^{p x} at the present approach (:data:`COUPLING`): F = f(x) + e^{p x} sum_m q_m[A], the
     integrators run on A unchanged. A history: its ODE adds the coupling term while the approach grows."""
-    f_eq = law.curve(alpha=alpha, radius=radius, C=C)
-    f = f_eq if coupling == 0.0 or betas.shape[0] == 0 else (lambda x: f_eq(x) * jnp.exp(-coupling * x))
+    if surface_tension is None:
+        f = fb0 = law.curve(alpha=alpha, radius=radius, C=C)
+    else:
+        f = law.curve(alpha=alpha, radius=radius, C=C, surface_tension=surface_tension)
+        fb0 = law.branch_curve(alpha=alpha, radius=radius, C=C, surface_tension=surface_tension)
+    coupled = coupling != 0.0 and betas.shape[0] > 0
+    fb = (lambda x: fb0(x) * jnp.exp(-coupling * x)) if coupled else fb0
     if callable(displacement):
 
         def x_of_t(tt):
             return displacement(tt) / (2.0 * radius)
 
         # the history's ODE carries the coupling itself (while the approach grows: not separable)
-        fhat, ok = _history(t, f_eq, x_of_t, betas, taus, jumps, method, solver, coupling)
-        f = f_eq
+        fhat, ok = _history(t, f, x_of_t, betas, taus, jumps, method, solver, coupling, fb0)
+        coupled = False
         x_t = x_of_t(t)
     else:
         X = displacement / (2.0 * radius)
         if isinstance(method, Quadrature):
             knots = law.knots(displacement, radius)
-            fhat, ok = _ramp_hold_quadrature(t, f, X, ramp_time, betas, taus, knots, batch_axis, method.nodes)
+            fhat, ok = _ramp_hold_quadrature(t, f, X, ramp_time, betas, taus, knots, batch_axis, method.nodes, fb)
         else:
-            fhat, ok = _ramp_hold(t, f, X, ramp_time, betas, taus, method, solver)
+            fhat, ok = _ramp_hold(t, f, X, ramp_time, betas, taus, method, solver, fb)
         x_t = X * jnp.clip(t / ramp_time, 0.0, 1.0)
-    if f is not f_eq:  # fhat = A(x) + sum q[A]: the branch sum acts through e^{p x} on f_eq
-        fhat = f_eq(x_t) + jnp.exp(coupling * x_t) * (fhat - f(x_t))
+    if coupled:  # fhat = f(x) + sum q[A]: the branch sum acts through e^{p x}
+        fhat = f(x_t) + jnp.exp(coupling * x_t) * (fhat - f(x_t))
     out = fhat * C * radius**2
     if stress:
         g = mid.curve(alpha=alpha, radius=radius)
@@ -1257,7 +1275,11 @@ def _evaluate(
     method,
     stress,
     coupling="auto",
+    surface_tension=None,
 ):
+    if surface_tension is not None:  # the elastocapillary law (reduced.capillary), the tension a parameter
+        equilibrium = _capillary_law(equilibrium, surface_tension, radius, C, alpha)
+        midplane = "incompressible" if midplane is None else midplane
     br = validate_branches(branches)
     if isinstance(displacement, tuple):  # a measured history (times, approaches): piecewise linear, kinks at the times
         displacement, kinks = _measured_history(displacement)
@@ -1269,6 +1291,7 @@ def _evaluate(
         C,
         alpha,
         ramp_time,
+        surface_tension,
         *(v for b in br for v in b),
         *(() if callable(displacement) else (displacement,)),
     )
@@ -1290,6 +1313,8 @@ def _evaluate(
     params = dict(radius=radius, C=C, alpha=alpha)
     if not callable(displacement):
         params.update(displacement=displacement, ramp_time=ramp_time)
+    if surface_tension is not None:
+        params.update(surface_tension=surface_tension)
     params = {k: jnp.asarray(v, dtype=jnp.float64) for k, v in params.items()}
     shapes = {
         **{k: v.shape for k, v in params.items()},
@@ -1360,6 +1385,7 @@ def force(
     adjoint: Any = None,
     method: Method = _QUADRATURE,
     coupling: float | str = "auto",
+    surface_tension: Any = None,
 ) -> jnp.ndarray:
     r"""Plate force F(t) in N of the lumped generalized-Maxwell spheroid.
 
@@ -1377,6 +1403,11 @@ def force(
                  branches (module doc).
     method       :class:`Quadrature` (default; "quadrature") or :class:`ODE` (``ODE(solver, stepsize_controller,
                  rtol=, atol=, adjoint=, max_steps=)``; "ode"): how the branches are integrated over a ramp.
+    surface_tension
+                 tissue surface tension gamma (N/m, >= 0; broadcasts like C, differentiable): the elastocapillary
+                 law ``reduced.capillary.Capillary`` (FE-calibrated, Gamma = gamma/(C a0) in its table) replaces the
+                 plate table (``equilibrium`` "fem", or a ``Capillary`` law); the branches are driven by the
+                 elastic plate part only (a tension does not relax). None (default): no tension.
     rtol, atol, max_steps, solver, adjoint
                  the loose spelling of the ODE options (defaults 1e-10, 1e-10, 16384, auto, "reverse"): with
                  ``method="ode"`` or a callable displacement only; with the quadrature they would have no effect
@@ -1405,6 +1436,7 @@ def force(
         method=method,
         stress=False,
         coupling=coupling,
+        surface_tension=surface_tension,
     )
 
 
@@ -1427,13 +1459,15 @@ def nominal_stress(
     adjoint: Any = None,
     method: Method = _QUADRATURE,
     coupling: float | str = "auto",
+    surface_tension: Any = None,
 ) -> jnp.ndarray:
     r"""Nominal stress sigma~(t) = F(t) / (pi r_mid(delta(t))^2) in Pa (the seed's observable).
 
     Same arguments as :func:`force`; ``midplane`` chooses r_mid: "incompressible" (a0/sqrt(1 - x)),
     "fem" (calibrated), an (x, g) table, a callable r_mid(delta, *, radius, alpha) (m), or None (auto).
     Errors as :func:`force` (eager: ValueError; under jit/vmap/grad: at run time, ``equinox.error_if``), the
-    midplane law's range included.
+    midplane law's range included. With ``surface_tension`` (:func:`force`) ``midplane=None`` means
+    "incompressible" (the calibrated g(x) is the tension-free ball's).
     """
     return _evaluate(
         t,
@@ -1454,6 +1488,7 @@ def nominal_stress(
         method=method,
         stress=True,
         coupling=coupling,
+        surface_tension=surface_tension,
     )
 
 
@@ -1583,6 +1618,29 @@ def _midplane_core(law: MidplaneLaw, displacement, radius, alpha):
 
 
 _NUMBER_TYPES = (float, int, np.floating, np.integer)
+
+
+def _capillary_law(equilibrium: Any, surface_tension: Any, radius: Any, C: Any, alpha: Any) -> EquilibriumLaw:
+    """The elastocapillary law for ``surface_tension=`` (the shipped ``Capillary()`` for ``equilibrium="fem"``, or
+    the ``Capillary`` law given), its Gamma = gamma/(C a0) range checked now for concrete values."""
+    from tissuemech.reduced import capillary
+
+    if isinstance(equilibrium, str) and equilibrium == "fem":
+        law = capillary.shipped_law()
+    elif isinstance(equilibrium, capillary.Capillary):
+        law = equilibrium
+    else:
+        raise ValueError(
+            "surface_tension (gamma, N/m) needs the elastocapillary law: equilibrium='fem' (the default) or a "
+            f"reduced.capillary.Capillary law; got equilibrium={equilibrium!r}"
+        )
+    if not is_traced(surface_tension, radius, C, alpha):
+        validate_nonnegative("surface_tension (gamma)", surface_tension, "N/m")
+        validate_positive("radius (of the ball)", radius, "m")
+        validate_positive("C (Fung stiffness)", C, "Pa")
+        G = np.asarray(surface_tension, float) / (np.asarray(C, float) * np.asarray(radius, float))
+        law.capillary.check_range(0.0, np.asarray(alpha, float), G)
+    return law
 
 
 def _float_array(v: Any) -> bool:

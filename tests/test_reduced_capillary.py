@@ -1,0 +1,132 @@
+"""The elastocapillary equilibrium law (tissuemech.reduced.capillary) and the lumped relaxation with a tension."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from tissuemech.reduced import capillary as cap
+from tissuemech.reduced import drop
+from tissuemech.reduced import spheroid as sph
+
+A0, C = 175e-6, 170.0  # S180 aggregate radius (m) and a Fung C (Pa, E ~ 1 kPa)
+GAMMA = 0.2 * C * A0  # N/m: elastocapillary number 0.2 (about 6 mN/m)
+
+
+def test_table_metadata_and_shape():
+    t = cap.capillary_table()
+    assert t.ratio.shape == (t.gamma.size, t.alpha.size, t.x.size)
+    assert t.gamma[0] == 0 and np.all(t.ratio[0] == 1.0)  # Gamma = 0 IS the plate table
+    for key in ("mesh", "command", "fe_seconds", "definition"):
+        assert key in t.metadata
+
+
+def test_drop_spline_matches_the_exact_drop():
+    t = cap.capillary_table()
+    x = np.array([6e-4, 0.003, 0.025, 0.11, 0.29])
+    exact = drop.force(2 * x, radius=1.0, surface_tension=1.0)
+    np.testing.assert_allclose(np.asarray(t.drop_f(x)), exact, rtol=2e-5)
+
+
+@pytest.mark.parametrize("alpha", [0.0, 0.3, 1.0])
+def test_tends_to_the_plate_table_as_the_tension_vanishes(alpha):
+    d = np.linspace(0.0, 0.6, 13) * A0
+    plate = sph.equilibrium_force(d, radius=A0, C=C, alpha=alpha)
+    f0 = cap.equilibrium_force(d, radius=A0, C=C, alpha=alpha, surface_tension=0.0)
+    np.testing.assert_allclose(np.asarray(f0), np.asarray(plate), rtol=1e-12, atol=0)
+    small = cap.equilibrium_force(d, radius=A0, C=C, alpha=alpha, surface_tension=1e-6 * C * A0)
+    np.testing.assert_allclose(np.asarray(small), np.asarray(plate), rtol=2e-5, atol=1e-18)
+
+
+def test_tension_adds_at_least_part_of_the_drop_force():
+    d = np.linspace(0.02, 0.6, 12) * A0
+    t = cap.capillary_table()
+    plate = np.asarray(sph.equilibrium_force(d, radius=A0, C=C, alpha=0.5))
+    for G in (0.1, 0.5, t.gamma_max):
+        F = np.asarray(cap.equilibrium_force(d, radius=A0, C=C, alpha=0.5, surface_tension=G * C * A0))
+        Fd = drop.force(d, radius=A0, surface_tension=G * C * A0)
+        assert np.all(F > plate)  # a tension stiffens the ball
+        # near the additive law (elastic + drop): the coupling R - 1 is largest at small x (~1/sqrt(x))
+        R = F / (plate + Fd)
+        assert np.all(R > 1.0) and R.max() < 1.15 and np.all(R[d >= 0.4 * A0] < 1.02)
+
+
+def test_relaxation_with_tension_relaxes_only_the_elastic_part():
+    t = np.array([0.0, 0.5, 1.0, 2.0, 10.0, 1e4])
+    kw = dict(radius=A0, C=C, alpha=0.5, branches=[(2.0, 3.0)], displacement=0.4 * A0, ramp_time=1.0)
+    F = np.asarray(sph.force(t, surface_tension=GAMMA, **kw))
+    F0 = np.asarray(sph.force(t, **kw))
+    Feq = np.asarray(cap.equilibrium_force(np.minimum(t, 1.0) * 0.4 * A0, radius=A0, C=C, alpha=0.5,
+                                           surface_tension=GAMMA))  # fmt: skip
+    Feq0 = np.asarray(sph.equilibrium_force(np.minimum(t, 1.0) * 0.4 * A0, radius=A0, C=C, alpha=0.5))
+    # the branch forces are those of the tension-free ball: the tension does not relax
+    np.testing.assert_allclose(F - Feq, F0 - Feq0, rtol=1e-9, atol=1e-12 * F0.max())
+    assert abs(F[-1] / Feq[-1] - 1) < 1e-9  # the long-time force is the elastocapillary equilibrium
+    # zero tension: the plate law's relaxation
+    np.testing.assert_allclose(np.asarray(sph.force(t, surface_tension=0.0, **kw)), F0, rtol=1e-12)
+
+
+def test_tension_broadcasts_and_differentiates():
+    t = jnp.linspace(0.0, 20.0, 9)
+    kw = dict(radius=A0, C=C, alpha=0.5, branches=[(2.0, 3.0)], displacement=0.4 * A0, ramp_time=1.0)
+    g = jnp.array([0.5, 1.0, 1.5]) * GAMMA
+    F = sph.force(t, surface_tension=g[:, None] * jnp.ones(1), **kw)
+    assert F.shape == (3, 1, 9) and bool(jnp.all(jnp.diff(F[:, 0, -1]) > 0))
+    dF = jax.grad(lambda gg: sph.force(t, surface_tension=gg, **kw)[-1])(GAMMA)
+    h = 1e-4 * GAMMA
+    fd = (sph.force(t, surface_tension=GAMMA + h, **kw)[-1] - sph.force(t, surface_tension=GAMMA - h, **kw)[-1]) / (
+        2 * h
+    )
+    assert float(dF) > 0
+    np.testing.assert_allclose(float(dF), float(fd), rtol=1e-6)
+
+
+def test_stress_with_tension_uses_the_incompressible_midplane():
+    kw = dict(radius=A0, C=C, alpha=0.5, displacement=0.4 * A0, ramp_time=1.0)
+    t = np.array([0.5, 2.0])
+    s = np.asarray(sph.nominal_stress(t, surface_tension=GAMMA, **kw))
+    F = np.asarray(sph.force(t, surface_tension=GAMMA, **kw))
+    x = np.minimum(t, 1.0) * 0.2
+    np.testing.assert_allclose(s, F / (np.pi * A0**2 / (1 - x)), rtol=1e-12)
+
+
+def test_out_of_range_inputs_raise():
+    t = cap.capillary_table()
+    kw = dict(radius=A0, C=C, alpha=0.5, displacement=0.4 * A0, ramp_time=1.0)
+    with pytest.raises(ValueError, match="elastocapillary number"):
+        sph.force([1.0], surface_tension=2 * t.gamma_max * C * A0, **kw)
+    with pytest.raises(ValueError, match="surface_tension"):
+        sph.force([1.0], surface_tension=-1e-3, **kw)
+    with pytest.raises(ValueError, match="elastocapillary law"):
+        sph.force([1.0], surface_tension=GAMMA, equilibrium="hertz", **kw)
+    with pytest.raises(ValueError, match="alpha"):
+        cap.equilibrium_force(0.1 * A0, radius=A0, C=C, alpha=5.0, surface_tension=GAMMA)
+    big = jax.jit(lambda g: sph.force(jnp.array([1.0]), surface_tension=g, **kw))
+    with pytest.raises(Exception, match="elastocapillary number"):
+        jax.block_until_ready(big(2 * t.gamma_max * C * A0))
+
+
+def test_law_object_with_its_own_tension():
+    law = cap.Capillary(surface_tension=GAMMA)
+    d = np.array([0.1, 0.3]) * A0
+    a = sph.equilibrium_force(d, radius=A0, C=C, alpha=0.5, equilibrium=law)
+    b = cap.equilibrium_force(d, radius=A0, C=C, alpha=0.5, surface_tension=GAMMA)
+    np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=1e-13)
+
+
+@pytest.mark.slow
+def test_reduced_matches_the_fe_between_the_nodes():
+    """alpha 0.25, Gamma 0.5 (between every node of the table), x = 0.075 .. 0.25 (between the x knots): the reduced
+    law against the FE of the table's level, its ratio taken to the shipped plate table as the table does."""
+    from tissuemech.compare.calibrate_capillary import capillary_curve, drop_curve
+
+    t = cap.capillary_table()
+    a, G = 0.25, 0.5
+    fe = capillary_curve(alpha=a, Gamma=G, x_max=0.25, n=10, mesh=t.metadata["mesh"])
+    fe0 = capillary_curve(alpha=a, Gamma=0.0, x_max=0.25, n=10, mesh=t.metadata["mesh"])
+    x = fe["x"][2:]
+    d = drop_curve(x)
+    plate = np.asarray(sph.master_curve().f(x, a))
+    ref = fe["f"][2:] / (fe0["f"][2:] + G * d) * (plate + G * d)
+    red = np.asarray(cap.Capillary().curve(alpha=a, radius=1.0, C=1.0, surface_tension=G)(x))
+    np.testing.assert_allclose(red, ref, rtol=5e-4)
