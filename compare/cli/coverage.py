@@ -36,7 +36,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         default=None,
         metavar="NAME",
         help="run the error-model rows instead (all when no NAME is given): "
-        + "; ".join(f"'{k}'" for k in _scenario_names()),
+        + "; ".join(f"'{k}'" for k in _scenario_names()).replace("%", "%%"),  # argparse %-formats help
     )
     p.add_argument("--n-scenario", type=int, default=200, help="fits per error-model row (default 200)")
     p.add_argument(
