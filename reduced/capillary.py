@@ -223,6 +223,10 @@ class Capillary(spheroid.EquilibriumLaw):
         """x -> f_plate(x): what drives the Maxwell branches (the tension does not relax)."""
         return self.plate.curve(alpha=alpha, radius=radius, C=C)
 
+    def branch_law(self) -> spheroid.EquilibriumLaw:
+        """The tension-free plate law: it drives the branches (``coupling="auto"`` follows it)."""
+        return self.plate
+
     def knots(self, displacement: Any, radius: Any) -> Any:
         """The x knots of both tables."""
         pk = self.plate.knots(displacement, radius)

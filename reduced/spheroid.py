@@ -433,6 +433,10 @@ class EquilibriumLaw(_LawChecks):
         ``reduced.capillary.Capillary``: its elastic plate part, a surface tension does not relax)."""
         return self.curve(alpha=alpha, radius=radius, C=C, **params)
 
+    def branch_law(self) -> EquilibriumLaw:
+        """The law whose curve drives the Maxwell branches (:meth:`branch_curve`): ``coupling="auto"`` follows it."""
+        return self
+
 
 class Hertz(EquilibriumLaw):
     """The small-strain Hertz plate law :func:`hertz_force` (two contacts, E* = 8 C) as a law object:
@@ -773,12 +777,13 @@ COUPLING = -0.7
 
 
 def _coupling_of(spec: Any, law: EquilibriumLaw) -> float:
-    """The coupling p (per unit x = delta / (2 a0)) of ``coupling=``: "auto" is :data:`COUPLING` for the FE-calibrated
-    law (``FEMTable``, finite strain) and 0 (the plain lumped law) for Hertz, user tables and callables."""
+    """The coupling p (per unit x = delta / (2 a0)) of ``coupling=``: "auto" is :data:`COUPLING` where the FE-calibrated
+    law (``FEMTable``, finite strain) drives the branches (the elastocapillary law's plate part too) and 0 (the plain
+    lumped law) for Hertz, user tables and callables."""
     if isinstance(spec, str):
         if spec != "auto":
             raise ValueError(f"coupling must be 'auto' or a number (per unit delta / (2 radius)); got {spec!r}")
-        return COUPLING if type(law) is FEMTable else 0.0
+        return COUPLING if type(law.branch_law()) is FEMTable else 0.0
     if isinstance(spec, bool) or not isinstance(spec, (int, float, np.integer, np.floating)) or not np.isfinite(spec):
         raise ValueError(
             f"coupling must be 'auto' or a finite number (per unit delta / (2 radius), dimensionless); got {spec!r}"
