@@ -165,6 +165,7 @@ __all__ = [
     "lumped_ramp_error",
     "RAMP_ERROR",
     "COUPLING",
+    "branch_coupling",
     "UnloadingWarning",
 ]
 
@@ -789,6 +790,12 @@ def _coupling_of(spec: Any, law: EquilibriumLaw) -> float:
             f"coupling must be 'auto' or a finite number (per unit delta / (2 radius), dimensionless); got {spec!r}"
         )
     return float(spec)
+
+
+def branch_coupling(coupling: Any = "auto", equilibrium: Any = "fem") -> float:
+    """The geometric coupling p (per unit x = delta / (2 a0), dimensionless) that ``force(..., coupling=coupling,
+    equilibrium=equilibrium)`` uses: "auto" is :data:`COUPLING` where the FE table drives the branches, else 0."""
+    return _coupling_of(coupling, as_equilibrium_law(equilibrium))
 
 
 _ODE_DEFAULTS = dict(rtol=1e-10, atol=1e-10, max_steps=16384, solver=None, adjoint="reverse")

@@ -236,19 +236,26 @@ def _forward_ode() -> Any:
 HISTORY_SUBSTEPS = 8  # each interval between a history's samples is cut into this many for F_eq (module doc)
 
 
-def history_force(t, times, approaches, *, radius, C, alpha, branches, equilibrium="fem", substeps=HISTORY_SUBSTEPS):
+def history_force(
+    t, times, approaches, *, radius, C, alpha, branches, equilibrium="fem", substeps=HISTORY_SUBSTEPS, coupling="auto"
+):
     r"""The lumped model's plate force (N) at ``t`` (s; each one a sample time of ``times``) under the measured
     approach history ``(times, approaches)`` (s, strictly increasing from 0; m, linear between the samples): what
-    ``reduced.spheroid.force(displacement=(times, approaches))`` integrates with diffrax, here by the exact
-    exponential recursion for an F_eq linear in time on each of ``substeps`` parts of a sample interval:
+    ``reduced.spheroid.force(displacement=(times, approaches), coupling=coupling)`` integrates with diffrax, here by
+    the exact recursion for an F_eq linear in time on each of ``substeps`` parts of a sample interval. The branch
+    equation dq_m/dt = -q_m / tau_m + beta_m dF_eq/dt + p max(dx/dt, 0) (q_m - beta_m F_eq) (x = delta / (2 a0), p the
+    geometric coupling ``reduced.spheroid.branch_coupling``) has on a part of length h with x' constant and
+    F_eq = F_0 + r s, with k = 1/tau_m - p x'^+ and c = p x'^+,
 
-        q_m(t + h) = q_m(t) e^{-h/tau_m} + beta_m tau_m (Delta F_eq / h) (1 - e^{-h/tau_m}),
+        q_m(h) = q_m(0) e^{-k h} + beta_m [(r - c F_0) E_1 - c r E_2],  E_1 = (1 - e^{-k h}) / k,  E_2 = (h - E_1) / k
 
-    second-order in h (the curvature of F_eq(delta(t)) within a part). JAX-traceable (jit, jacfwd), ~1000 times
-    faster than the ODE on a record of noisy samples (every sample a kink the adaptive ODE steps must find); agrees
-    with ``reduced.spheroid.force`` to 1e-5 of the peak on the tests' histories (tests/test_compare_fit_protocols.py)."""
+    (p = 0: q_m(t + h) = q_m(t) e^{-h/tau_m} + beta_m tau_m r (1 - e^{-h/tau_m})), second-order in h (the curvature of
+    F_eq(delta(t)) within a part). JAX-traceable (jit, jacfwd), ~1000 times faster than the ODE on a record of noisy
+    samples (every sample a kink the adaptive ODE steps must find); agrees with ``reduced.spheroid.force`` to 1e-5 of
+    the peak on the tests' histories (tests/test_compare_fit_protocols.py)."""
     from tissuemech.reduced import spheroid
 
+    p = spheroid.branch_coupling(coupling, equilibrium)
     times, approaches = jnp.asarray(times), jnp.asarray(approaches)
     w = jnp.arange(substeps) / substeps
     tf = jnp.concatenate([(times[:-1, None] + jnp.diff(times)[:, None] * w).ravel(), times[-1:]])
@@ -256,10 +263,17 @@ def history_force(t, times, approaches, *, radius, C, alpha, branches, equilibri
     feq = spheroid.equilibrium_force(jnp.maximum(df, 0.0), radius=radius, C=C, alpha=alpha, equilibrium=equilibrium)
     h = jnp.diff(tf)
     rate = jnp.diff(feq) / h
+    c = p * jnp.maximum(jnp.diff(df) / (2.0 * radius), 0.0) / h  # p x'^+ (1/s) on each part
     total = feq
     for beta, tau in branches:
-        a = jnp.exp(-h / tau)
-        inc = beta * tau * rate * (1.0 - a)
+        k = 1.0 / tau - c
+        kh = k * h
+        small = jnp.abs(kh) < 1e-3
+        ks = jnp.where(small, 1.0, k)
+        e1 = jnp.where(small, h * (1.0 - kh / 2.0 + kh**2 / 6.0), -jnp.expm1(-kh) / ks)
+        e2 = jnp.where(small, h**2 * (0.5 - kh / 6.0 + kh**2 / 24.0), (h - e1) / ks)
+        a = jnp.exp(-kh)
+        inc = beta * ((rate - c * feq[:-1]) * e1 - c * rate * e2)
 
         def step(q, ai):
             q = ai[0] * q + ai[1]
