@@ -9,6 +9,7 @@ with the FE's exact parameter sensitivities at a few spot-check points, where th
 from __future__ import annotations
 
 import functools
+import logging
 from collections.abc import Sequence
 from typing import Any
 
@@ -17,6 +18,8 @@ import pandas as pd
 
 from tissuemech.compare.scan.evaluation import default_times, summaries
 from tissuemech.compare.scan.table import UNITS, column, is_log_sampled, parameters_of, scene_of, varied_parameters
+
+logger = logging.getLogger(__name__)
 
 __all__ = [
     "sensitivities",
@@ -286,6 +289,6 @@ def fe_sensitivities(
         ys.append(y)
         Js.append(J)
         if progress:
-            print(f"FE sensitivities: point {i + 1}/{len(rows)}", flush=True)
+            logger.info("FE sensitivities: point %d/%d", i + 1, len(rows))
     p = np.stack([vals[n][rows] for n in varied], axis=1)
     return _shares(np.stack(ys), np.stack(Js), p, varied, vals, log, SPHEROID_SUMMARIES)
