@@ -28,6 +28,17 @@ def _exact(name: str) -> np.ndarray:
     return np.array(out)
 
 
+def perturbed(base, branches, name, value):
+    """(parameters, branches) with ``name`` ("C", "alpha", ..., "beta_m" or "tau_m", m from 1) set to ``value``."""
+    p, b = dict(base), [list(x) for x in branches]
+    if name in p:
+        p[name] = value
+    else:
+        kind, m = name.split("_")
+        b[int(m) - 1][0 if kind == "beta" else 1] = value
+    return p, [tuple(x) for x in b]
+
+
 @pytest.fixture(scope="module")
 def gradients():
     return {
@@ -154,13 +165,8 @@ def test_time_run_gradient_equals_central_differences_of_whole_runs():
     values = {**base, "beta_1": 0.8, "tau_1": 0.05, "beta_2": 0.3, "tau_2": 20.0}
 
     def run(name, v):
-        p, b = dict(base), [list(x) for x in br]
-        if name in p:
-            p[name] = v
-        else:
-            kind, m = name.split("_")
-            b[int(m) - 1][0 if kind == "beta" else 1] = v
-        return fs.compress(branches=[tuple(x) for x in b], rtol=1e-13, **p, **kw).force
+        p, b = perturbed(base, br, name, v)
+        return fs.compress(branches=b, rtol=1e-13, **p, **kw).force
 
     for name, v in values.items():
         h = 1e-4 * v
@@ -254,13 +260,8 @@ def test_force_control_gradient_equals_central_differences_of_whole_runs():
     values = {**base, "beta_1": 0.8, "tau_1": 0.5, "beta_2": 0.3, "tau_2": 20.0}
 
     def run(name, v):
-        p, b = dict(base), [list(x) for x in br]
-        if name in p:
-            p[name] = v
-        else:
-            kind, m = name.split("_")
-            b[int(m) - 1][0 if kind == "beta" else 1] = v
-        return fs.compress(branches=[tuple(x) for x in b], rtol=1e-13, **p, **CREEP)
+        p, b = perturbed(base, br, name, v)
+        return fs.compress(branches=b, rtol=1e-13, **p, **CREEP)
 
     for name, v in values.items():
         h = 1e-4 * v
