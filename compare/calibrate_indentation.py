@@ -23,7 +23,7 @@ extrapolation of the check level (default 3) and the fine one at the check slice
 the check points, the command). ``reduced.indentation`` interpolates h by natural cubic splines in ln rho, then
 in s = sqrt(y) and alpha (the plate table's sqrt rule: h - 1 grows like sqrt(y)).
 
-``python -m tissuemech.compare.calibrate_indentation [--out PATH] [--install] [--store DIR] [--mesh L]
+``tissuemech calibrate-indentation [--out PATH] [--install] [--store DIR] [--mesh L]
 [--coarse-mesh L] [--order P] [--check-mesh L] [--check-rhos ..] [--rhos ..] [--alphas ..] [--ys ..] [--serial]``
 regenerates it through ``compare.batch`` (resumable with ``--store``; the slices and the checks in one process
 pool). The shipped table: 4 min (levels 1 and 3 at rho = 0.05, with level 2 and level 3 at rho = 0.2 already in
@@ -32,7 +32,6 @@ the store: 14 min) with 2 processes on a heavily loaded shared 2-core machine.
 
 from __future__ import annotations
 
-import argparse
 import json
 import logging
 import sys
@@ -215,44 +214,11 @@ def write(path: str | Path, table: dict, metadata: dict) -> None:
     np.savez(path, **arrays, metadata=np.asarray(json.dumps(metadata)))  # type: ignore[arg-type]
 
 
-def _floats(text: str) -> list[float]:
-    try:
-        return [float(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a comma list of numbers, got {text!r}") from None
-
-
 def main(argv: Sequence[str] | None = None) -> int:
-    """The command line (module doc)."""
-    ap = argparse.ArgumentParser(
-        prog="python -m tissuemech.compare.calibrate_indentation", description=__doc__.split("\n")[0]
-    )
-    ap.add_argument("--out", default="indentation_master.npz", help="table to write (default: %(default)s)")
-    ap.add_argument("--install", action="store_true", help=f"write the shipped table {DEFAULT_OUT}")
-    ap.add_argument("--store", default=None, help="folder for per-slice results (resume)")
-    ap.add_argument("--mesh", type=int, default=2, help="FE level of the table (default: %(default)s)")
-    ap.add_argument("--coarse-mesh", type=int, default=1, help="coarser level of the Richardson table (-1: none)")
-    ap.add_argument("--order", type=float, default=ORDER, help="Richardson order in n_zone (default: %(default)s)")
-    ap.add_argument("--check-rhos", type=_floats, default=list(CHECK_RHOS), help="rho values of the check slices")
-    ap.add_argument(
-        "--check-mesh", type=int, default=3, help="finer level of the check (-1: none; default: %(default)s)"
-    )
-    ap.add_argument("--rhos", type=_floats, default=list(RHOS), help="probe radius / ball radius values")
-    ap.add_argument("--alphas", type=_floats, default=list(ALPHAS), help="Fung exponents (increasing)")
-    ap.add_argument("--ys", type=_floats, default=list(YS), help="depth ratios y = d_1 / R_1 (increasing, > 0)")
-    ap.add_argument("--serial", action="store_true", help="one process (default: compare.batch's local pool)")
-    a = ap.parse_args(argv)
-    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s: %(message)s")
-    table, meta = tabulate(
-        rhos=a.rhos, alphas=a.alphas, ys=a.ys, mesh=a.mesh, coarse_mesh=None if a.coarse_mesh < 0 else a.coarse_mesh,
-        order=a.order, check_rhos=a.check_rhos, check_mesh=None if a.check_mesh < 0 else a.check_mesh,
-        executor="serial" if a.serial else None, store=a.store,
-    )  # fmt: skip
-    out = DEFAULT_OUT if a.install else Path(a.out)
-    write(out, table, meta)
-    print(f"wrote {out}: y up to {meta['y_max']:g}, discretisation error {meta['discretisation_error']:.2e} "
-          f"({meta['discretisation_error_at']}), {meta['wall_seconds']:.0f} s")  # fmt: skip
-    return 0
+    """The command line: ``tissuemech calibrate-indentation`` (:mod:`tissuemech.compare.cli.calibrate_indentation`)."""
+    from tissuemech.compare.cli.calibrate_indentation import main as cli_main
+
+    return cli_main(argv)
 
 
 if __name__ == "__main__":

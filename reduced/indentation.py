@@ -36,7 +36,7 @@ FE-calibrated table (``law="table"``; ``law="auto"``, the default, uses it where
 F_eq = F_Hertz,series(delta) h(y, alpha, rho), rho = R_p / a0, y = d_1 / R_1 = 2 x share(rho) / r_1(rho)
 (:func:`depth_ratio`: the probe contact's small-strain depth in units of its effective radius, the quantity
 that bounds what the scene resolves, so one y grid serves every probe size). h comes from static FE runs on
-contact-edge-fitted meshes (``python -m tissuemech.compare.calibrate_indentation``, shipped as
+contact-edge-fitted meshes (``tissuemech calibrate-indentation``, shipped as
 ``reduced/data/indentation_master.npz`` with its metadata: FE level, the discretisation error against a finer
 level at check points, the command), h = 1 at y = 0, interpolated by natural cubic splines in ln(rho), then in
 s = sqrt(y) and alpha (:class:`MasterTable`; the same sqrt rule as the plate table: h - 1 grows like sqrt(y)).
@@ -345,12 +345,12 @@ class MasterTable:
 @functools.lru_cache(maxsize=4)
 def master_table(path: str | None = None) -> MasterTable:
     """The FE-calibrated indentation table shipped with the package (``reduced/data/indentation_master.npz``, made
-    by ``python -m tissuemech.compare.calibrate_indentation``) or read from ``path``."""
+    by ``tissuemech calibrate-indentation``) or read from ``path``."""
     p = Path(path) if path is not None else DATA_FILE
     if not p.exists():
         raise FileNotFoundError(
-            f"no calibrated indentation table at {p}. Generate it with `python -m "
-            "tissuemech.compare.calibrate_indentation --install`, or use law='hertz'."
+            f"no calibrated indentation table at {p}. Generate it with `tissuemech calibrate-indentation "
+            "--install`, or use law='hertz'."
         )
     with np.load(p, allow_pickle=False) as z:
         meta = json.loads(str(z["metadata"])) if "metadata" in z.files else {}
