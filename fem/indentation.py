@@ -28,6 +28,12 @@ step times: ``fem.protocols.Record`` / ``record_schedule``). :func:`fitted_state
 over a grid of approaches and alphas, continued in both (the indentation table's generator,
 ``compare.calibrate_indentation``).
 
+``kinematics="small"`` (static, elastic; ``SmallStrainAssembler``, ``ReferenceSphere``): the geometrically linear
+counterpart, linear strain, Hooke's law with the Fung law's small-strain shear modulus 2 C, tr(eps) for J - 1, the
+Hertz contact gap (vertical, at the reference radius): what the two-contact Hertz law approximates but for the
+half-spaces. At x = approach / (2 a0) = 0.005, R_p = a0 it is 2.20 % above Hertz (the ball's finite size, 1 + 0.311
+sqrt(x)), the finite-strain FE 0.54 % below it (``python -m tissuemech.compare.bench.fem_indentation --hertz``).
+
 Inside, lengths are scaled by a0, stresses by C, forces by C a0^2 (``fem.problem.SceneProblem``).
 """
 

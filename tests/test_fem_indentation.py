@@ -279,6 +279,13 @@ def test_hertz_decomposition():
     d1 = h.approach[-1] - h.centre_drop[-1]
     assert d1 / r1 == pytest.approx(d1a / 0.5, rel=0.01)
     assert h.force[-1] / (32 / 3 * C * np.sqrt(r1) * d1**1.5) == pytest.approx(1.0, abs=2e-3)
+    # the two-plate scene (R_p = 1000 a0): the small-strain FE gives 0.374 sqrt(x) (the small-strain series'
+    # 0.375); the same extra compliance k = (q - 1) / (8 sqrt(2 R_s / a0) sqrt(x)) as R_p = a0 (0.0935) to 2 %
+    p = _static(0.005, probe_radius=1000 * A0, level=3, kinematics="small")
+    qp = p.force[-1] / _series(p, 1000 * A0)[-1]
+    assert (qp - 1) / np.sqrt(0.005) == pytest.approx(0.3745, abs=0.004)
+    k = [(q - 1) / (8 * np.sqrt(2 * rs) * np.sqrt(0.005)) for q, rs in ((qs[2], 0.086640), (qp, 0.124938))]
+    assert k[0] == pytest.approx(k[1], rel=0.02)
 
 
 @pytest.mark.parametrize(

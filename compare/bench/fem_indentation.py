@@ -33,7 +33,10 @@ geometrically linear mode (``indent(..., kinematics="small")``: linear strain, H
 * the half-space check at the same probe-contact depth ratio d_1 / R_1 as R_p = a0, x = 0.005 (R_p = a0 / 20): the
   probe contact's own Hertz law (d_1 = approach - the centre's drop) for both kinematics, and the finite-strain
   effect per a/R carried to the two contacts in series (each weighted by its share of the approach) against the
-  finite - small difference measured at R_p = a0.
+  finite - small difference measured at R_p = a0;
+* the two-plate limit (R_p = 1000 a0) at x = 0.005 for both kinematics, and for both geometries the ball's extra
+  compliance k in delta = delta_Hertz(F) - k F / (mu a0) (mu = 2 C) that the small-strain departure implies:
+  F / F_Hertz - 1 = 8 k sqrt(2 R_s / a0) sqrt(x) to first order (R_s the series radius).
 
 ``--quick``: levels 1..3 for the refinement (node-by-node contact on levels 1, 2 only) and level 1 elsewhere (about
 3 minutes on a loaded shared core).
@@ -263,12 +266,34 @@ def hertz_half_space(levels, q_a0: dict[str, float] | None = None) -> None:
         print(f"measured there: q_finite / q_small - 1 = {q_a0['finite'] / q_a0['small'] - 1:+.5f}")
 
 
+def series_radius(rho: float) -> float:
+    """R_s / a0 of the two Hertz contacts in series for R_p / a0 = rho (``fem.indentation.IndentProblem``)."""
+    return ((rho / (1.0 + rho)) ** (-1.0 / 3.0) + 1.0) ** -3.0
+
+
+def hertz_plates(levels, q_a0: dict[str, float], x: float = 0.005) -> None:
+    """The two-plate limit for both kinematics and the ball's extra compliance k of both geometries."""
+    rho = 1000.0
+    print(f"\n## Two-plate limit (R_p = 1000 a0), x = {x}: Richardson limits of levels {levels}, and the ball's extra "
+          "compliance k (delta = delta_Hertz(F) - k F / (mu a0), mu = 2 C) from the small-strain departure")  # fmt: skip
+    lim = {}
+    for kin in ("finite", "small"):
+        v = [static_ratio(x, rho * A0, lev, kinematics=kin)[0] for lev in levels]
+        lim[kin], p = richardson(v, levels)
+        print(f"{kin:6s} strain: F / F_Hertz = {lim[kin]:.6f} (order {p:.2f}; (F / F_Hertz - 1) / sqrt(x) = "
+              f"{(lim[kin] - 1) / np.sqrt(x):.4f})")  # fmt: skip
+    for name, r, q in (("R_p = a0", 1.0, q_a0["small"]), ("R_p = 1000 a0", rho, lim["small"])):
+        k = (q - 1) / (8 * np.sqrt(2 * series_radius(r)) * np.sqrt(x))
+        print(f"{name:14s}: k = {k:.4f}")
+
+
 def hertz(quick: bool) -> None:
     """The decomposition of F / F_Hertz - 1 (``--hertz``)."""
     levels = (1, 2, 3) if quick else (0, 1, 2, 3, 4)
     q = hertz_refinement(levels)
     hertz_sweep((1, 2, 3) if quick else (2, 3, 4))
     hertz_half_space((1, 2, 3) if quick else (2, 3, 4), q)
+    hertz_plates((1, 2, 3) if quick else (2, 3, 4), q)
 
 
 def main(argv: list[str] | None = None) -> int:
