@@ -148,7 +148,8 @@ class SmallStrainAssembler(Assembler):
 
     ``constitutive.small_strain_stress``: eps = sym(grad u) incl. the hoop term u_r/R, Hooke's deviatoric law with
     the small-strain shear modulus 2 C, the constraint tr(eps) - q / kappa = 0 in place of J - 1 - q / kappa. The
-    tangent is constant; only the contact makes the problem nonlinear. Branch stresses are not supported."""
+    tangent is constant; only the contact makes the problem nonlinear. Branch stresses are not supported; ``stress``
+    and ``iso_S`` stay the finite-strain ones (a static indentation reads forces from ``internal`` only)."""
 
     def __init__(self, mesh: AxiMesh):
         super().__init__(mesh, "mixed")
