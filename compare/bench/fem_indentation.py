@@ -39,7 +39,8 @@ geometrically linear mode (``indent(..., kinematics="small")``: linear strain, H
   F / F_Hertz - 1 = 8 k sqrt(2 R_s / a0) sqrt(x) to first order (R_s the series radius).
 
 ``--quick``: levels 1..3 for the refinement (node-by-node contact on levels 1, 2 only) and level 1 elsewhere (about
-3 minutes on a loaded shared core).
+3 minutes on a loaded shared core). ``--hertz --quick``: levels 1..3 throughout (about 9 minutes on a loaded shared
+core; without --quick: levels 0..4 for the refinement, 2..4 elsewhere).
 """
 
 from __future__ import annotations
