@@ -13,6 +13,11 @@ Ibar1 = J^(-2/3) I1 and W_iso = W(Ibar1):
 pressure-like field q (mixed form): P = q dJ, A = q d2J; penalty U(J): P = U' dJ, A = kappa dJ(x)dJ + U' d2J.
 Units: whatever C is given in (the engine passes C = 1, i.e. stresses scaled by C).
 
+Small-strain option (``small_strain_stress``, opt-in, used by ``fem.indentation``'s ``kinematics="small"``): the
+geometrically linear limit of the same law, eps = sym(H) with H = f - I (incl. the hoop term u_r/R), Hooke's
+deviatoric law with the Fung law's small-strain shear modulus mu = 2 W'(3) = 2 C (any alpha), and tr(eps) in
+place of J - 1 in the mixed constraint.
+
 API: ``iso_stress(f, C, alpha) -> (P, A)``, ``iso_energy(f, C, alpha)``, ``iso_second_piola(f, C, alpha)``
 (S_iso, what the viscoelastic recursion needs), ``vol_q(f, q)``, ``vol_penalty(f, kappa)``,
 ``cauchy(f, P) -> 3x3 sigma`` and ``von_mises(sigma)``; ``total_stress(f, C, alpha, ...)`` the fused kernel
@@ -40,7 +45,11 @@ __all__ = [
     "vol_penalty",
     "cauchy",
     "von_mises",
+    "small_strain_stress",
+    "TRACE5",
 ]
+
+TRACE5 = np.array([1.0, 0.0, 0.0, 1.0, 1.0])  # tr(eps) = TRACE5 . H in the 5-comp form (the linearised dJ/df)
 
 
 def _ibar_derivs(f):
@@ -197,3 +206,26 @@ def von_mises(sig: np.ndarray) -> np.ndarray:
     tr = np.trace(sig, axis1=-2, axis2=-1)
     s = sig - tr[..., None, None] / 3.0 * np.eye(3)
     return np.sqrt(1.5 * np.sum(s * s, axis=(-2, -1)))
+
+
+def small_strain_stress(f: np.ndarray, C: float, q: np.ndarray | None = None, weight: np.ndarray | None = None):
+    """Geometrically linear Fung law: (P, A, tr_eps) at the points from the 5-comp f (H = f - I).
+
+    W = mu (eps : eps - tr(eps)^2 / 3) + q tr(eps), mu = 2 C (the Fung law's small-strain shear modulus),
+    eps = sym(H): eps_rr = H_0, eps_zz = H_3, eps_tt = H_4 (u_r/R), eps_rz = (H_1 + H_2) / 2. P = dW/dH (..., 5)
+    (the linear stress, weighted by ``weight``), A = d2W/dH2 (5, 5) constant (times ``weight``: (..., 5, 5)),
+    tr_eps (...,) the linearised J - 1. ``q`` (...,): the mixed field (None: no volumetric part)."""
+    mu = 2.0 * C
+    H = f - np.array([1.0, 0.0, 0.0, 1.0, 1.0])
+    tr = H @ TRACE5
+    P = np.empty_like(H)
+    for i in (0, 3, 4):
+        P[..., i] = 2.0 * mu * (H[..., i] - tr / 3.0)
+    P[..., 1] = P[..., 2] = mu * (H[..., 1] + H[..., 2])
+    if q is not None:
+        P = P + q[..., None] * TRACE5
+    A0 = 2.0 * mu * (np.diag(TRACE5) - np.outer(TRACE5, TRACE5) / 3.0)
+    A0[1:3, 1:3] = mu
+    if weight is None:
+        return P, A0, tr
+    return P * weight[..., None], A0 * weight[..., None, None], tr

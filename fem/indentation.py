@@ -28,6 +28,12 @@ step times: ``fem.protocols.Record`` / ``record_schedule``). :func:`fitted_state
 over a grid of approaches and alphas, continued in both (the indentation table's generator,
 ``compare.calibrate_indentation``).
 
+``kinematics="small"`` (static, elastic; ``SmallStrainAssembler``, ``ReferenceSphere``): the geometrically linear
+counterpart, linear strain, Hooke's law with the Fung law's small-strain shear modulus 2 C, tr(eps) for J - 1, the
+Hertz contact gap (vertical, at the reference radius): what the two-contact Hertz law approximates but for the
+half-spaces. At x = approach / (2 a0) = 0.005, R_p = a0 it is 2.20 % above Hertz (the ball's finite size, 1 + 0.311
+sqrt(x)), the finite-strain FE 0.54 % below it (``python -m tissuemech.compare.bench.fem_indentation --hertz``).
+
 Inside, lengths are scaled by a0, stresses by C, forces by C a0^2 (``fem.problem.SceneProblem``).
 """
 
@@ -42,8 +48,9 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from tissuemech.fem import viscoelastic as ve
+from tissuemech.fem.constitutive import TRACE5, small_strain_stress
 from tissuemech.fem.contact import ContactError, ObstacleSolution, RigidSphere, solve_obstacles
-from tissuemech.fem.forms import Material
+from tissuemech.fem.forms import Assembler, Material
 from tissuemech.fem.linalg import Symmetric
 from tissuemech.fem.mesh import AxiMesh, full_ball_section, surface_layers, zone_points
 from tissuemech.fem.newton import NewtonError
@@ -69,7 +76,12 @@ __all__ = [
     "X_MIN",
     "X_MAX",
     "EDGE_TOL",
+    "KINEMATICS",
+    "SmallStrainAssembler",
+    "ReferenceSphere",
 ]
+
+KINEMATICS = ("finite", "small")
 
 # level -> (n_zone, n_out, n_radial, n_equator): n_zone equal elements over each pole's contact zone (ZONE times
 # its Hertz contact radius at the largest approach), n_out growing ones to the end of the pole block (SPLIT),
@@ -131,6 +143,72 @@ def zone_mesh(radius: float, level: int, z_top: float, z_bot: float) -> AxiMesh:
     )
 
 
+class SmallStrainAssembler(Assembler):
+    """The mixed Q2/P1 assembly of the geometrically linear Fung law (``kinematics="small"``; static, elastic).
+
+    ``constitutive.small_strain_stress``: eps = sym(grad u) incl. the hoop term u_r/R, Hooke's deviatoric law with
+    the small-strain shear modulus 2 C, the constraint tr(eps) - q / kappa = 0 in place of J - 1 - q / kappa. The
+    tangent is constant; only the contact makes the problem nonlinear. Branch stresses are not supported; ``stress``
+    and ``iso_S`` stay the finite-strain ones (a static indentation reads forces from ``internal`` only)."""
+
+    def __init__(self, mesh: AxiMesh):
+        super().__init__(mesh, "mixed")
+
+    def internal(self, u: np.ndarray, mat: Material, extra_S=None, iso_scale: float = 1.0, tangent: bool | str = True):
+        """(r, K) of the linear law at x = (u, q) (as ``Assembler.internal``; ``extra_S`` must be None)."""
+        if extra_S is not None or iso_scale != 1.0:
+            raise ValueError("kinematics='small' is elastic: no Maxwell branch stresses (static=True)")
+        ne, nq = self.w.shape
+        f = self.f_at(u)
+        q = np.einsum("eqa,ea->eq", self.psi, u[self.qdofs])
+        P, A, tr = small_strain_stress(f, mat.C, q=q, weight=self.w)
+        B2 = self.B.reshape(ne, nq * 5, -1)
+        re = np.matmul(P.reshape(ne, 1, nq * 5), B2)[:, 0]
+        r = np.bincount(self.edofs.ravel(), weights=re.ravel(), minlength=self.ndof)
+        rq = np.einsum("eqa,eq->ea", self.psi, tr * self.w) - np.einsum("eab,eb->ea", self.M, u[self.qdofs]) / mat.kappa
+        r[self.n_u :] = rq.ravel()
+
+        def assemble():
+            nd = self.B.shape[-1]
+            Ke = np.empty((ne, nd + 3, nd + 3))
+            AB = np.matmul(A, self.B).reshape(ne, nq * 5, nd)
+            Ke[:, :nd, :nd] = np.matmul(B2.transpose(0, 2, 1), AB)
+            tB = np.einsum("i,eqin->eqn", TRACE5, self.B) * self.w[..., None]
+            G = np.einsum("eqa,eqn->ean", self.psi, tB)
+            Ke[:, nd:, :nd] = G
+            Ke[:, :nd, nd:] = G.transpose(0, 2, 1)
+            Ke[:, nd:, nd:] = -self.M / mat.kappa
+            return self.pattern.matrix(Ke)
+
+        if tangent == "lazy":
+            return r, assemble
+        return r, (assemble() if tangent else None)
+
+
+class ReferenceSphere(RigidSphere):
+    """``fem.contact.RigidSphere`` with the linearised (Hertz) contact of ``kinematics="small"``: the gap is
+    vertical and evaluated at the reference radius, g = z_s(R) - (Z + u_z) above the body (Z + u_z - z_s(R) below),
+    the contact traction vertical; an active node's u_z = z_s(R) - Z does not depend on its u_r (slope and
+    curvature 0 for ``fem.contact.solve_obstacles``), its u_r stays free (frictionless)."""
+
+    def positions(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(reference r, deformed z) of the candidates."""
+        return self.R.copy(), self.Z + x[self.dofs]
+
+    def surface(self, r: np.ndarray, height: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        z = super().surface(r, height)[0]
+        return z, np.zeros_like(r), np.zeros_like(r)
+
+    def gap(self, x: np.ndarray, height: float) -> np.ndarray:
+        r, z = self.positions(x)
+        zs = self.surface(r, height)[0]
+        return zs - z if self.above else z - zs
+
+    def normals(self, x: np.ndarray, height: float) -> np.ndarray:
+        n = self.R.size
+        return np.stack([np.zeros(n), np.full(n, -1.0 if self.above else 1.0)])
+
+
 class IndentState(NamedTuple):
     """A converged state (scaled: lengths / a0, stresses / C, forces / (C a0^2))."""
 
@@ -148,15 +226,23 @@ class IndentProblem(SceneProblem):
     ``IndentProblem(m, mat, probe_radius, beta, tau, rtol)``: the full-section mesh (scaled by a0), the scaled
     material, the probe radius / a0, the Maxwell branches (beta_m, tau_m [s]) and Newton's relative tolerance.
     ``probe`` and ``plate`` are ``fem.contact.RigidSphere`` obstacles on the surface nodes of the upper and the
-    lower half; ``centre`` the node at the ball's centre."""
+    lower half; ``centre`` the node at the ball's centre. ``kinematics="small"``: the geometrically linear law
+    (``SmallStrainAssembler``) and the linearised contact (``ReferenceSphere``)."""
 
-    def __init__(self, m: AxiMesh, mat: Material, probe_radius: float, beta, tau, rtol: float):
+    def __init__(self, m: AxiMesh, mat: Material, probe_radius: float, beta, tau, rtol: float,
+                 kinematics: str = "finite"):  # fmt: skip
         super().__init__(m, mat, "mixed", beta, tau)
+        if kinematics not in KINEMATICS:
+            raise ValueError(f"kinematics must be 'finite' or 'small', got {kinematics!r}")
+        sphere = RigidSphere
+        if kinematics == "small":
+            self.asm = SmallStrainAssembler(m)
+            sphere = ReferenceSphere
         X = m.X
         outer = m.nodes["outer"]
         self.rp = float(probe_radius)
-        self.probe = RigidSphere(X, outer[X[1, outer] > 1e-12], self.rp, above=True)
-        self.plate = RigidSphere(X, outer[X[1, outer] < -1e-12], np.inf, above=False)
+        self.probe = sphere(X, outer[X[1, outer] > 1e-12], self.rp, above=True)
+        self.plate = sphere(X, outer[X[1, outer] < -1e-12], np.inf, above=False)
         self.centre = int(np.argmin(np.hypot(X[0], X[1])))
         self.rtol = rtol
         self.floor = roundoff_floor(mat.kappa, 1.0, SPHEROID_MARGIN)
@@ -554,6 +640,7 @@ def indent(
     n_static: int | None = None,
     rtol: float = 1e-10,
     sizing_approach: float | None = None,
+    kinematics: str = "finite",
 ) -> IndentationResult:
     """Press a rigid frictionless sphere on the top of the Fung ball resting on a rigid frictionless plate.
 
@@ -599,6 +686,11 @@ def indent(
         sizing_approach: the approach (m) the node-by-node mesh is sized for (default: the run's largest approach;
             under force control see ``force``): equal values give equal meshes, so a force-controlled run and a
             displacement run can be compared without the edge quantisation between them.
+        kinematics: "finite" (default: the finite-strain Fung law, the contact on the deformed surface) or "small"
+            (``static=True`` only, elastic: the geometrically linear law with the small-strain shear modulus 2 C,
+            tr(eps) for J - 1, and the Hertz contact gap, vertical at the reference radius: ``SmallStrainAssembler``,
+            ``ReferenceSphere``): the FE counterpart of the small-strain two-contact Hertz law, which separates
+            the finite-strain part of F / F_Hertz - 1 from the ball's finite size.
 
     Returns:
         ``IndentationResult``.
@@ -675,13 +767,17 @@ def indent(
     if sizing_approach is not None:
         validate_positive("sizing_approach (the approach the mesh is sized for)", sizing_approach, "m")
         _check_approach(float(sizing_approach), a0, rp)
+    if kinematics not in KINEMATICS:
+        raise ValueError(f"kinematics must be 'finite' or 'small', got {kinematics!r}")
+    if kinematics == "small" and not static:
+        raise ValueError("kinematics='small' (the geometrically linear elastic law) needs static=True")
     if contact not in ("nodal", "fitted"):
         raise ValueError(f"contact must be 'nodal' or 'fitted', got {contact!r}")
     if contact == "fitted" and not static:
         raise ValueError("contact='fitted' (a mesh per state, its edges on nodes) needs static=True")
     m = make_mesh(mesh, a0, rp, d_max if sizing_approach is None else float(sizing_approach))
     mat = Material(1.0, float(alpha), float(kappa) / C)
-    prob = IndentProblem(m, mat, rp / a0, beta, tau, rtol)
+    prob = IndentProblem(m, mat, rp / a0, beta, tau, rtol, kinematics)
     too_large = None
     if static:
         n = n_static or 8
@@ -716,7 +812,7 @@ def indent(
     runs: list[tuple[float, IndentProblem, IndentState, int, float]] = []  # (time, problem, state, its, wall)
     if contact == "fitted":
         fit = FittedEdges(a0, rp, int(mesh_spec(mesh, MESHES, "or a level 0..4")), lambda mm: IndentProblem(
-            mm, mat, rp / a0, beta, tau, rtol))  # fmt: skip
+            mm, mat, rp / a0, beta, tau, rtol, kinematics))  # fmt: skip
         e_prev: tuple[float, float] | None = None
         d_prev, x_prev = 0.0, None
         for t in times:
@@ -790,5 +886,6 @@ def indent(
             control="force" if force is not None else "displacement",
             mesh=mesh,
             contact=contact,
+            kinematics=kinematics,
         ),
     )
