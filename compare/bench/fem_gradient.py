@@ -44,8 +44,32 @@ ratio 1.98x against 2.11x in one side-by-side run of both, 5 repeats each; the a
 IsoLinearisation``: no difference quotients any more) and 3-5 block solves of the minimal-residual refinement
 from the last factorisation; the plain step is ~5 cheap Broyden iterations (~14 ms CPU each way on Fig. 10).
 Under force control each step runs several trials, and the sensitivities' fresh factorisations, handed to Newton,
-save it iterations. Time runs on fitted meshes (the replayed history's sensitivity across the meshes) are not
-done.
+save it iterations.
+
+Where the Fig. 10 run's gradient time goes (cProfile, 2026-12-04 04:24 UTC, load average 1.1: plain 0.25 s CPU,
+with 4 gradients 0.52-0.56 s, 2.1x): the sensitivities' ~12 ms per step are ~50 % the block solve (3-5
+minimal-residual iterations from Newton's kept factorisation, each a 4-column solve and a tangent product of
+0.4 ms each), ~20 % the tangent's assembly, ~11 % the closed-form stress derivative of the history; the plain step
+is ~10 ms (4-6 Broyden iterations, no tangent). Tried the same day, the ratio side by side (CPU, load 5-20, so
++-0.1): a fresh factorisation of every step's tangent handed to Newton (its hold iterations 4-6 -> 2-3, 150 -> 98
+in all, but the 26 factorisations cost what they save: 2.1x); refinement capped at 1-2 iterations, else a new
+factorisation (2.17-2.33x); the earlier states' solutions or search directions recycled into the minimal-residual
+space (the hold's iterations 3 -> 1-2, but the products with the recycled block cost more: 2.2-3.1x); the solves'
+tolerance 1e-6 (1.95-2.02x, alpha's agreement 9.6e-9 -> 5.2e-8: not taken); with the optional qdldl backend
+(``pip install tissuemech[fast]``, a factorisation ~2x faster) the plain 0.23 s, with gradients 0.53 s as they are
+(2.3x) and 0.46 s with a fresh factorisation per step (2.0x). The 1.5x stays open: it needs the
+solve near one preconditioner application per step (a much better preconditioner than a factorisation of a tangent
+made steps earlier, or one much cheaper than SuperLU's 5 ms factorisation of the 2552 unknowns).
+
+Fitted meshes (``--only-fitted``, :func:`edge_share`, 2026-12-04 04:38 UTC, load average 17): Fig. 10 on its
+default, contact-edge-fitted meshes, whole-run differences with every step's edge found again against the same
+with every step's edge (so its mesh and the history's transfer) frozen at the unperturbed run's, max over the
+steps relative to the largest: C 8.3e-10, alpha 2.8e-2, beta 1.0e-7, tau 3.9e-7; the node-by-node run's exact
+gradient against the fitted run's differences 7.0e-3 (C), 5.3e-2 (alpha), 7.0e-3 (beta), 2.3e-3 (tau). C only
+scales the scaled problem (no edge moves); alpha reshapes the contact and the edge, no stationary point of the
+force, moves with it; on a coarse 0.2 s ramp case beta and tau move it too (3.7e-5, 1.5e-4). A time run's
+gradient on fitted meshes therefore needs the edge's motion (as the static runs carry it) and the replayed
+history's sensitivity across the meshes; neither is carried, so ``compress`` refuses it (contact="nodal" works).
 """
 
 from __future__ import annotations
