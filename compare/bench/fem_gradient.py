@@ -26,7 +26,8 @@ Time runs (default level, node-by-node contact; the Maxwell history's sensitivit
 shared 2-core box at load average 20-27 (wall times 4-8x the CPU times; the ratios side by side agree in both):
 
 * Fig. 10 relaxation (force): 5.9e-12 (C), 9.6e-9 (alpha), 1.9e-9 (beta), 4.4e-9 (tau); 4 gradients cost 1.90x
-  the plain run (CPU 2.01x; was 3.7x, then 1.98-2.22x before the two changes below);
+  the plain run (CPU 2.01x; was 3.7x, then 1.98-2.22x before the two changes below; again 2026-12-04 04:43 UTC,
+  load average 13.7: the same agreement, 2.19x wall, 2.16x CPU; two branches 8.4e-9, CPU 1.68x);
 * relaxation at alpha = 1.4 with two branches (tau 0.2 s and 20 s, 40 um in 1 s, 8 + 20 fixed steps: the adaptive
   schedule depends on beta and tau, so whole runs of a central difference would not share their steps) (force):
   <= 8.4e-9 for C, alpha, beta_1, tau_1, beta_2, tau_2; 6 gradients 1.89x (CPU 1.81x);
