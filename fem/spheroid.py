@@ -505,8 +505,9 @@ def compress(
             ``"approach"`` (m per unit parameter: 0 under displacement control); under force control (``force=``)
             the plate's motion with the parameters is solved for (the force stays F(t): its gradient is 0, the
             approach, midplane radius and nominal stress move). Time runs need contact="nodal" for now (across
-            the fitted meshes of a time run the history's sensitivity is not carried yet: ValueError). Accuracy
-            and cost: ``tissuemech bench fem-gradient``.
+            the fitted meshes of a time run neither the history's sensitivity nor the edge's motion is carried:
+            ValueError; the edge's motion alone carries 2.8e-2 of d force / d alpha on Fig. 10, ``tissuemech
+            bench fem-gradient --only-fitted``). Accuracy and cost: ``tissuemech bench fem-gradient``.
 
     Returns:
         ``SpheroidResult`` with one entry per converged step: ``time`` (s), ``approach`` (m), plate
@@ -624,7 +625,9 @@ def compress(
     if gradient and not static and isinstance(treat, FittedEdge):
         raise ValueError(
             "gradient=True in a time run needs contact='nodal' (one fixed mesh): the sensitivity of the Maxwell "
-            "history across the contact-edge-fitted meshes is not carried yet (static=True runs take either)"
+            "history across the contact-edge-fitted meshes and of their edge's motion is not carried yet (the edge "
+            "is no stationary point of the force: it carries 2.8e-2 of d force / d alpha on Fig. 10); static=True "
+            "runs take either contact"
         )
     if isinstance(treat, FittedEdge) and level is None:
         raise ValueError(

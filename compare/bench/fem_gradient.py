@@ -26,7 +26,8 @@ Time runs (default level, node-by-node contact; the Maxwell history's sensitivit
 shared 2-core box at load average 20-27 (wall times 4-8x the CPU times; the ratios side by side agree in both):
 
 * Fig. 10 relaxation (force): 5.9e-12 (C), 9.6e-9 (alpha), 1.9e-9 (beta), 4.4e-9 (tau); 4 gradients cost 1.90x
-  the plain run (CPU 2.01x; was 3.7x, then 1.98-2.22x before the two changes below);
+  the plain run (CPU 2.01x; was 3.7x, then 1.98-2.22x before the two changes below; again 2026-12-04 04:43 UTC,
+  load average 13.7: the same agreement, 2.19x wall, 2.16x CPU; two branches 8.4e-9, CPU 1.68x);
 * relaxation at alpha = 1.4 with two branches (tau 0.2 s and 20 s, 40 um in 1 s, 8 + 20 fixed steps: the adaptive
   schedule depends on beta and tau, so whole runs of a central difference would not share their steps) (force):
   <= 8.4e-9 for C, alpha, beta_1, tau_1, beta_2, tau_2; 6 gradients 1.89x (CPU 1.81x);
@@ -44,8 +45,32 @@ ratio 1.98x against 2.11x in one side-by-side run of both, 5 repeats each; the a
 IsoLinearisation``: no difference quotients any more) and 3-5 block solves of the minimal-residual refinement
 from the last factorisation; the plain step is ~5 cheap Broyden iterations (~14 ms CPU each way on Fig. 10).
 Under force control each step runs several trials, and the sensitivities' fresh factorisations, handed to Newton,
-save it iterations. Time runs on fitted meshes (the replayed history's sensitivity across the meshes) are not
-done.
+save it iterations.
+
+Where the Fig. 10 run's gradient time goes (cProfile, 2026-12-04 04:24 UTC, load average 1.1: plain 0.25 s CPU,
+with 4 gradients 0.52-0.56 s, 2.1x): the sensitivities' ~12 ms per step are ~50 % the block solve (3-5
+minimal-residual iterations from Newton's kept factorisation, each a 4-column solve and a tangent product of
+0.4 ms each), ~20 % the tangent's assembly, ~11 % the closed-form stress derivative of the history; the plain step
+is ~10 ms (4-6 Broyden iterations, no tangent). Tried the same day, the ratio side by side (CPU, load 5-20, so
++-0.1): a fresh factorisation of every step's tangent handed to Newton (its hold iterations 4-6 -> 2-3, 150 -> 98
+in all, but the 26 factorisations cost what they save: 2.1x); refinement capped at 1-2 iterations, else a new
+factorisation (2.17-2.33x); the earlier states' solutions or search directions recycled into the minimal-residual
+space (the hold's iterations 3 -> 1-2, but the products with the recycled block cost more: 2.2-3.1x); the solves'
+tolerance 1e-6 (1.95-2.02x, alpha's agreement 9.6e-9 -> 5.2e-8: not taken); with the optional qdldl backend
+(``pip install tissuemech[fast]``, a factorisation ~2x faster) the plain 0.23 s, with gradients 0.53 s as they are
+(2.3x) and 0.46 s with a fresh factorisation per step (2.0x). The 1.5x stays open: it needs the
+solve near one preconditioner application per step (a much better preconditioner than a factorisation of a tangent
+made steps earlier, or one much cheaper than SuperLU's 5 ms factorisation of the 2552 unknowns).
+
+Fitted meshes (``--only-fitted``, :func:`edge_share`, 2026-12-04 04:38 UTC, load average 17): Fig. 10 on its
+default, contact-edge-fitted meshes, whole-run differences with every step's edge found again against the same
+with every step's edge (so its mesh and the history's transfer) frozen at the unperturbed run's, max over the
+steps relative to the largest: C 8.3e-10, alpha 2.8e-2, beta 1.0e-7, tau 3.9e-7; the node-by-node run's exact
+gradient against the fitted run's differences 7.0e-3 (C), 5.3e-2 (alpha), 7.0e-3 (beta), 2.3e-3 (tau). C only
+scales the scaled problem (no edge moves); alpha reshapes the contact and the edge, no stationary point of the
+force, moves with it; on a coarse 0.2 s ramp case beta and tau move it too (3.7e-5, 1.5e-4). A time run's
+gradient on fitted meshes therefore needs the edge's motion (as the static runs carry it) and the replayed
+history's sensitivity across the meshes; neither is carried, so ``compress`` refuses it (contact="nodal" works).
 """
 
 from __future__ import annotations
@@ -65,9 +90,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--fit-mesh", default="default", help="mesh of the FE-in-the-loop fit (coarse, default)")
     ap.add_argument("--only-fit", action="store_true", help="run only the FE-in-the-loop fit")
     ap.add_argument("--only-time", action="store_true", help="run only the time runs (FD tables and cost ratios)")
+    ap.add_argument(
+        "--only-fitted", action="store_true", help="run only the fitted-mesh measurement (the contact edge's share)"
+    )
     args = ap.parse_args(argv)
     if args.only_fit:
         fe_fit(args.fit_mesh)
+        return 0
+    if args.only_fitted:
+        fitted_edge_share()
         return 0
     if args.only_time:
         relaxation(args.repeats)
@@ -123,6 +154,7 @@ def main(argv: list[str] | None = None) -> int:
         )
     plates(args.repeats)
     relaxation(args.repeats)
+    fitted_edge_share()
     fe_fit(args.fit_mesh)
     return 0
 
@@ -245,6 +277,70 @@ def relaxation(repeats: int) -> None:
     _fd_table("creep under force control (3 uN), alpha = 1.4, two branches (default level, node by node, 6 + 12 "
               "steps)", run, _values(stiff, two), ("approach", "midplane_radius", "nominal_stress"))  # fmt: skip
     _cost(run, max(1, repeats // 2), 6)
+
+
+def fitted_edge_share() -> dict[str, tuple[float, float]]:
+    """What the contact edge's motion contributes to d force / d theta of the Fig. 10 relaxation on its default,
+    contact-edge-fitted meshes (the default contact): prints and returns :func:`edge_share` of that case."""
+    from tissuemech.compare.cases import FIG10, FIG10_END_TIME
+
+    case = {k: v for k, v in FIG10.items() if k not in ("C", "alpha", "branches")}
+    base, br = {"C": FIG10["C"], "alpha": FIG10["alpha"]}, list(FIG10["branches"])
+    print("Fig. 10 on its fitted meshes (default level): d force / d theta, max over the steps of |a - b| / max |b|")
+    out = edge_share(dict(**case, end_time=FIG10_END_TIME, mesh="default"), base, br)
+    for name, (edge, nodal) in out.items():
+        print(f"  {name:6s} fitted - frozen edges {edge:.1e}  nodal gradient - fitted {nodal:.1e}")
+    return out
+
+
+def edge_share(fixed: dict, base: dict, branches: list) -> dict[str, tuple[float, float]]:
+    """The share of the contact edge's motion in d force / d theta of a time run on contact-edge-fitted meshes
+    (``fem.spheroid.compress(**fixed, ...)`` with the default contact; C, alpha from ``base``, the Maxwell
+    ``branches``), from whole-run central differences (rtol 1e-13, step 1e-4 of the parameter):
+
+    * "fitted": the runs as they are (each step's edge found again: edge, mesh and the replayed history move with
+      theta);
+    * "frozen": every step's edge (so its mesh and the history's transfer between the meshes) held at the
+      unperturbed run's, theta alone changed: what a sensitivity on the run's fixed meshes would give.
+
+    Returns {name: (max over the steps of |fitted - frozen| / max |fitted|, the same of the node-by-node run's exact
+    gradient (``contact="nodal"``, same level) against "fitted")}. Measurement only: the edge search of
+    ``fem.spheroid.compress`` is swapped for one that records the edges, then replays them (an
+    :class:`fem.contact.EdgeSearch` whose tolerance accepts the edge it is given), and restored."""
+    from tissuemech.fem import contact
+    from tissuemech.fem import spheroid as fs
+
+    edges: dict[str, float] = {}
+    frozen = [False]
+
+    class Frozen(contact.EdgeSearch):
+        def solve(self, d, edge0, x0, load, visc=None):
+            if frozen[0]:
+                self.tol = np.inf  # the state at the recorded edge (the step's load names it), no edge search
+                return super().solve(d, edges[load], x0, load, visc)
+            sol = super().solve(d, edge0, x0, load, visc)
+            edges[load] = float(sol.edge)
+            return sol
+
+    fitted = _case(fixed, base, branches)
+    nodal = _case({**fixed, "contact": "nodal"}, base, branches)
+    g = nodal(gradient=True).gradient
+    out = {}
+    saved = fs.EdgeSearch
+    fs.EdgeSearch = Frozen  # type: ignore[misc]
+    try:
+        fitted(rtol=1e-13)  # records every step's edge
+        for name, v in _values(base, branches).items():
+            h = 1e-4 * v
+            frozen[0] = False
+            fd = (fitted(name, v + h, rtol=1e-13).force - fitted(name, v - h, rtol=1e-13).force) / (2 * h)
+            frozen[0] = True
+            fz = (fitted(name, v + h, rtol=1e-13).force - fitted(name, v - h, rtol=1e-13).force) / (2 * h)
+            s = float(np.max(np.abs(fd)))
+            out[name] = (float(np.max(np.abs(fd - fz))) / s, float(np.max(np.abs(g[name]["force"] - fd))) / s)
+    finally:
+        fs.EdgeSearch = saved  # type: ignore[misc]
+    return out
 
 
 def plates(repeats: int) -> None:
