@@ -101,3 +101,51 @@ def test_correlated_noise_gets_longer_bins():
     b = bin_record(t, ar, ramp_time=2.0)
     assert b.count.min() >= min_samples(ar) >= 30 and b.count.sum() == t.size
     assert bin_record(t, white, ramp_time=2.0).count.min() == 1
+
+
+def _ar1(n: int, rho: float, seed: int) -> np.ndarray:
+    from scipy.signal import lfilter
+
+    e = np.random.default_rng(seed).standard_normal(n)
+    return lfilter([np.sqrt(1 - rho**2)], [1.0, -rho], e)
+
+
+@pytest.mark.parametrize("rho", [0.0, 0.5, 0.9])
+def test_bin_means_covariance_is_the_samples_ar1_covariance(rho):
+    """The bin means' covariance under AR(1) noise (closed form, summed over neighbouring bins until rho^gap
+    underflows) equals A R A' with R_ik = rho^|i - k| the samples' correlation and A the averaging matrix."""
+    from tissuemech.compare.fit.compress import ar1_mean_covariance
+
+    rng = np.random.default_rng(2)
+    count = rng.integers(1, 40, size=60).astype(float)
+    n = int(count.sum())
+    k = np.arange(n)
+    R = rho ** np.abs(k[:, None] - k[None, :])
+    A = np.zeros((count.size, n))
+    ends = np.cumsum(count).astype(int)
+    for b, (lo, hi) in enumerate(zip(ends - count.astype(int), ends)):
+        A[b, lo:hi] = 1.0 / (hi - lo)
+    K = A @ R @ A.T
+    X = rng.standard_normal((count.size, 3))
+    M, k_diag = ar1_mean_covariance(count, rho, X)
+    np.testing.assert_allclose(k_diag, np.diag(K), rtol=1e-12)
+    np.testing.assert_allclose(M, X.T @ K @ X, rtol=1e-10, atol=1e-12 * float(np.abs(M).max()))
+
+
+def test_sample_correlation_from_the_bins_is_the_samples():
+    """The samples' residual lag-1 correlation and mean square, from the bins' sums and a model linear in each bin,
+    are those computed sample by sample (to round-off), for any bin offsets and slopes."""
+    from tissuemech.compare.fit.compress import sample_ar1
+
+    t = np.linspace(0.01, 20.0, 5000)
+    y = np.sin(t) + 0.1 * _ar1(t.size, 0.8, 4)
+    b = bin_record(t, y, ramp_time=2.0, bins=120)
+    rng = np.random.default_rng(5)
+    offset = 0.01 * rng.standard_normal(b.count.size)
+    slope = 0.1 * rng.standard_normal(b.count.size)
+    c = b.count.astype(int)
+    model = np.repeat(b.stress - offset, c) + np.repeat(slope, c) * (t - np.repeat(b.time, c))
+    r = y - model
+    rho, s2 = sample_ar1(b, offset, slope)
+    assert rho == pytest.approx(float(r[1:] @ r[:-1]) / float(r @ r), rel=1e-10)
+    assert s2 == pytest.approx(float(r @ r) / t.size, rel=1e-10)

@@ -34,11 +34,21 @@ full fit on a 1e5-sample record, and the end-to-end time of ``tissuemech fit`` o
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["DEFAULT_BINS", "AUTO_MIN_SAMPLES", "RAMP_SHARE", "Binned", "bin_record", "bins_for"]
+__all__ = [
+    "DEFAULT_BINS",
+    "AUTO_MIN_SAMPLES",
+    "RAMP_SHARE",
+    "Binned",
+    "bin_record",
+    "bins_for",
+    "sample_ar1",
+    "ar1_mean_covariance",
+]
 
 DEFAULT_BINS = 2000  # bins per record of a compressed fit (about 1/4 over the ramp, the rest log-spaced in the hold)
 AUTO_MIN_SAMPLES = 20_000  # compress="auto" bins the records longer than this (shorter ones: fitted sample by sample)
@@ -58,6 +68,7 @@ class Binned:
     ss_within: float
     dof_within: int
     samples: int
+    lag_stats: np.ndarray | None = None  # (bins, 10) sums for the samples' lag-1 correlation (:func:`sample_ar1`)
 
 
 def bin_edges(t_end: float, ramp_time: float, bins: int, dt_min: float) -> np.ndarray:
@@ -99,6 +110,29 @@ def bin_record(time: np.ndarray, stress: np.ndarray, ramp_time: float, bins: int
     line = np.where(stt > 0, sty**2 / np.where(stt > 0, stt, 1.0), 0.0)
     ss = np.maximum(syy - line, 0.0)
     big = count >= 3
+    # the sums :func:`sample_ar1` needs: products of neighbouring samples of one bin (each about its bin's mean time
+    # and stress), and each bin's first and last sample
+    bin_of = np.repeat(np.arange(count.size), count)
+    same = np.append(bin_of[1:] == bin_of[:-1], False)  # sample k and k + 1 lie in one bin
+
+    def pair_sum(p: np.ndarray) -> np.ndarray:
+        return np.add.reduceat(np.where(same, np.append(p, 0.0), 0.0), starts)
+
+    ends = starts + count - 1
+    lag_stats = np.column_stack(
+        [
+            syy,
+            sty,
+            stt,
+            pair_sum(dyb[:-1] * dyb[1:]),
+            pair_sum(dyb[:-1] * dtb[1:] + dtb[:-1] * dyb[1:]),
+            pair_sum(dtb[:-1] * dtb[1:]),
+            dyb[starts],
+            dtb[starts],
+            dyb[ends],
+            dtb[ends],
+        ]
+    )
     return Binned(
         time=t_mean,
         stress=y_mean,
@@ -106,7 +140,56 @@ def bin_record(time: np.ndarray, stress: np.ndarray, ramp_time: float, bins: int
         ss_within=float(np.sum(ss[big])),
         dof_within=int(np.sum(count[big] - 2)),
         samples=int(t.size),
+        lag_stats=lag_stats,
     )
+
+
+def sample_ar1(binned: Binned, offset: np.ndarray, slope: np.ndarray) -> tuple[float, float]:
+    """Lag-1 autocorrelation rho and mean square s^2 (Pa^2) of the samples' residuals (data - model) over the
+    whole record, from the bins' sums (``binned.lag_stats``) with the model linear across each bin: ``offset``
+    (Pa) each bin mean's residual, ``slope`` (Pa/s) the model's time derivative in each bin. These are the
+    numbers the full record's fit prewhitens with (:func:`tissuemech.compare.fit.diagnostics.hac`); the noise
+    inside a bin, its slope included, counts as in the samples."""
+    if binned.lag_stats is None:
+        raise ValueError("the bins carry no lag sums (lag_stats): bin the record with bin_record")
+    syy, sty, stt, saa1, sat1, stt1, a_f, t_f, a_l, t_l = binned.lag_stats.T
+    n, c, d = binned.count, np.asarray(offset, dtype=float), np.asarray(slope, dtype=float)
+    s0 = syy - 2.0 * d * sty + d * d * stt + n * c * c
+    s1 = saa1 - d * sat1 + d * d * stt1 - c * (a_f + a_l) + c * d * (t_f + t_l) + (n - 1.0) * c * c
+    first, last = a_f - d * t_f + c, a_l - d * t_l + c
+    total = float(np.sum(s0))
+    if total <= 0:
+        return 0.0, 0.0
+    rho = (float(np.sum(s1)) + float(last[:-1] @ first[1:])) / total
+    return rho, total / binned.samples
+
+
+def ar1_mean_covariance(count: np.ndarray, rho: float, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """X' K X and diag(K), with K the covariance of the bin means (bins of ``count`` consecutive samples, in time
+    order) of AR(1) noise of lag-1 correlation ``rho`` (0 <= rho < 1) and unit variance: the sum over a bin of
+    n samples has variance n (1 + rho) / (1 - rho) - 2 rho (1 - rho^n) / (1 - rho)^2, two bins a gap of g samples
+    apart (last of the one to first of the other) the covariance rho^g (1 - rho^n_a) (1 - rho^n_b) / (1 - rho)^2.
+    ``X`` (bins, p); the bins' covariances are summed until rho^gap underflows."""
+    n = np.asarray(count, dtype=float)
+    X = np.asarray(X, dtype=float)
+    if rho <= 0.0:
+        k_diag = 1.0 / n
+        return (X * k_diag[:, None]).T @ X, k_diag
+    q = 1.0 - rho
+    k_diag = (n * (1.0 + rho) / q - 2.0 * rho * (1.0 - rho**n) / q**2) / n**2
+    out = (X * k_diag[:, None]).T @ X
+    ends = np.cumsum(n)  # one past each bin's last sample
+    starts = ends - n
+    tail = (1.0 - rho**n) / (q * n)  # (1 - rho^n) / ((1 - rho) n) per bin
+    log_rho = math.log(rho)
+    for lag in range(1, n.size):
+        gap = starts[lag:] - (ends[:-lag] - 1.0)
+        w = np.exp(gap * log_rho) * tail[:-lag] * tail[lag:]
+        if float(np.max(w)) < 1e-17 * float(np.max(k_diag)):
+            break
+        G = (X[:-lag] * w[:, None]).T @ X[lag:]
+        out = out + G + G.T
+    return out, k_diag
 
 
 def noise_correlation(y: np.ndarray, window: int = 25) -> float:
