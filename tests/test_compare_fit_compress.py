@@ -85,8 +85,9 @@ def test_binned_fit_matches_the_full_fit():
 
 
 def test_correlated_noise_gets_longer_bins():
-    """AR(1) noise of lag-1 correlation 0.9: bins hold at least ~2 integrated correlation times (38 samples), so
-    bin means are nearly independent; white noise keeps single-sample bins where the log-time bins are narrow."""
+    """AR(1) noise of lag-1 correlation 0.9: with ``min_count=min_samples(...)`` bins hold at least ~2 integrated
+    correlation times (38 samples), so bin means are nearly independent; white noise keeps single-sample bins where
+    the log-time bins are narrow."""
     from scipy.signal import lfilter
 
     from tissuemech.compare.fit.compress import min_samples, noise_correlation
@@ -98,12 +99,12 @@ def test_correlated_noise_gets_longer_bins():
     ar = signal + 0.75 * lfilter([np.sqrt(1 - 0.81)], [1.0, -0.9], rng.standard_normal(t.size))
     assert noise_correlation(white) < 0.05 and min_samples(white) == 1
     assert noise_correlation(ar) == pytest.approx(0.9, abs=0.02)
-    b = bin_record(t, ar, ramp_time=2.0)
+    b = bin_record(t, ar, ramp_time=2.0, min_count=min_samples(ar))
     assert b.count.min() >= min_samples(ar) >= 30 and b.count.sum() == t.size
-    assert bin_record(t, white, ramp_time=2.0).count.min() == 1
+    assert bin_record(t, white, ramp_time=2.0, min_count=min_samples(white)).count.min() == 1
 
 
-def _ar1(n: int, rho: float, seed: int) -> np.ndarray:
+def _ar1_noise(n: int, rho: float, seed: int) -> np.ndarray:
     from scipy.signal import lfilter
 
     e = np.random.default_rng(seed).standard_normal(n)
@@ -138,7 +139,7 @@ def test_sample_correlation_from_the_bins_is_the_samples():
     from tissuemech.compare.fit.compress import sample_ar1
 
     t = np.linspace(0.01, 20.0, 5000)
-    y = np.sin(t) + 0.1 * _ar1(t.size, 0.8, 4)
+    y = np.sin(t) + 0.1 * _ar1_noise(t.size, 0.8, 4)
     b = bin_record(t, y, ramp_time=2.0, bins=120)
     rng = np.random.default_rng(5)
     offset = 0.01 * rng.standard_normal(b.count.size)

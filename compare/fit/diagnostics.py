@@ -170,8 +170,8 @@ def binned_ar1(
     A HAC estimate from the bin means instead rests on the few bins that carry a parameter (13-26 ramp bins carry C
     and alpha in a dense record): its widths scattered by +-20 % about the full fit's under AR(1) noise.
     ``J`` (bins, p) and ``u`` the bins' weighted Jacobian and residual (model - data) / ``sig``, ``model`` (Pa) and
-    ``time`` (s) the bins' model values and mean times. Returns (J' Sigma J, rho, each bin's variance in weighted
-    units)."""
+    ``time`` (s) the bins' model values and mean times. Returns (J' Sigma J, rho, each bin mean's long-run variance
+    in weighted units: s^2 (1 + rho) / ((1 - rho) n_b), what a smooth shape sees, for the discrepancy's REML)."""
     t = np.asarray(time, dtype=float)
     slope = np.zeros(t.size)
     for seg in (t <= ramp_time, t > ramp_time):  # the loading's kink at the ramp's end is a bin edge
@@ -179,8 +179,8 @@ def binned_ar1(
             slope[seg] = np.gradient(model[seg], t[seg])
     rho, s2 = sample_ar1(binned, -u * sig, slope)
     rho = min(max(rho, 0.0), RHO_MAX)
-    S, k_diag = ar1_mean_covariance(binned.count, rho, J * (math.sqrt(s2) / sig)[:, None])
-    return S, rho, s2 * k_diag / sig**2
+    S, _ = ar1_mean_covariance(binned.count, rho, J * (math.sqrt(s2) / sig)[:, None])
+    return S, rho, s2 * (1.0 + rho) / (1.0 - rho) / binned.count / sig**2
 
 
 @dataclass
