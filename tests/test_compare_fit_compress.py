@@ -52,7 +52,7 @@ def test_compress_choices():
             bins_for(bad, 10)
 
 
-def _record(n: int, seed: int = 5):
+def _record(n: int, seed: int | None = 5):
     from tissuemech.reduced import spheroid
 
     t = np.arange(1, n + 1) * (200.0 / n)
@@ -61,6 +61,8 @@ def _record(n: int, seed: int = 5):
             t, radius=500e-6, C=150.0, alpha=0.2, branches=[(0.4, 20.0)], displacement=200e-6, ramp_time=2.0
         )
     )
+    if seed is None:  # the noise-free curve
+        return t, y
     return t, y + 0.01 * y.max() * np.random.default_rng(seed).standard_normal(n)
 
 
@@ -150,3 +152,24 @@ def test_sample_correlation_from_the_bins_is_the_samples():
     rho, s2 = sample_ar1(b, offset, slope)
     assert rho == pytest.approx(float(r[1:] @ r[:-1]) / float(r @ r), rel=1e-10)
     assert s2 == pytest.approx(float(r @ r) / t.size, rel=1e-10)
+
+
+@pytest.mark.slow
+def test_binned_fit_under_ar1_noise_matches_the_full_fit():
+    """AR(1) noise of lag-1 correlation 0.9 on 2e4 samples: the binned fit's estimates are the full fit's (every
+    ramp sample its own bin, no bin-size floor), the samples' correlation is found from the bins' sums, and the 95 %
+    widths of beta and tau agree within 5 %. C and alpha rest on the 2 s ramp, where the full fit's HAC is itself an
+    estimate from few samples: over noise realisations (5e4 samples, seeds 1-4) the ratio binned / full was
+    0.94-1.23 while the binned widths stayed within 4 % of the exact AR(1) sandwich at the truth."""
+    t, y0 = _record(20_000, seed=None)
+    y = y0 + 0.01 * float(y0.max()) * _ar1_noise(t.size, 0.9, 7)
+    rec = [(t, y, 200e-6)]
+    full = fit.relaxation(rec, radius=500e-6, ramp_time=2.0, compress=False)
+    binned = fit.relaxation(rec, radius=500e-6, ramp_time=2.0, compress=True)
+    assert binned.correlation[0] == pytest.approx(full.correlation[0], abs=0.01)
+    for n in full.names:
+        lo, hi = full.intervals[n]
+        blo, bhi = binned.intervals[n]
+        assert abs(binned.params[n] - full.params[n]) < 0.02 * (hi - lo), n
+        ratio = (bhi - blo) / (hi - lo)
+        assert 0.95 < ratio < 1.05 if n in ("beta", "tau") else 0.75 < ratio < 1.35, (n, ratio)
