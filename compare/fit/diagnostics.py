@@ -22,7 +22,8 @@ covariance changes. In the fit's weighted units (residual r_k, Jacobian rows J_k
 * the rest, u, by a heteroscedasticity- and autocorrelation-consistent (HAC) long-run covariance of the scores
   g_k = J_k u_k: AR(1) prewhitening with the residuals' lag-1 autocorrelation (clipped to [0, 0.97]), a Bartlett
   kernel of Andrews' automatic bandwidth on the whitened scores, recoloured by 1 / (1 - rho)^2
-  (Andrews & Monahan 1992);
+  (Andrews & Monahan 1992); a record fitted as bin means (:mod:`.compress`) gets instead the parametric AR(1)
+  term of :func:`binned_ar1` (the samples' rho and variance, the bin means' exact AR(1) covariance);
 * cov = A^-1 B A^-1 with A = J'J (the Gauss-Newton matrix, model-error factors included) and
   B = HAC(u) + eps_d^2 J'D D'J (+ the model-error factors' prior rows).
 
