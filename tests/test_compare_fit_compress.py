@@ -52,7 +52,7 @@ def test_compress_choices():
             bins_for(bad, 10)
 
 
-def _record(n: int, seed: int = 5):
+def _record(n: int, seed: int | None = 5):
     from tissuemech.reduced import spheroid
 
     t = np.arange(1, n + 1) * (200.0 / n)
@@ -61,6 +61,8 @@ def _record(n: int, seed: int = 5):
             t, radius=500e-6, C=150.0, alpha=0.2, branches=[(0.4, 20.0)], displacement=200e-6, ramp_time=2.0
         )
     )
+    if seed is None:  # the noise-free curve
+        return t, y
     return t, y + 0.01 * y.max() * np.random.default_rng(seed).standard_normal(n)
 
 
@@ -85,8 +87,9 @@ def test_binned_fit_matches_the_full_fit():
 
 
 def test_correlated_noise_gets_longer_bins():
-    """AR(1) noise of lag-1 correlation 0.9: bins hold at least ~2 integrated correlation times (38 samples), so
-    bin means are nearly independent; white noise keeps single-sample bins where the log-time bins are narrow."""
+    """AR(1) noise of lag-1 correlation 0.9: with ``min_count=min_samples(...)`` bins hold at least ~2 integrated
+    correlation times (38 samples), so bin means are nearly independent; white noise keeps single-sample bins where
+    the log-time bins are narrow."""
     from scipy.signal import lfilter
 
     from tissuemech.compare.fit.compress import min_samples, noise_correlation
@@ -98,6 +101,75 @@ def test_correlated_noise_gets_longer_bins():
     ar = signal + 0.75 * lfilter([np.sqrt(1 - 0.81)], [1.0, -0.9], rng.standard_normal(t.size))
     assert noise_correlation(white) < 0.05 and min_samples(white) == 1
     assert noise_correlation(ar) == pytest.approx(0.9, abs=0.02)
-    b = bin_record(t, ar, ramp_time=2.0)
+    b = bin_record(t, ar, ramp_time=2.0, min_count=min_samples(ar))
     assert b.count.min() >= min_samples(ar) >= 30 and b.count.sum() == t.size
-    assert bin_record(t, white, ramp_time=2.0).count.min() == 1
+    assert bin_record(t, white, ramp_time=2.0, min_count=min_samples(white)).count.min() == 1
+
+
+def _ar1_noise(n: int, rho: float, seed: int) -> np.ndarray:
+    from scipy.signal import lfilter
+
+    e = np.random.default_rng(seed).standard_normal(n)
+    return lfilter([np.sqrt(1 - rho**2)], [1.0, -rho], e)
+
+
+@pytest.mark.parametrize("rho", [0.0, 0.5, 0.9])
+def test_bin_means_covariance_is_the_samples_ar1_covariance(rho):
+    """The bin means' covariance under AR(1) noise (closed form, summed over neighbouring bins until rho^gap
+    underflows) equals A R A' with R_ik = rho^|i - k| the samples' correlation and A the averaging matrix."""
+    from tissuemech.compare.fit.compress import ar1_mean_covariance
+
+    rng = np.random.default_rng(2)
+    count = rng.integers(1, 40, size=60).astype(float)
+    n = int(count.sum())
+    k = np.arange(n)
+    R = rho ** np.abs(k[:, None] - k[None, :])
+    A = np.zeros((count.size, n))
+    ends = np.cumsum(count).astype(int)
+    for b, (lo, hi) in enumerate(zip(ends - count.astype(int), ends)):
+        A[b, lo:hi] = 1.0 / (hi - lo)
+    K = A @ R @ A.T
+    X = rng.standard_normal((count.size, 3))
+    M, k_diag = ar1_mean_covariance(count, rho, X)
+    np.testing.assert_allclose(k_diag, np.diag(K), rtol=1e-12)
+    np.testing.assert_allclose(M, X.T @ K @ X, rtol=1e-10, atol=1e-12 * float(np.abs(M).max()))
+
+
+def test_sample_correlation_from_the_bins_is_the_samples():
+    """The samples' residual lag-1 correlation and mean square, from the bins' sums and a model linear in each bin,
+    are those computed sample by sample (to round-off), for any bin offsets and slopes."""
+    from tissuemech.compare.fit.compress import sample_ar1
+
+    t = np.linspace(0.01, 20.0, 5000)
+    y = np.sin(t) + 0.1 * _ar1_noise(t.size, 0.8, 4)
+    b = bin_record(t, y, ramp_time=2.0, bins=120)
+    rng = np.random.default_rng(5)
+    offset = 0.01 * rng.standard_normal(b.count.size)
+    slope = 0.1 * rng.standard_normal(b.count.size)
+    c = b.count.astype(int)
+    model = np.repeat(b.stress - offset, c) + np.repeat(slope, c) * (t - np.repeat(b.time, c))
+    r = y - model
+    rho, s2 = sample_ar1(b, offset, slope)
+    assert rho == pytest.approx(float(r[1:] @ r[:-1]) / float(r @ r), rel=1e-10)
+    assert s2 == pytest.approx(float(r @ r) / t.size, rel=1e-10)
+
+
+@pytest.mark.slow
+def test_binned_fit_under_ar1_noise_matches_the_full_fit():
+    """AR(1) noise of lag-1 correlation 0.9 on 2e4 samples: the binned fit's estimates are the full fit's (every
+    ramp sample its own bin, no bin-size floor), the samples' correlation is found from the bins' sums, and the 95 %
+    widths of beta and tau agree within 5 %. C and alpha rest on the 2 s ramp, where the full fit's HAC is itself an
+    estimate from few samples: over noise realisations (5e4 samples, seeds 1-4) the ratio binned / full was
+    0.94-1.23 while the binned widths stayed within 4 % of the exact AR(1) sandwich at the truth."""
+    t, y0 = _record(20_000, seed=None)
+    y = y0 + 0.01 * float(y0.max()) * _ar1_noise(t.size, 0.9, 7)
+    rec = [(t, y, 200e-6)]
+    full = fit.relaxation(rec, radius=500e-6, ramp_time=2.0, compress=False)
+    binned = fit.relaxation(rec, radius=500e-6, ramp_time=2.0, compress=True)
+    assert binned.correlation[0] == pytest.approx(full.correlation[0], abs=0.01)
+    for n in full.names:
+        lo, hi = full.intervals[n]
+        blo, bhi = binned.intervals[n]
+        assert abs(binned.params[n] - full.params[n]) < 0.02 * (hi - lo), n
+        ratio = (bhi - blo) / (hi - lo)
+        assert 0.95 < ratio < 1.05 if n in ("beta", "tau") else 0.75 < ratio < 1.35, (n, ratio)

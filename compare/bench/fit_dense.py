@@ -8,9 +8,12 @@
 2. End to end: ``tissuemech fit`` on a CSV of ``--big`` samples (default 1e6) in a fresh process (read, checks,
    compression, fit, intervals, figure), its wall time and the load average.
 
-``--seed`` picks the noise realisation of part 1: under AR(1) noise the width ratio of C and alpha moves with it
-(1e5 samples, rho 0.9: 1.19 at seed 1; 5e4 samples: 1.30 / 1.35 at seed 1, 0.89 / 0.89 at seed 2), the scatter of a
-sandwich estimate from the 13-26 ramp bins that carry C and alpha (see docs/benchmarks.md).
+``--seeds 1,2,3,4`` runs part 1 on several noise realisations and prints the ratios per seed; ``--misfit M`` gives
+the record a smooth misfit (the curve times 1 + M sin(2 pi log(t + ramp) / log(t_end + ramp))). ``--parametric``
+adds a third fit: the full record with every sample (nearly) its own bin, i.e. the full fit with the binned fit's
+AR(1) noise term instead of the full fit's HAC, which tells the binning's error from the noise-term estimators'
+difference. Under AR(1) noise the HAC on the full record scatters over realisations where the parameter's
+information sits on few samples (C and alpha on the 2 s ramp; see docs/benchmarks.md).
 ``--skip-full`` leaves out the full fit of part 1 (it takes about a minute on 1e5 samples), ``--skip-cli`` part 2.
 """
 
@@ -33,7 +36,7 @@ TRUTH = dict(C=150.0, alpha=0.2, beta=0.4, tau=20.0)
 RADIUS, RAMP, T_END, APPROACH, NOISE = 500e-6, 2.0, 200.0, 200e-6, 0.01
 
 
-def make_record(samples: int, rho: float = 0.0, seed: int = 1) -> tuple[np.ndarray, np.ndarray]:
+def make_record(samples: int, rho: float = 0.0, seed: int = 1, misfit: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """(time s, nominal stress Pa) of the synthetic record (module doc): uniform sampling of (0, T_END]."""
     from tissuemech.reduced import spheroid
 
@@ -49,6 +52,8 @@ def make_record(samples: int, rho: float = 0.0, seed: int = 1) -> tuple[np.ndarr
             ramp_time=RAMP,
         )
     )
+    if misfit:
+        y = y * (1.0 + misfit * np.sin(2.0 * np.pi * np.log(t + RAMP) / np.log(T_END + RAMP)))
     rng = np.random.default_rng(seed)
     e = rng.standard_normal(samples)
     if rho > 0:  # AR(1) of unit marginal variance
@@ -58,16 +63,22 @@ def make_record(samples: int, rho: float = 0.0, seed: int = 1) -> tuple[np.ndarr
     return t, y + NOISE * float(np.max(y)) * e
 
 
-def compare_fits(samples: int, rho: float = 0.0, full: bool = True, seed: int = 1) -> list[dict]:
+def compare_fits(
+    samples: int, rho: float = 0.0, full: bool = True, seed: int = 1, misfit: float = 0.0, parametric: bool = False
+) -> list[dict]:
     """Rows per parameter: estimate and 95 % width, binned and full, and their ratios; plus the fits' times
-    (``seed``: the noise realisation)."""
+    (``seed``: the noise realisation; ``parametric``: also the full record in (nearly) one bin per sample, module
+    doc)."""
     from tissuemech.compare import fit
 
-    t, y = make_record(samples, rho, seed)
+    t, y = make_record(samples, rho, seed, misfit)
     rec = [(t, y, APPROACH)]
     kw = dict(radius=RADIUS, ramp_time=RAMP)
     runs = {}
-    for name, compress in (("binned", "auto"), ("full", False)) if full else (("binned", "auto"),):
+    plan: list[tuple[str, bool | int | str]] = [("binned", "auto")]
+    plan += [("full", False)] if full else []
+    plan += [("full AR(1)", samples)] if parametric else []
+    for name, compress in plan:
         c0 = time.perf_counter()
         res = fit.relaxation(rec, compress=compress, **kw)
         runs[name] = (res, time.perf_counter() - c0)
@@ -86,6 +97,9 @@ def compare_fits(samples: int, rho: float = 0.0, full: bool = True, seed: int = 
                     "width binned / full": row["binned 95% width"] / wf,
                 }
             )
+        if parametric:
+            g = runs["full AR(1)"][0]
+            row["width binned / full AR(1)"] = row["binned 95% width"] / np.subtract(*g.intervals[n][::-1])
         rows.append(row)
     for name, (res, wall) in runs.items():
         rows.append({"parameter": f"{name} fit: {sum(res.bins) or samples} points", "fit incl. compile [s]": wall})
@@ -122,6 +136,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--samples", type=float, default=1e5, help="samples of the binned-vs-full record (default 1e5)")
     ap.add_argument("--rho", type=float, default=0.0, help="AR(1) coefficient of the noise (default 0: white)")
     ap.add_argument("--seed", type=int, default=1, help="noise realisation of part 1 (default 1)")
+    ap.add_argument("--seeds", default="", help="several noise realisations of part 1, e.g. 1,2,3,4 (over --seed)")
+    ap.add_argument("--misfit", type=float, default=0.0, help="relative size of a smooth misfit (default 0)")
+    ap.add_argument("--parametric", action="store_true", help="also the full record with the AR(1) noise term")
     ap.add_argument("--big", type=float, default=1e6, help="samples of the end-to-end record (default 1e6)")
     ap.add_argument("--skip-full", action="store_true", help="no full fit (only the binned one)")
     ap.add_argument("--skip-cli", action="store_true", help="no end-to-end run of tissuemech fit")
@@ -130,8 +147,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     if a.quick:
         a.samples, a.big = min(a.samples, 2e4), min(a.big, 2e5)
     print(machine_line())
-    print(f"binned vs full fit, {int(a.samples)} samples, noise rho {a.rho:g}, seed {a.seed}")
-    print_rows(compare_fits(int(a.samples), a.rho, full=not a.skip_full, seed=a.seed))
+    for seed in [int(s) for s in a.seeds.split(",")] if a.seeds else [a.seed]:
+        print(f"binned vs full fit, {int(a.samples)} samples, noise rho {a.rho:g}, misfit {a.misfit:g}, seed {seed}")
+        print_rows(compare_fits(int(a.samples), a.rho, not a.skip_full, seed, a.misfit, a.parametric))
     if not a.skip_cli:
         print_rows([cli_time(int(a.big))])
     return 0

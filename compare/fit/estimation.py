@@ -378,6 +378,7 @@ def estimate(
             float(ramp_time),
             white=cov,
             misfit=misfit,
+            binned=binned,
         )
         for m, c_m in emf.covariances.items():  # Wald intervals under every error model, for comparison studies
             t_m = _quantiles(emf, m, P, dof)
