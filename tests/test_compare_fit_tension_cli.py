@@ -76,7 +76,7 @@ def test_profile_enters_the_likelihood():
     assert lo < GAMMA < hi
     assert hi / lo < base.intervals["gamma"][1] / base.intervals["gamma"][0]  # the profile adds information
     assert fit.profile is not None and abs(fit.profile["gamma_formula"] / GAMMA - 1) < 1e-9
-    assert len(fit.diagnostics) == 2
+    assert len(fit.diagnostics) == len(LEVELS)
 
 
 @pytest.mark.slow
