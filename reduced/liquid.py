@@ -181,6 +181,12 @@ def _branches(branches: Any) -> tuple[Any, list[tuple[Any, Any]]]:
 
 
 def _evaluate(t: Any, *, stress: bool, branches: Any, **kw: Any) -> jnp.ndarray:
+    fixed = sorted({"C", "equilibrium"} & set(kw))
+    if fixed:
+        raise InputTypeError(
+            f"reduced.liquid sets {', '.join(fixed)} itself (C = sum of the branch moduli, the liquid's law); "
+            "a solid with tension is reduced.spheroid.force(..., surface_tension=gamma)"
+        )
     ref, rel = _branches(branches)
     fn = spheroid.nominal_stress if stress else spheroid.force
     return fn(t, C=ref, branches=rel, equilibrium=liquid_law(), **kw)

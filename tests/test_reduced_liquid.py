@@ -79,6 +79,8 @@ def test_errors_name_the_quantity():
         liquid.force(np.array([1.0]), branches=[(CM, TAU)], displacement=d, **{**KW, "surface_tension": 0.6})
     with pytest.raises(ValueError, match="displacement"):
         liquid.drop_force(1.0 * A0, radius=A0, surface_tension=GAMMA)
+    with pytest.raises(TypeError, match="sets C itself"):
+        liquid.force(np.array([1.0]), branches=[(CM, TAU)], displacement=d, C=1.0, **KW)
 
 
 @pytest.mark.slow
