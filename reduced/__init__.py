@@ -13,6 +13,7 @@ spheroid   lumped generalized-Maxwell plate force of a compressed ball
 indentation the same for a spherical probe on a ball resting on a plate (AFM)
 oscillation the spheroid's dynamic stiffness (storage, loss) under a small sinusoidal approach
 drop       the Young-Laplace liquid drop between plates (scipy, not JAX: one small solve per approach)
+liquid     the lumped viscoelastic liquid with surface tension (drop plateau, elastocapillary instant)
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ if "jax" in sys.modules:
 else:
     os.environ["JAX_ENABLE_X64"] = "1"
 
-__all__ = ["material", "validation", "blastula", "viscoshell", "spheroid", "indentation", "drop", "interp"]
+__all__ = ["material", "validation", "blastula", "viscoshell", "spheroid", "indentation", "drop", "liquid", "interp"]
 
 
 def __getattr__(name: str) -> Any:

@@ -17,6 +17,7 @@ SUITES = {
     "fem-indentation": "tissuemech.compare.bench.fem_indentation",
     "fem-protocols": "tissuemech.compare.bench.fem_protocols",
     "fem-liquid": "tissuemech.compare.bench.fem_liquid",
+    "liquid-relaxation": "tissuemech.compare.bench.liquid_relaxation",
     "fit-dense": "tissuemech.compare.bench.fit_dense",
     "scan-kernel": "tissuemech.compare.bench.scan_kernel",
     # checks run one by one (not part of "all")
@@ -32,6 +33,7 @@ SEPARATE = (
     "fem-gradient",
     "fem-protocols",
     "fem-liquid",
+    "liquid-relaxation",
 )  # not part of "all"
 
 

@@ -3,6 +3,8 @@ r"""``tissuemech fit``: fit the spheroid model to your own compression-relaxatio
     tissuemech fit DATA.csv [DATA2.csv ...] --radius-um R --displacement-um D [D2 ...] --ramp-time T
                    [--quantity auto|stress|force] [--equilibrium fem|hertz] [--branches N]
                    [--model-error auto|X] [--protocol auto|relaxation|creep|history] [--force-un F] [--out DIR]
+                   [--fit-surface-tension] [--surface-tension G] [--profile R1,R2,R3 | PROFILE.csv] [--profile-sd S]
+                   [--profile-force-un F]
 
 The files: one CSV per compression level, time in s and nominal stress in Pa or plate force in N, an optional
 header naming the columns with units, ``#`` comments (:mod:`tissuemech.compare.fit.records` has the format).
@@ -15,6 +17,14 @@ Output: the parameter table with 95 % intervals and the identifiability report (
 ``--out`` (default ``fit-results``): ``fit.json`` (everything: parameters, intervals and their kind,
 noise, covariance, identifiability, the inputs) and ``fit.png`` (data, model and residuals).
 A malformed file gives one line naming the file and the line (exit code 2).
+
+Surface tension (``--fit-surface-tension``, or ``--surface-tension G``: its starting value in N/m): relaxation records
+at two or more compression levels are fitted with the elastocapillary model (:func:`tissuemech.compare.fit.tension.
+tension_relaxation`: C, gamma, alpha, the branches); ``--profile R1,R2,R3`` (um: the meridional radius of curvature at
+the equator, the equatorial radius and the contact radius, measured at the end of the last record's hold; or a CSV
+whose rows are R1, R2, R3 in um, averaged, their sd of the mean the uncertainty unless ``--profile-sd`` says it) adds
+the classic formula gamma = F / (pi R3^2 (1/R1 + 1/R2)) to the likelihood with its propagated uncertainty. Without
+data files, ``--profile`` with ``--profile-force-un`` gives the formula's gamma and its error alone.
 """
 
 from __future__ import annotations
@@ -52,7 +62,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "stress (Pa) or plate force (N); a header line may name the columns with units, '#' comments. Prints the parameters with 95 % "
         "intervals and the identifiability report; writes fit.json and fit.png to --out.",
     )
-    f.add_argument("files", nargs="+", metavar="DATA.csv", help="one CSV file per compression level")
+    f.add_argument(
+        "files", nargs="*", metavar="DATA.csv", help="one CSV file per compression level (none: --profile alone)"
+    )
     f.add_argument("--radius-um", type=_positive, required=True, help="undeformed spheroid radius a0 in um")
     f.add_argument(
         "--displacement-um",
@@ -120,6 +132,34 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="--model fe: starting values in SI (C=150 alpha=1.2 beta=0.4 tau=200; every parameter); default: the "
         "reduced fit's estimate, or the rough guess from the curves where the reduced model cannot fit the records",
     )
+    f.add_argument(
+        "--fit-surface-tension",
+        action="store_true",
+        help="fit the tissue surface tension gamma too (elastocapillary model; relaxation records, two or more levels)",
+    )
+    f.add_argument(
+        "--surface-tension",
+        type=_positive,
+        default=None,
+        help="starting value of gamma in N/m (e.g. 0.006); implies --fit-surface-tension",
+    )
+    f.add_argument(
+        "--profile",
+        default=None,
+        help="profile measurement R1,R2,R3 in um (meridional radius at the equator, equatorial radius, contact "
+        "radius) at the end of the last record, or a CSV of such rows (um); enters the gamma fit via the classic "
+        "formula F / (pi R3^2 (1/R1 + 1/R2))",
+    )
+    f.add_argument(
+        "--profile-sd", type=_positive, default=None, help="1-sigma uncertainty of each profile radius in um"
+    )
+    f.add_argument(
+        "--profile-force-un",
+        type=_positive,
+        default=None,
+        help="plate force in uN at the profile's time (with --profile and no data files: the formula's gamma alone)",
+    )
+    f.add_argument("--alpha", type=nonnegative, default=None, help="gamma fit: fix the Fung alpha (default: fitted)")
     f.add_argument("--out", default="fit-results", help="folder for fit.json and fit.png (default: %(default)s)")
     f.add_argument("--no-figure", action="store_true", help="skip fit.png")
     return f
@@ -135,6 +175,14 @@ def run(args: argparse.Namespace) -> None:
         raise ValueError(f"--branches must be at least 1; got {args.branches}")
     output_folder("--out", args.out)  # before the fit
     radius = args.radius_um * UM
+    tension = args.fit_surface_tension or args.surface_tension is not None or args.profile is not None
+    if not args.files and not (args.profile is not None and args.profile_force_un is not None):
+        raise ValueError(
+            "give at least one DATA.csv file (or --profile R1,R2,R3 with --profile-force-un F for the classic "
+            "formula's gamma alone)"
+        )
+    if tension:
+        return _run_tension(args, radius)
     if args.model == "fe":
         return _run_fe(args, radius)
     if args.initial is not None:
@@ -382,3 +430,108 @@ def _run_fe(args: argparse.Namespace, radius: float) -> None:
         save_figure(fe_fit_figure(recs, res, ramp_time=args.ramp_time), str(out / "fit.png"))
         written.append(str(out / "fit.png"))
     print("wrote " + ", ".join(written))
+
+
+def _profile(args: argparse.Namespace) -> tuple[float, float, float, float]:
+    """(R1, R2, R3, sd) in m from ``--profile`` (three numbers or a CSV of rows) and ``--profile-sd`` (um)."""
+    import numpy as np
+
+    text = args.profile
+    if Path(text).is_file():
+        from tissuemech.compare.fit.records import read_table
+
+        rows = read_table(text).values
+        if rows.ndim != 2 or rows.shape[1] < 3 or rows.shape[0] < 1:
+            raise ValueError(f"--profile {text}: expected rows of R1, R2, R3 in um")
+        rows = rows[:, :3]
+    else:
+        try:
+            rows = np.array([[float(v) for v in text.split(",")]])
+        except ValueError:
+            raise ValueError(f"--profile {text!r}: expected R1,R2,R3 in um (e.g. 160,190,95) or a CSV file") from None
+        if rows.shape != (1, 3):
+            raise ValueError(f"--profile {text!r}: expected three radii R1,R2,R3 in um")
+    if not np.all(np.isfinite(rows)) or np.any(rows <= 0):
+        raise ValueError(f"--profile: the radii R1, R2, R3 must be positive (um); got {rows.tolist()}")
+    R = rows.mean(axis=0)
+    if args.profile_sd is not None:
+        sd = args.profile_sd
+    elif rows.shape[0] >= 2:
+        sd = float(np.max(rows.std(axis=0, ddof=1)) / np.sqrt(rows.shape[0]))
+    else:
+        raise ValueError(
+            "--profile with one measurement needs --profile-sd (the 1-sigma uncertainty of each radius, um)"
+        )
+    return float(R[0] * UM), float(R[1] * UM), float(R[2] * UM), float(sd * UM)
+
+
+def _run_tension(args: argparse.Namespace, radius: float) -> None:
+    """``tissuemech fit --fit-surface-tension`` / ``--profile``: gamma from relaxation records and/or a profile."""
+    import math
+
+    from scipy import stats
+
+    from tissuemech.compare import fit
+    from tissuemech.compare.fit import tension
+
+    if args.model == "fe" or args.protocol in ("creep", "history"):
+        raise ValueError("the surface-tension fit takes relaxation records with --model reduced")
+    prof = None if args.profile is None else _profile(args)
+    if not args.files:  # the classic formula alone
+        assert prof is not None
+        F = args.profile_force_un * UM
+        g, sd = tension.formula_tension(F, *prof[:3], radius_sd=prof[3])
+        z = float(stats.norm.ppf(0.975))
+        d = dict(
+            params={"gamma": g},
+            intervals={"gamma": [g - z * sd, g + z * sd]},
+            sd={"gamma": sd},
+            method="classic formula gamma = F / (pi R3^2 (1/R1 + 1/R2)): exact for a liquid drop at rest; over-states "
+            "gamma while the aggregate is still elastic",
+            inputs=dict(R1_m=prof[0], R2_m=prof[1], R3_m=prof[2], radius_sd_m=prof[3], force_N=F),
+        )
+        print(
+            f"classic formula: gamma = {g:.5g} N/m, 95 % interval [{g - z * sd:.5g}, {g + z * sd:.5g}] (sd {sd:.2g} "
+            f"N/m = {100 * sd / g:.2g} %, from the radii's {prof[3] / UM:g} um). Exact only for a liquid at rest: an "
+            "aggregate that is still partly elastic makes it over-state gamma (fit the relaxation records too)"
+        )
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "fit.json").write_text(json.dumps(d, indent=1))
+        print(f"wrote {out / 'fit.json'}")
+        return None
+    disps = None if args.displacement_um is None else [d * UM for d in args.displacement_um]
+    recs, forces = fit.load_records(
+        list(args.files), radius=radius, displacements=disps, ramp_time=args.ramp_time, quantity=args.quantity
+    )
+    profile = None if prof is None else tension.Profile(*prof)
+    initial = None if args.surface_tension is None else {"gamma": args.surface_tension}
+    res = tension.tension_relaxation(
+        recs, radius=radius, ramp_time=args.ramp_time, n_branches=args.branches, alpha=args.alpha, initial=initial,
+        profile=profile,
+    )  # fmt: skip
+    if args.profile_force_un is not None:
+        print("note: --profile-force-un is for --profile alone; with records the force is the last record's")
+    print(res.summary())
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    d = res.to_dict()
+    d["inputs"] = {
+        "files": [str(f) for f in args.files],
+        "model": "elastocapillary (reduced.capillary)",
+        "radius_m": radius,
+        "displacement_m": [r[2] for r in recs],
+        "ramp_time_s": args.ramp_time,
+        "quantity": ["force_N" if f else "stress_Pa" for f in forces],
+        "profile_m": None if prof is None else dict(zip(("R1", "R2", "R3", "sd"), prof)),
+        "n_points": [int(r[0].size) for r in recs],
+    }
+    (out / "fit.json").write_text(json.dumps(d, indent=1, default=lambda v: None if not math.isfinite(v) else v))
+    written = [str(out / "fit.json")]
+    if not args.no_figure:
+        from tissuemech.compare.plots.fit import tension_fit_figure
+
+        save_figure(tension_fit_figure(recs, res, radius=radius, ramp_time=args.ramp_time), str(out / "fit.png"))
+        written.append(str(out / "fit.png"))
+    print("wrote " + ", ".join(written))
+    return None

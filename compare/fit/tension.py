@@ -11,10 +11,20 @@ Estimation: weighted least squares in the log-parameters ``(C, Gamma, [alpha], b
 unweighted pass, the per-record noise sd from its residuals, a weighted pass. 95 % Wald intervals in log space
 (Student t with N - P degrees of freedom, the Gauss-Newton covariance scaled by the weighted residual variance);
 gamma's interval from log gamma = log Gamma + log C + log a0 with their covariance.
+
+Profile measurement (``profile=Profile(R1, R2, R3, sd)``, m): the classic plate-tensiometry formula
+gamma_p = F / (pi R3^2 (1/R1 + 1/R2)) (R1 the profile's meridional radius at the equator, R2 the equatorial radius,
+R3 the contact radius; exact for a liquid drop at rest, ``reduced.drop``) with F the record's measured force at the
+profile's time (nominal stress times the incompressible midplane area) is one more observation of gamma: the residual
+(gamma - gamma_p) / sd_p joins the likelihood, sd_p propagated to first order from the radii's sd and the record's
+noise (:func:`formula_tension`). For an aggregate that is still partly elastic the formula over-states gamma (the
+elastic stress adds to the Laplace pressure): give the profile at the end of a long hold, and compare the
+records-only fit (``TensionFit.profile`` holds gamma_p, its sd and its normal score against the fit).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from typing import Any, NamedTuple
@@ -24,21 +34,95 @@ import jax.numpy as jnp
 import numpy as np
 from scipy import optimize, stats
 
+from tissuemech.compare.fit.diagnostics import residual_diagnostics
 from tissuemech.compare.fit.model import initial_guess
 from tissuemech.compare.fit.records import as_records
 
-__all__ = ["TensionFit", "tension_relaxation"]
+__all__ = ["TensionFit", "Profile", "formula_tension", "tension_relaxation"]
 
 
 class TensionFit(NamedTuple):
     """Estimates (SI: C Pa, gamma N/m, alpha -, beta -, tau s), 95 % intervals ``(low, high)`` by name, the noise sd
-    per record (Pa), the residual norm and whether the solver converged."""
+    per record (Pa), the residual norm and whether the solver converged; ``diagnostics``: the residual diagnostics
+    per record (``compare.fit.diagnostics.RecordDiagnostics``: lag-1 autocorrelation, runs test); ``profile``: with a
+    profile measurement, ``gamma_formula`` (N/m), ``sd`` (N/m), ``z`` = (gamma_formula - gamma) / sd, ``force`` (N)."""
 
     params: dict[str, float]
     intervals: dict[str, tuple[float, float]]
     noise: list[float]
     cost: float
     success: bool
+    diagnostics: tuple = ()
+    profile: dict[str, float] | None = None
+
+    def summary(self) -> str:
+        """The parameter table with 95 % intervals, the noise and residual diagnostics per record, the profile."""
+        units = {"C": "Pa", "gamma": "N/m", "Gamma": "-", "alpha": "-"}
+        lines = ["surface-tension fit (reduced elastocapillary model): estimate and 95 % interval"]
+        for n, v in self.params.items():
+            u = units.get(n, "s" if n.startswith("tau") else "-")
+            iv = f"[{self.intervals[n][0]:.5g}, {self.intervals[n][1]:.5g}]" if n in self.intervals else "(fixed)"
+            lines.append(f"  {n:<8} {v:12.5g}   {iv} {u}")
+        for k, sd in enumerate(self.noise):
+            diag = f"; {self.diagnostics[k].text()}" if k < len(self.diagnostics) else ""
+            lines.append(f"  record {k + 1}: noise sd {sd:.3g} Pa{diag}")
+        if self.profile is not None:
+            p = self.profile
+            lines.append(
+                f"  profile: classic formula gamma = {p['gamma_formula']:.5g} +- {p['sd']:.2g} N/m (1 sd) at F = "
+                f"{p['force']:.4g} N; {p['z']:+.2f} sd from the fit (exact for a liquid at rest; over-states gamma "
+                "while the aggregate is still elastic)"
+            )
+        if not self.success:
+            lines.append("  WARNING: the least-squares solver did not converge")
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: params, intervals, noise, cost, success, diagnostics, profile."""
+        return dict(
+            params=self.params,
+            intervals={k: list(v) for k, v in self.intervals.items()},
+            noise=self.noise,
+            cost=self.cost,
+            success=self.success,
+            diagnostics=[{**dataclasses.asdict(d), "correlated": d.correlated} for d in self.diagnostics],
+            profile=self.profile,
+        )
+
+
+class Profile(NamedTuple):
+    """A profile measurement of the compressed aggregate: ``R1`` the meridional radius of curvature at the equator,
+    ``R2`` the equatorial radius, ``R3`` the contact radius (m), ``sd`` the 1-sigma uncertainty of each radius (m),
+    taken on record ``record`` (index, default the last) at ``time`` (s, default its last sample)."""
+
+    R1: float
+    R2: float
+    R3: float
+    sd: float
+    record: int = -1
+    time: float | None = None
+
+
+def formula_tension(
+    force: float, R1: float, R2: float, R3: float, *, force_sd: float = 0.0, radius_sd: float = 0.0
+) -> tuple[float, float]:
+    """The classic plate-tensiometry gamma = F / (pi R3^2 (1/R1 + 1/R2)) (N/m) from the plate force ``force`` (N) and
+    the radii (m), and its 1-sigma uncertainty (N/m) to first order from ``force_sd`` (N) and ``radius_sd`` (m, each
+    radius, independent). Exact for a liquid drop at rest between non-wetting plates. Raises ValueError naming a bad
+    input."""
+    for name, v in (("R1 (meridional radius at the equator)", R1), ("R2 (equatorial radius)", R2),
+                    ("R3 (contact radius)", R3)):  # fmt: skip
+        if not (math.isfinite(v) and v > 0):
+            raise ValueError(f"{name} must be a positive length in m; got {v!r}")
+    if not (math.isfinite(force) and force > 0):
+        raise ValueError(f"force (the plate force at the profile's time) must be > 0 N; got {force!r}")
+    if not (force_sd >= 0 and radius_sd >= 0):
+        raise ValueError(f"force_sd (N) and radius_sd (m) must be >= 0; got {force_sd!r}, {radius_sd!r}")
+    k = 1.0 / R1 + 1.0 / R2
+    gamma = force / (math.pi * R3**2 * k)
+    rel2 = (force_sd / force) ** 2 + (2 * radius_sd / R3) ** 2
+    rel2 += (radius_sd / (R1**2 * k)) ** 2 + (radius_sd / (R2**2 * k)) ** 2
+    return gamma, gamma * math.sqrt(rel2)
 
 
 def _names(n_branches: int, fit_alpha: bool) -> list[str]:
@@ -56,12 +140,14 @@ def tension_relaxation(
     alpha: float | None = None,
     initial: dict[str, float] | None = None,
     max_nfev: int = 200,
+    profile: Profile | None = None,
 ) -> TensionFit:
     """Fit ``(C, gamma, alpha, beta_m, tau_m)`` to relaxation records ``(time [s], nominal_stress [Pa],
     displacement [m])`` (one per compression level; the stress divides by the incompressible midplane area).
 
     ``alpha``: a number fixes it, None fits it (inside the elastocapillary table's alpha range). ``initial``: optional
-    starting values by name (C, gamma, alpha, beta.., tau..). Returns a :class:`TensionFit` (``params`` and
+    starting values by name (C, gamma, alpha, beta.., tau..). ``profile``: a :class:`Profile` measurement (m) entering
+    the likelihood through the classic formula (module docstring). Returns a :class:`TensionFit` (``params`` and
     ``intervals`` hold ``gamma`` in N/m and ``Gamma`` = gamma / (C a0)). Raises ValueError for malformed records or
     fewer points than parameters."""
     from tissuemech.reduced import capillary
@@ -96,6 +182,7 @@ def tension_relaxation(
     ys = tuple(jnp.asarray(r.nominal_stress) for r in recs)
     ds = tuple(float(r.displacement) for r in recs)
     nb = n_branches
+    prof = None if profile is None else _profile_force(profile, recs, a0, tr)
 
     def predict(theta: Any) -> list[Any]:
         p = dict(zip(names, jnp.exp(theta), strict=True))
@@ -109,15 +196,23 @@ def tension_relaxation(
             for t, d in zip(ts, ds, strict=True)
         ]
 
-    def residual(theta: Any, w: Any) -> Any:
-        return jnp.concatenate([(m - y) * wk for m, y, wk in zip(predict(theta), ys, w, strict=True)])
+    def residual(theta: Any, w: Any, psd: Any = 1.0) -> Any:
+        r = [(m - y) * wk for m, y, wk in zip(predict(theta), ys, w, strict=True)]
+        if prof is not None:  # the classic formula's gamma as one more observation
+            gam = jnp.exp(theta[names.index("Gamma")] + theta[names.index("C")]) * a0
+            r.append(jnp.atleast_1d((gam - prof[1]) / psd))
+        return jnp.concatenate(r)
 
     res_j = jax.jit(residual)
     jac_j = jax.jit(jax.jacfwd(residual))
     scale = float(max(np.max(np.abs(r.nominal_stress)) for r in recs)) or 1.0
     w = tuple(jnp.asarray(1.0 / scale) for _ in recs)
+    psd = 1.0
+    if prof is not None:  # the radii's share of the formula's sd (the record's noise is not known yet)
+        psd = formula_tension(prof[0], profile.R1, profile.R2, profile.R3, radius_sd=profile.sd)[1]  # type: ignore[union-attr]
+        psd = max(psd, 1e-12 * prof[1])
     sol = optimize.least_squares(
-        lambda th: np.asarray(res_j(th, w)), x0, jac=lambda th: np.asarray(jac_j(th, w)), bounds=(lb, ub),
+        lambda th: np.asarray(res_j(th, w, psd)), x0, jac=lambda th: np.asarray(jac_j(th, w, psd)), bounds=(lb, ub),
         max_nfev=max_nfev, x_scale="jac",
     )  # fmt: skip
     pred = [np.asarray(m) for m in predict(sol.x)]
@@ -128,13 +223,18 @@ def tension_relaxation(
         for m, r in zip(pred, recs, strict=True)
     ]
     w = tuple(jnp.asarray(1.0 / s) for s in noise)
+    prof_out = None
+    if prof is not None:  # the formula's sd with the record's force noise
+        F_sd = noise[prof[2]] * prof[3]
+        psd = formula_tension(prof[0], profile.R1, profile.R2, profile.R3, force_sd=F_sd, radius_sd=profile.sd)[1]  # type: ignore[union-attr]
+        psd = max(psd, 1e-12 * prof[1])
     sol = optimize.least_squares(
-        lambda th: np.asarray(res_j(th, w)), sol.x, jac=lambda th: np.asarray(jac_j(th, w)), bounds=(lb, ub),
+        lambda th: np.asarray(res_j(th, w, psd)), sol.x, jac=lambda th: np.asarray(jac_j(th, w, psd)), bounds=(lb, ub),
         max_nfev=max_nfev, x_scale="jac",
     )  # fmt: skip
-    J = np.asarray(jac_j(sol.x, w))
-    r = np.asarray(res_j(sol.x, w))
-    dof = n_data - len(names)
+    J = np.asarray(jac_j(sol.x, w, psd))
+    r = np.asarray(res_j(sol.x, w, psd))
+    dof = n_data + (prof is not None) - len(names)
     s2 = float(r @ r) / dof
     cov = np.linalg.pinv(J.T @ J) * s2
     t = float(stats.t.ppf(0.975, dof))
@@ -151,4 +251,27 @@ def tension_relaxation(
     iv["gamma"] = (float(math.exp(lg - t * sd_g)), float(math.exp(lg + t * sd_g)))
     if not fit_alpha:
         params["alpha"] = float(alpha)  # type: ignore[arg-type]
-    return TensionFit(params, iv, noise, float(sol.cost), bool(sol.success))
+    pred = [np.asarray(m) for m in predict(sol.x)]
+    diags = tuple(residual_diagnostics(r.nominal_stress - m) for m, r in zip(pred, recs, strict=True))
+    if prof is not None:
+        prof_out = dict(gamma_formula=prof[1], sd=float(psd), z=float((prof[1] - params["gamma"]) / psd), force=prof[0])
+    return TensionFit(params, iv, noise, float(sol.cost), bool(sol.success), diags, prof_out)
+
+
+def _profile_force(profile: Profile, recs: Sequence[Any], a0: float, tr: float) -> tuple[float, float, int, float]:
+    """(F [N], the formula's gamma [N/m], record index, midplane area [m^2]) at the profile's time and record."""
+    if not isinstance(profile, Profile):
+        raise ValueError(f"profile must be a Profile(R1, R2, R3, sd) in m; got {profile!r}")
+    if not (math.isfinite(profile.sd) and profile.sd > 0):
+        raise ValueError(f"the profile's sd (1-sigma uncertainty of each radius) must be > 0 m; got {profile.sd!r}")
+    k = int(profile.record)
+    if not -len(recs) <= k < len(recs):
+        raise ValueError(f"profile.record {k} does not name one of the {len(recs)} records")
+    k %= len(recs)
+    r = recs[k]
+    tp = float(r.time[-1]) if profile.time is None else float(profile.time)
+    i = int(np.argmin(np.abs(r.time - tp)))
+    x = float(r.displacement) / (2 * a0) * min(float(r.time[i]) / tr, 1.0)
+    area = math.pi * a0**2 / (1.0 - x)  # the incompressible midplane (as the records' nominal stress)
+    F = float(r.nominal_stress[i]) * area
+    return F, formula_tension(F, profile.R1, profile.R2, profile.R3)[0], k, area

@@ -9,7 +9,7 @@ import numpy as np
 
 from tissuemech.compare.plots import pyplot as _plt
 
-__all__ = ["fit_figure", "protocol_figure", "fe_fit_figure"]
+__all__ = ["fit_figure", "protocol_figure", "fe_fit_figure", "tension_fit_figure"]
 
 UM = 1e-6
 DISPLAY_SAMPLES = 4000  # records longer than this are drawn as bin means (compare.fit.compress.bin_record)
@@ -125,5 +125,33 @@ def fe_fit_figure(records: Sequence[tuple], result: Any, *, ramp_time: float):
     axr.axhline(0.0, color="k", lw=0.6)
     axr.set_ylabel("residual (Pa)")
     axr.set_xlabel("time (s)")
+    fig.tight_layout()
+    return fig
+
+
+def tension_fit_figure(records: Sequence[tuple], result: Any, *, radius: float, ramp_time: float):
+    """Data and the elastocapillary model (top, log time) and residuals (bottom) of a surface-tension fit
+    (``compare.fit.tension.TensionFit``; records as fitted: time s, nominal stress Pa, displacement m). Returns the
+    figure."""
+    from tissuemech.reduced import spheroid
+
+    p = result.params
+    taus = sorted(k for k in p if k.startswith("tau"))
+    br = [(p["beta" + k[3:]], p[k]) for k in taus]
+    plt = _plt()
+    fig, (ax, axr) = plt.subplots(2, 1, figsize=(6.4, 6.0), sharex=True, gridspec_kw=dict(height_ratios=(3, 1)))
+    for k, (t, y, d) in enumerate(records):
+        m = np.asarray(spheroid.nominal_stress(t, radius=radius, C=p["C"], alpha=p["alpha"], branches=br,
+                                               displacement=d, ramp_time=ramp_time, surface_tension=p["gamma"]))  # fmt: skip
+        ax.plot(t, y, ".", ms=3, color=f"C{k}", label=f"record {k + 1}: delta = {d / UM:.3g} um")
+        ax.plot(t, m, "-", color=f"C{k}")
+        axr.plot(t, y - m, ".", ms=3, color=f"C{k}")
+    lo, hi = result.intervals["gamma"]
+    ax.set_title(f"gamma = {p['gamma'] * 1e3:.4g} mN/m (95 %: {lo * 1e3:.4g} to {hi * 1e3:.4g}), C = {p['C']:.4g} Pa")
+    ax.set_ylabel("nominal stress (Pa)")
+    axr.set_ylabel("residual (Pa)")
+    axr.set_xlabel("time (s)")
+    ax.set_xscale("log")
+    ax.legend(fontsize=8)
     fig.tight_layout()
     return fig
