@@ -26,6 +26,7 @@ from __future__ import annotations
 import sys
 import time
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -89,7 +90,9 @@ def ramp_error(
             ts = output_times(q)
             t1 = time.perf_counter()
             F_fe, n = _fe(alpha, [(beta, q * RAMP)], x, ts, level, tol)
-            red = dict(radius=RADIUS, C=C_PA, alpha=alpha, branches=[(beta, q * RAMP)], displacement=2 * RADIUS * x)
+            red: dict[str, Any] = dict(
+                radius=RADIUS, C=C_PA, alpha=alpha, branches=[(beta, q * RAMP)], displacement=2 * RADIUS * x
+            )
             b = np.array([bias[round(t, 12)] for t in ts])
             e = np.asarray(rs.force(ts, **red, ramp_time=RAMP)) / F_fe - b  # the default (coupled) law
             e0 = np.asarray(rs.force(ts, **red, ramp_time=RAMP, coupling=0.0)) / F_fe - b  # the plain lumped law
