@@ -421,11 +421,12 @@ def test_an_approach_past_the_diameter_is_refused_whatever_the_law():
 
 
 def test_auto_model_error_grows_for_a_tau_near_the_ramp():
-    """Issue 35: the lumped model is up to 0.5 % off the FE while a branch near the ramp relaxes; model_error="auto"
-    of a fit whose tau is near the ramp takes that (half the 2-sigma bound, >> the table's 1.5e-5) and says so."""
+    """Issue 35: the lumped model is off the FE while a branch near the ramp relaxes (the default coupled law up to
+    0.11 %, the plain one 0.5 %); model_error="auto" of a fit whose tau is near the ramp takes that (half the 2-sigma
+    bound, >> the table's 1.5e-5) and says so."""
     from tissuemech.compare.fit.model import ramp_model_error
 
-    assert ramp_model_error(dict(C=150.0, alpha=0.2, beta=0.8, tau=0.3 * TR), 1, TR) == pytest.approx(2.45e-3)
+    assert ramp_model_error(dict(C=150.0, alpha=0.2, beta=0.8, tau=0.3 * TR), 1, TR) == pytest.approx(2.495e-4)
     assert ramp_model_error(dict(C=150.0, alpha=0.2, beta=0.4, tau=1000 * TR), 1, TR) < 1e-5
     params = dict(C=150.0, alpha=0.2, beta=0.8, tau=0.3 * TR)
     res = fit.relaxation(
@@ -436,7 +437,7 @@ def test_auto_model_error_grows_for_a_tau_near_the_ramp():
         initial=params,
         intervals="wald",
     )
-    assert res.model_error > 1e-3
+    assert res.model_error > 2e-4
     assert any("near the ramp" in f for f in res.flags)
 
 

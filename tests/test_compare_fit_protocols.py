@@ -116,11 +116,11 @@ def test_history_force_matches_the_reduced_ode():
     th = np.linspace(0.0, 600.0, 151)
     d = np.minimum(th / 2.0, 1.0) * 200e-6 * (1 + 0.01 * np.sin(th / 30)) + 0.2e-6 * rng.standard_normal(151) * (th > 0)
     kw = dict(radius=A0, C=TRUTH["C"], alpha=TRUTH["alpha"], branches=BRANCHES)
-    for coupling in (spheroid.COUPLING, 0.0):  # the FE table's geometric coupling (issue 34) and the plain lumped law
+    for coupling in ("auto", 0.0):  # the FE table's geometric coupling (issue 34) and the plain lumped law
         ode = np.asarray(spheroid.force(th, displacement=(th, d), coupling=coupling, **kw))
         fast = np.asarray(protocols.history_force(th, th, d, coupling=coupling, **kw))
         assert np.max(np.abs(fast - ode)) <= 5e-5 * np.max(ode)
-    coupled = np.asarray(protocols.history_force(th, th, d, coupling=spheroid.COUPLING, **kw))
+    coupled = np.asarray(protocols.history_force(th, th, d, **kw))  # the default: "auto" = COUPLING (FE table)
     assert np.max(np.abs(coupled - fast)) > 5e-4 * np.max(ode)  # the coupling is not negligible here: 1.3e-3
 
 

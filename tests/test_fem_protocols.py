@@ -214,7 +214,9 @@ def test_dynamic_stiffness_is_the_steady_response_of_the_lumped_law():
         t < 0.2, d0 * t / 0.2, d0 + eps * jax.numpy.sin(2 * np.pi * f * (t - hold)) * (t >= hold)
     )
     t = hold + np.linspace(2 / f, 3 / f, 201)
-    F = np.asarray(force(t, **mat, displacement=disp, jump_times=(0.2, hold), method="ode"))
+    # the closed form linearises the plain lumped law (coupling=0); the default coupling of the FE table, applied
+    # while the approach grows, raises K'' by 1.0-1.1 % and K' by 0.02-0.25 % at 0.05-0.5 Hz (branch (0.4, 1 s))
+    F = np.asarray(force(t, **mat, displacement=disp, jump_times=(0.2, hold), method="ode", coupling=0.0))
     w, tt = 2 * np.pi * f, t - hold
     A = np.stack([np.ones_like(tt), np.sin(w * tt), np.cos(w * tt)], axis=1)
     c = np.linalg.lstsq(A, F, rcond=None)[0]

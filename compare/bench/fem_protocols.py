@@ -7,7 +7,7 @@ fem-protocols``) prints, for the Fig. 10 material (a0 = 500 um, C = 150 Pa, alph
   ~5e-6) against ``reduced.spheroid.approach`` (the lumped law solved for the approach, ``equilibrium="fem"``, the
   geometric coupling ``reduced.spheroid.COUPLING``; a second row: the plain lumped law, ``coupling=0``): the
   approach's relative error per level at t = 0.2, 10, 200, 1500 s and its largest value over every step after the
-  ramp;
+  ramp; then the reduced creep ODE's timing, coupled (default) and plain side by side;
 * a measured history: ``compress(displacement=(times, approaches))`` with noise-free kinks and an unloading (0 ->
   50 um in 0.2 s, held to 20 s, unloaded to 30 um by 20.2 s, held to 100 s, reloaded to 45 um by 100.4 s, held to
   300 s; 3001 samples, the steps at its 6 kinks only) against ``reduced.spheroid.force(displacement=(times,
@@ -118,6 +118,24 @@ def oscillation(level: int) -> None:
         )
 
 
+def creep_timing(repeats: int = 20) -> None:
+    """The reduced creep ODE (``reduced.spheroid.approach``, 202 output times to 1500 s) with the default coupling and
+    with the plain law: the fastest of ``repeats`` calls after a first (compiling) one, side by side (printed only)."""
+    print("\n## reduced creep ODE (approach, 202 times to 1500 s): fastest of 20 runs after compiling [s]")
+    t = np.union1d(np.linspace(0.0, CREEP["end_time"], 201), [CREEP["ramp_time"]])
+    best = {}
+    for name, coupling in (("plain (p = 0)", 0.0), ("coupled (default)", "auto")):
+        reduced_creep(t, coupling)
+        best[name] = np.inf
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            reduced_creep(t, coupling)
+            best[name] = min(best[name], time.perf_counter() - t0)
+        print(f"{name:<28} | {best[name]:.4f}")
+    plain, coupled = best.values()
+    print(f"{'ratio coupled / plain':<28} | {coupled / plain:.2f}")
+
+
 def at(t: np.ndarray, v: np.ndarray, times: Sequence[float]) -> np.ndarray:
     """The values at the step times closest to ``times`` (they are step times: field_times)."""
     return np.array([v[int(np.argmin(np.abs(t - s)))] for s in times])
@@ -165,6 +183,7 @@ def main(argv: list[str] | None = None) -> int:
                 _row("  plain lumped (p = 0)", at(t, v / r0 - 1.0, times), float(np.max(np.abs(v / r0 - 1)[after])), 0)
             )
         runs[name] = (vals, red(np.array(times)), times)
+    creep_timing()
     if a.oscillation or not a.quick:
         oscillation(1)
     if a.quick:

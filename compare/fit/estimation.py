@@ -195,7 +195,7 @@ def relaxation(
             res = relaxation(**{**call, "model_error": float(ramp_eps), "initial": dict(res.params)})
             note = (
                 f"model_error 'auto' raised from {eps:.2g} (the table's) to {ramp_eps:.2g}: a fitted tau is near the "
-                "ramp, where the lumped model is up to 0.5 % off the FE (reduced.spheroid.lumped_ramp_error)"
+                "ramp, where the lumped model is up to 0.11 % off the FE (reduced.spheroid.lumped_ramp_error)"
             )
             return dataclasses.replace(res, flags=res.flags + (note,))
     return res

@@ -184,7 +184,8 @@ def ramp_model_error(params: dict[str, float], n_branches: int, ramp_time: float
     """The lumped model's own 1-sigma error during the ramp for fitted branches ``params`` (names of
     :func:`parameter_names`): half (a 2-sigma bound, as the table's ``model_error_rel``) of
     ``reduced.spheroid.lumped_ramp_error`` at the largest approach ``x`` = delta/(2 a0). A branch whose tau is near
-    the ramp (tau / ramp_time 0.05-3) makes it 0.05-0.25 %, far above the table's 1.5e-5 (issue 35)."""
+    the ramp (tau / ramp_time 0.05-3) makes it 0.01-0.06 % with the default coupled law (0.05-0.25 % with the plain
+    one), far above the table's 1.5e-5 (issue 35)."""
     from tissuemech.reduced.spheroid import lumped_ramp_error
 
     names = parameter_names(n_branches)

@@ -12,8 +12,9 @@ own calibration error and the level's spatial error are taken out by an elastic 
 
     e(t) = F_red(t) / F_FE(t) - F_eq,red(delta(t)) / F_FE,elastic(delta(t)),
 
-the lumped model's error beyond that of its equilibrium law (the plain lumped law, ``coupling=0``: what
-``lumped_ramp_error`` tabulates; the default coupling of issue 34 is not measured here). Output times: 0.1, 0.25, 0.5, 0.75, 1 ramp_time
+the lumped model's error beyond that of its equilibrium law, for the default law (``coupling="auto"``: the FE
+table's geometric coupling of issue 34, ``reduced.spheroid.COUPLING``; what ``lumped_ramp_error`` tabulates) and,
+in the ``plain_*`` columns, the plain lumped law (``coupling=0``). Output times: 0.1, 0.25, 0.5, 0.75, 1 ramp_time
 and ramp_time + (0.5, 1, 3) tau; ``max |e|`` over them and the time where it is largest.
 
 ``python -m tissuemech.compare.studies.ramp [--level 0] [--ratios 0.05,0.1,...] [--alphas 0,0.8,1.5] [--beta 0.8]
@@ -25,6 +26,7 @@ from __future__ import annotations
 import sys
 import time
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -72,7 +74,8 @@ def ramp_error(
     tol: float = 1e-4,
 ) -> pd.DataFrame:
     """One row per (tau / ramp_time, alpha): ``max_error`` (max |e| over the output times, signed), ``t_max / ramp``
-    (where), ``error_ramp_end`` (e at the end of the ramp), FE steps and wall time (see the module docstring)."""
+    (where), ``error_ramp_end`` (e at the end of the ramp) of the default (coupled) law, ``plain_max_error`` and
+    ``plain_t_max / ramp`` of the plain lumped law (``coupling=0``), FE steps and wall time (module docstring)."""
     from tissuemech.reduced import spheroid as rs
 
     rows = []
@@ -87,20 +90,13 @@ def ramp_error(
             ts = output_times(q)
             t1 = time.perf_counter()
             F_fe, n = _fe(alpha, [(beta, q * RAMP)], x, ts, level, tol)
-            F_red = np.asarray(
-                rs.force(
-                    ts,
-                    radius=RADIUS,
-                    C=C_PA,
-                    alpha=alpha,
-                    branches=[(beta, q * RAMP)],
-                    displacement=2 * RADIUS * x,
-                    ramp_time=RAMP,
-                    coupling=0.0,  # the plain lumped law, what RAMP_ERROR tabulates (module doc)
-                )
+            red: dict[str, Any] = dict(
+                radius=RADIUS, C=C_PA, alpha=alpha, branches=[(beta, q * RAMP)], displacement=2 * RADIUS * x
             )
-            e = F_red / F_fe - np.array([bias[round(t, 12)] for t in ts])
-            k = int(np.argmax(np.abs(e)))
+            b = np.array([bias[round(t, 12)] for t in ts])
+            e = np.asarray(rs.force(ts, **red, ramp_time=RAMP)) / F_fe - b  # the default (coupled) law
+            e0 = np.asarray(rs.force(ts, **red, ramp_time=RAMP, coupling=0.0)) / F_fe - b  # the plain lumped law
+            k, k0 = int(np.argmax(np.abs(e))), int(np.argmax(np.abs(e0)))
             rows.append(
                 {
                     "tau / ramp": q,
@@ -108,6 +104,8 @@ def ramp_error(
                     "max_error": float(e[k]),
                     "t_max / ramp": float(ts[k] / RAMP),
                     "error_ramp_end": float(e[4]),
+                    "plain_max_error": float(e0[k0]),
+                    "plain_t_max / ramp": float(ts[k0] / RAMP),
                     "fe_steps": n,
                     "wall [s]": time.perf_counter() - t1 + (time.perf_counter() - t0 if q == ratios[0] else 0.0),
                 }
