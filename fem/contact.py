@@ -579,7 +579,7 @@ def edge_slope_change(plane: RigidPlane, x: np.ndarray, n_act: int, dx: np.ndarr
     return (ddz * dr - dz * ddr) / dr**2
 
 
-TENSION_START = 0.2  # gamma / (C a0) of the first state of EdgeSearch._tension_ramp (levels 0-3 start there)
+TENSION_START = 0.02  # gamma / (C a0) of the first state of EdgeSearch._tension_ramp (level 3 at 0.25 starts from 0.02, not from 0.2)
 _TENSION_RAMP = np.zeros(0)  # marker of the continuation guess in EdgeSearch._state
 
 SHRINK_TRIES = 4  # halvings of a failed first edge guess with a surface tension (EdgeSearch.solve)
