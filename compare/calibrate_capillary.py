@@ -32,7 +32,7 @@ the table's x: ``drop_nodes``), ``f`` (n_g, n_a, n_x: the FE's f),
 ``metadata`` (JSON: mesh, command, timing, ``check``: the relative change of f = R (f_plate + Gamma d) at the
 check points when the ratio is taken on the finer level ``error_mesh``, the table's discretisation error).
 
-``python -m tissuemech.compare.calibrate_capillary [--out PATH] [--store DIR] [--mesh M] [--error-mesh M]
+``tissuemech calibrate-capillary [--out PATH] [--store DIR] [--mesh M] [--error-mesh M]
 [--gammas g,..] [--alphas a,..] [--x-max X] [--n-x N] [--check a:G,..] [--against REF.json]`` regenerates it
 (resumable with ``--store``; ``--against``: the table's largest error against a converged reference goes into the
 metadata as ``reference_error_f``). ``--reference REF.json [--reference-columns a:G,..] [--reference-levels 1,2,3]``
@@ -42,7 +42,6 @@ writes such a reference instead (:func:`reference`: FE levels 1-3 at off-node (a
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import time
@@ -61,6 +60,7 @@ __all__ = [
     "write",
     "reference",
     "reference_error",
+    "run",
     "main",
     "DEFAULT_GAMMAS",
     "DEFAULT_ALPHAS",
@@ -289,26 +289,10 @@ def reference_error(ref: dict, law: Any = None) -> tuple[float, str]:
     return worst, at
 
 
-def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(
-        prog="python -m tissuemech.compare.calibrate_capillary", description=__doc__.split("\n")[0]
-    )
-    p.add_argument("--out", default=str(DEFAULT_OUT))
-    p.add_argument("--store", default=None)
-    p.add_argument("--mesh", type=int, default=1)
-    p.add_argument("--error-mesh", type=int, default=2)
-    p.add_argument("--gammas", default=",".join(map(str, DEFAULT_GAMMAS)))
-    p.add_argument("--alphas", default=",".join(map(str, DEFAULT_ALPHAS)))
-    p.add_argument("--x-max", type=float, default=0.3)
-    p.add_argument("--n-x", type=int, default=31)
-    p.add_argument("--check", default="0.5:0.1", help="alpha:Gamma columns rerun on --error-mesh (none: skip)")
-    p.add_argument("--executor", default=None, help="'serial' or None (2 processes)")
-    p.add_argument("--reference", default=None, help="write a converged reference (JSON) to this path instead")
-    p.add_argument("--reference-columns", default="0.25:0.15,0.75:0.25", help="alpha:Gamma columns of --reference")
-    p.add_argument("--reference-levels", default="1,2,3", help="mesh levels of --reference (Richardson: 3 finest)")
-    p.add_argument("--against", default=None, help="a --reference JSON: the table's error against it in metadata")
-    a = p.parse_args(argv)
-    command = "python -m tissuemech.compare.calibrate_capillary " + " ".join(sys.argv[1:] if argv is None else argv)
+def run(a: Any, command: str) -> int:
+    """The work of ``tissuemech calibrate-capillary`` (its parsed options ``a``, see
+    ``compare.cli.calibrate_capillary``; ``command``: the provenance line written into the metadata): a converged
+    reference (``--reference``) or the table (and its metadata), printed as JSON."""
     if a.reference:
         cols = [(float(c.split(":")[0]), float(c.split(":")[1])) for c in a.reference_columns.split(",")]
         ref = reference(cols, levels=[int(v) for v in a.reference_levels.split(",")])
@@ -360,6 +344,13 @@ def main(argv: list[str] | None = None) -> int:
         write(a.out, tab, meta)
     print(json.dumps(meta, indent=1))
     return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m tissuemech.compare.calibrate_capillary``: an alias of ``tissuemech calibrate-capillary``."""
+    from tissuemech.compare.cli.calibrate_capillary import main as cli_main
+
+    return cli_main(argv)
 
 
 if __name__ == "__main__":

@@ -43,6 +43,7 @@ COMMANDS: list[tuple[str, str]] = [
     ("coverage", "tissuemech.compare.cli.coverage"),
     ("scan", "tissuemech.compare.cli.scan"),
     ("calibrate", "tissuemech.compare.cli.calibrate"),
+    ("calibrate-capillary", "tissuemech.compare.cli.calibrate_capillary"),
     ("checks", "tissuemech.compare.cli.checks"),
     ("readme-tables", "tissuemech.compare.cli.readme_tables"),
     ("afm", "tissuemech.compare.cli.afm"),
