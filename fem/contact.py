@@ -343,6 +343,7 @@ class EdgeSearch(Generic[P]):
         self.slope = 0.0
         self._cache: dict[float, P] = {}
         self._laplace: np.ndarray | None = None
+        self._no_laplace = False  # the free ball's Laplace state did not converge on this level (not retried)
         self.linear = Reuse(Symmetric())  # one factorisation kept across the fitted meshes (same size and pattern)
 
     def problem(self, edge: float) -> P:
@@ -380,17 +381,32 @@ class EdgeSearch(Generic[P]):
         if prob.asm.surface is not None and not any(g is not None and g.shape[0] == prob.asm.ndof for g in guesses):
             # with a tension the squeeze starts from the free ball under its Laplace pressure 2 gamma / a0 (from
             # q = 0 the first Newton steps of a fitted mesh's first state stall or diverge beyond gamma/(C a0) ~ 0.3)
-            affine = newton(
-                lambda x: prob.asm.internal(x, prob.mat, tangent="lazy"), affine, free=prob.free, ref_norm=1.0,
-                rtol=1e-12, atol=prob.floor, admissible=prob.admissible,
-            ).x  # fmt: skip
+            try:
+                affine = newton(
+                    lambda x: prob.asm.internal(x, prob.mat, tangent="lazy"), affine, free=prob.free, ref_norm=1.0,
+                    rtol=1e-12, atol=prob.floor, admissible=prob.admissible,
+                ).x  # fmt: skip
+            except NewtonError:  # (its corrections may stall at round-off on a fine mesh: the squeeze from q = 0)
+                affine = np.zeros(prob.asm.ndof)
         affine[0 : prob.asm.n_u : 2] += 0.5 * d * X[0]
         affine[1 : prob.asm.n_u : 2] += -d * X[1]
         err = None
         tension = prob.asm.surface is not None and prob.asm.surface.gamma > 0
         # with a tension the round ball at its Laplace pressure (the contact zone pressed onto the plate) is closer
         # than the squeeze (whose residual is the tension's, gamma / (C a0) times larger than the elastic one)
-        for g in [*guesses, *([self.laplace_state(prob)] if tension else []), affine]:
+        laplace = []
+        if tension and not self._no_laplace:
+            try:
+                laplace = [self.laplace_state(prob)]
+            except NewtonError as e:  # (a fine mesh at strong tension: the continuation below starts without it)
+                self._no_laplace, err = True, e
+        for g in [*guesses, *laplace, affine, *([_TENSION_RAMP] if tension else [])]:
+            if g is _TENSION_RAMP:  # every guess failed: continuation in the tension from a weak one
+                try:
+                    g = self._tension_ramp(prob, d, act, fr, load, fun)
+                except NewtonError as e:
+                    err = e
+                    continue
             if g is None or g.shape[0] != prob.asm.ndof:
                 continue  # none, or a state of a fitted mesh with other dofs (its numbers mean nothing here)
             xg = pl.impose(g, 1.0 - d, act)
@@ -431,6 +447,34 @@ class EdgeSearch(Generic[P]):
                 phi = max(phi, -float(g.min()) / d)
             return st, res.iterations, phi
         raise err if err is not None else NewtonError("no admissible initial guess", load=load, hint="reduce the step")
+
+    def _tension_ramp(self, prob: P, d: float, act: np.ndarray, fr: np.ndarray, load, fun) -> np.ndarray:
+        """A guess for the state at approach d on ``prob``'s mesh under a strong tension: the elastic squeeze solved
+        at the tension ``TENSION_START`` (gamma / (C a0)) and then at tensions doubled up to the problem's, each from
+        the last (measured: on level 2 at gamma / (C a0) = 1.5 no state started from the Laplace state or the squeeze
+        at any approach; the first contact's kinked surface pulled Newton astray). The problem's tension is
+        restored on return."""
+        surf = prob.asm.surface
+        assert surf is not None
+        full = surf.gamma
+        steps = [full]
+        while steps[-1] > TENSION_START:
+            steps.append(0.5 * steps[-1])
+        X = prob.m.X
+        x = np.zeros(prob.asm.ndof)
+        x[0 : prob.asm.n_u : 2] = 0.5 * d * X[0]
+        x[1 : prob.asm.n_u : 2] = -d * X[1]
+        x = prob.plane.impose(x, 1.0 - d, act)
+        try:
+            for g in reversed(steps):
+                surf.gamma = g
+                x = newton(
+                    fun, x, free=fr, load=load, ref_norm=max(32.0 / 3.0 * d**1.5, 1e-12), rtol=self.rtol, xtol=1e-9,
+                    atol=prob.floor, admissible=prob.admissible, max_iter=25, linear=self.linear,
+                ).x  # fmt: skip
+        finally:
+            surf.gamma = full
+        return x
 
     def solve(self, d: float, edge0: float, x0, load, visc=None) -> EdgeSolution:
         """The state at plate displacement d (scaled) whose edge node's multiplier vanishes (to ``tol``).
@@ -534,6 +578,9 @@ def edge_slope_change(plane: RigidPlane, x: np.ndarray, n_act: int, dx: np.ndarr
     ddr, ddz = _edge_tangent(plane, dx, n_act, False)
     return (ddz * dr - dz * ddr) / dr**2
 
+
+TENSION_START = 0.02  # gamma / (C a0) of the first state of EdgeSearch._tension_ramp (level 3 at 0.25 starts from 0.02, not from 0.2)
+_TENSION_RAMP = np.zeros(0)  # marker of the continuation guess in EdgeSearch._state
 
 SHRINK_TRIES = 4  # halvings of a failed first edge guess with a surface tension (EdgeSearch.solve)
 

@@ -9,7 +9,7 @@ squeezed by the total approach ``delta`` (m) carries the equilibrium plate force
 
 ``f_plate`` the shipped tension-free plate table (``reduced.spheroid``, the ``"fem"`` law), ``d(x) = F_drop /
 (gamma a0)`` the exact liquid drop between the plates (``reduced.drop``) and R the FE-calibrated coupling ratio
-(``reduced/data/capillary_master.npz``, made by ``python -m tissuemech.compare.calibrate_capillary``; its metadata
+(``reduced/data/capillary_master.npz``, made by ``tissuemech calibrate-capillary``; its metadata
 holds the mesh, the command, the FE time and the discretisation error). R = 1 at Gamma = 0 exactly (the law IS the
 plate table there) and R -> 1 as Gamma -> inf (the drop, C -> 0); an additive law (elastic + drop force) would have
 R = 1 everywhere. R is interpolated by natural cubic splines in s = sqrt(x), alpha and Gamma (tensor product:
@@ -150,8 +150,8 @@ class CapillaryTable:
             (
                 (G < 0) | (G > self.gamma_max * (1 + 1e-12)),
                 "the elastocapillary number gamma/(C a0) (surface tension / (C radius)) is outside the calibrated table "
-                f"([0, {self.gamma_max:g}]): the fitted FE contact edge does not start beyond it yet; a liquid-like "
-                "aggregate is tissuemech.reduced.drop",
+                f"([0, {self.gamma_max:g}]): the table was calibrated to gamma/(C a0) = {self.gamma_max:g} only "
+                "(`tissuemech calibrate-capillary --gammas ...` extends it); a liquid-like aggregate is tissuemech.reduced.drop",
             ),
         ]
 
@@ -167,7 +167,7 @@ def capillary_table(path: str | None = None) -> CapillaryTable:
     p = Path(path) if path is not None else DATA_FILE
     if not p.exists():
         raise FileNotFoundError(
-            f"no elastocapillary table at {p}. Generate it with `python -m tissuemech.compare.calibrate_capillary`."
+            f"no elastocapillary table at {p}. Generate it with `tissuemech calibrate-capillary`."
         )
     with np.load(p, allow_pickle=False) as z:
         meta = json.loads(str(z["metadata"])) if "metadata" in z.files else {}

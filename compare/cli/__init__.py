@@ -44,6 +44,7 @@ COMMANDS: list[tuple[str, str]] = [
     ("scan", "tissuemech.compare.cli.scan"),
     ("calibrate", "tissuemech.compare.cli.calibrate"),
     ("calibrate-indentation", "tissuemech.compare.cli.calibrate_indentation"),
+    ("calibrate-capillary", "tissuemech.compare.cli.calibrate_capillary"),
     ("checks", "tissuemech.compare.cli.checks"),
     ("readme-tables", "tissuemech.compare.cli.readme_tables"),
     ("afm", "tissuemech.compare.cli.afm"),

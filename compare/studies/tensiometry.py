@@ -159,8 +159,9 @@ def fe_point(
 ) -> TensiometryPoint:
     """The formula on the FE spheroid of elastocapillary number ``number`` = gamma / (C a0) (C set from it),
     statically compressed by delta = 2 a0 ``compression``, radii from the FE profile (:func:`profile_radii`).
-    ``contact="nodal"`` (default): the fitted contact edge fails to start for gamma / (C a0) >~ 2 (see
-    docs/tension.md)."""
+    ``contact="nodal"`` (default; the sweep's numbers were measured with it): the fitted contact edge failed to
+    start for gamma / (C a0) >~ 2 before its continuation in the tension (``fem.contact.EdgeSearch``; level 1 now
+    starts at 2, 5 and 10, see docs/tension.md)."""
     C = surface_tension / (number * radius)
     d = 2 * radius * compression
     r = fem_spheroid.compress(radius=radius, C=C, alpha=alpha, displacement=d, ramp_time=1.0, end_time=1.0,
