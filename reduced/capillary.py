@@ -166,9 +166,7 @@ def capillary_table(path: str | None = None) -> CapillaryTable:
     """The FE-calibrated elastocapillary table shipped with the package (or read from ``path``)."""
     p = Path(path) if path is not None else DATA_FILE
     if not p.exists():
-        raise FileNotFoundError(
-            f"no elastocapillary table at {p}. Generate it with `tissuemech calibrate-capillary`."
-        )
+        raise FileNotFoundError(f"no elastocapillary table at {p}. Generate it with `tissuemech calibrate-capillary`.")
     with np.load(p, allow_pickle=False) as z:
         meta = json.loads(str(z["metadata"])) if "metadata" in z.files else {}
         return CapillaryTable(z["x"], z["alpha"], z["gamma"], z["ratio"], z["drop_x"], z["drop"], metadata=meta)
