@@ -217,9 +217,33 @@ class Capillary(spheroid.EquilibriumLaw):
         d = self.capillary.drop_f
         return lambda x: R(x) * (fp(x) + G * d(x))
 
-    def branch_curve(self, *, alpha: Any, radius: Any, C: Any, **params: Any) -> Callable[[Any], jnp.ndarray]:
-        """x -> f_plate(x): what drives the Maxwell branches (the tension does not relax)."""
-        return self.plate.curve(alpha=alpha, radius=radius, C=C)
+    def branch_curve(
+        self, *, alpha: Any, radius: Any, C: Any, surface_tension: Any = None, total_beta: Any = None, **params: Any
+    ) -> Callable[[Any], jnp.ndarray]:
+        """x -> f_b(x), what drives the Maxwell branches (each beta_m f_b): the instantaneous excess over the
+        equilibrium per unit B = sum_m beta_m,
+
+            f_b = [R(x; alpha, Gamma / (1 + B)) ((1 + B) f_plate + Gamma d) - R(x; alpha, Gamma) (f_plate + Gamma d)] / B,
+
+        so that a ramp much faster than every tau_m gives the elastocapillary ball of modulus C (1 + B) with the same
+        tension (its own table point), and the long-time force the equilibrium f. The tension itself does not relax;
+        at Gamma = 0, f_b = f_plate. Without ``total_beta`` (or B = 0): f_plate."""
+        fp = self.plate.curve(alpha=alpha, radius=radius, C=C)
+        if total_beta is None:
+            return fp
+        B = jnp.asarray(total_beta, dtype=jnp.float64)
+        G = elastocapillary_number(self._gamma(surface_tension), C=C, radius=radius)
+        Bs = jnp.where(B > 0, B, 1.0)
+        R = self.capillary.ratio_curve(alpha, G)
+        Ri = self.capillary.ratio_curve(alpha, G / (1.0 + Bs))
+        d = self.capillary.drop_f
+
+        def fb(x: Any) -> jnp.ndarray:
+            fpx, gd = fp(x), G * d(x)
+            excess = (Ri(x) * ((1.0 + Bs) * fpx + gd) - R(x) * (fpx + gd)) / Bs
+            return jnp.where(B > 0, excess, fpx)
+
+        return fb
 
     def branch_law(self) -> spheroid.EquilibriumLaw:
         """The tension-free plate law: it drives the branches (``coupling="auto"`` follows it)."""

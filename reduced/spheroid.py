@@ -433,9 +433,12 @@ class EquilibriumLaw(_LawChecks):
         """x-values (dimensionless) of the law's kinks in smoothness over [0, X] (None: smooth)."""
         return None
 
-    def branch_curve(self, *, alpha: Any, radius: Any, C: Any, **params: Any) -> Callable[[Any], jnp.ndarray]:
-        """x -> the part of f(x) that drives the Maxwell branches (default the whole law; the elastocapillary law
-        ``reduced.capillary.Capillary``: its elastic plate part, a surface tension does not relax)."""
+    def branch_curve(
+        self, *, alpha: Any, radius: Any, C: Any, total_beta: Any = None, **params: Any
+    ) -> Callable[[Any], jnp.ndarray]:
+        """x -> the part of f(x) that drives the Maxwell branches (each beta_m times it; ``total_beta`` = sum_m
+        beta_m). Default the whole law; the elastocapillary law ``reduced.capillary.Capillary``: the instantaneous
+        excess over its equilibrium per unit sum beta (a surface tension does not relax)."""
         return self.curve(alpha=alpha, radius=radius, C=C, **params)
 
     def branch_law(self) -> EquilibriumLaw:
@@ -1193,7 +1196,9 @@ def _curve(
         f = fb0 = law.curve(alpha=alpha, radius=radius, C=C)
     else:
         f = law.curve(alpha=alpha, radius=radius, C=C, surface_tension=surface_tension)
-        fb0 = law.branch_curve(alpha=alpha, radius=radius, C=C, surface_tension=surface_tension)
+        fb0 = law.branch_curve(
+            alpha=alpha, radius=radius, C=C, surface_tension=surface_tension, total_beta=jnp.sum(betas)
+        )
     coupled = coupling != 0.0 and betas.shape[0] > 0
     fb = (lambda x: fb0(x) * jnp.exp(-coupling * x)) if coupled else fb0
     if callable(displacement):

@@ -51,19 +51,36 @@ def test_tension_adds_at_least_part_of_the_drop_force():
         assert np.all(R > 1.0) and R.max() < 1.15 and np.all(R[d >= 0.4 * A0] < 1.02)
 
 
-def test_relaxation_with_tension_relaxes_only_the_elastic_part():
-    t = np.array([0.0, 0.5, 1.0, 2.0, 10.0, 1e4])
-    kw = dict(radius=A0, C=C, alpha=0.5, branches=[(2.0, 3.0)], displacement=0.4 * A0, ramp_time=1.0)
-    F = np.asarray(sph.force(t, surface_tension=GAMMA, **kw))
-    F0 = np.asarray(sph.force(t, **kw))
-    Feq = np.asarray(cap.equilibrium_force(np.minimum(t, 1.0) * 0.4 * A0, radius=A0, C=C, alpha=0.5,
-                                           surface_tension=GAMMA))  # fmt: skip
-    Feq0 = np.asarray(sph.equilibrium_force(np.minimum(t, 1.0) * 0.4 * A0, radius=A0, C=C, alpha=0.5))
-    # the branch forces are those of the tension-free ball: the tension does not relax
-    np.testing.assert_allclose(F - Feq, F0 - Feq0, rtol=1e-9, atol=1e-12 * F0.max())
-    assert abs(F[-1] / Feq[-1] - 1) < 1e-9  # the long-time force is the elastocapillary equilibrium
+def test_relaxation_with_tension_has_the_exact_instantaneous_and_long_time_limits():
+    betas, taus = (1.2, 0.8), (3.0, 40.0)
+    B = sum(betas)
+    kw = dict(radius=A0, C=C, alpha=0.5, branches=list(zip(betas, taus)), displacement=0.4 * A0)
+    d = 0.4 * A0
+    # a ramp much faster than every tau: the elastocapillary ball of modulus C (1 + sum beta), the same tension
+    # (its own table point, Gamma / (1 + B)); the plain elastic-driven branches would miss this by the coupling R - 1
+    ramp = 1e-5
+    F_inst = float(sph.force([ramp], ramp_time=ramp, surface_tension=GAMMA, **kw)[0])
+    exact = float(cap.equilibrium_force(d, radius=A0, C=C * (1 + B), alpha=0.5, surface_tension=GAMMA))
+    additive = float(
+        cap.equilibrium_force(d, radius=A0, C=C, alpha=0.5, surface_tension=GAMMA)
+        + B * sph.equilibrium_force(d, radius=A0, C=C, alpha=0.5)
+    )
+    assert abs(F_inst / exact - 1) < 1e-5  # the relaxation during the ramp is ~ beta ramp / (2 tau) ~ 2e-6
+    assert (
+        abs(additive / exact - 1) > 2e-4
+    )  # (3.9e-4 here) what the test would miss if the branches ignored the tension
+    # the long-time force is the elastocapillary equilibrium; the tension itself never relaxes
+    t = np.array([0.0, 0.5, 1.0, 2.0, 10.0, 1e5])
+    F = np.asarray(sph.force(t, ramp_time=1.0, surface_tension=GAMMA, **kw))
+    Feq = float(cap.equilibrium_force(d, radius=A0, C=C, alpha=0.5, surface_tension=GAMMA))
+    assert abs(F[-1] / Feq - 1) < 1e-9 and np.all(np.diff(F[2:]) < 0)
     # zero tension: the plate law's relaxation
-    np.testing.assert_allclose(np.asarray(sph.force(t, surface_tension=0.0, **kw)), F0, rtol=1e-12)
+    F0 = np.asarray(sph.force(t, ramp_time=1.0, **kw))
+    np.testing.assert_allclose(np.asarray(sph.force(t, ramp_time=1.0, surface_tension=0.0, **kw)), F0, rtol=1e-12)
+    # no branches: the equilibrium law itself
+    F_el = np.asarray(sph.force(t, radius=A0, C=C, alpha=0.5, displacement=d, ramp_time=1.0, surface_tension=GAMMA))
+    Feq_t = np.asarray(cap.equilibrium_force(np.minimum(t, 1.0) * d, radius=A0, C=C, alpha=0.5, surface_tension=GAMMA))
+    np.testing.assert_allclose(F_el, Feq_t, rtol=1e-12)
 
 
 def test_tension_broadcasts_and_differentiates():
@@ -126,3 +143,21 @@ def test_reduced_matches_the_fe_between_the_nodes():
     fe = capillary_curve(alpha=a, Gamma=G, x_max=0.25, n=10, mesh=t.metadata["mesh"])
     red = np.asarray(cap.Capillary().curve(alpha=a, radius=1.0, C=1.0, surface_tension=G)(fe["x"]))
     np.testing.assert_allclose(red, fe["f"], rtol=2e-4)
+
+
+@pytest.mark.slow
+def test_relaxation_with_tension_against_the_fe():
+    """A solid S180-like ball with a 6 mN/m tension (Gamma 0.2) and one branch (beta 1.5, tau 30 s), 13 %
+    compression in 0.3 s, held 10 tau, default mesh: the lumped law is exact at the instant (the FE's own mesh error
+    ~1e-4) and at the plateau, and up to ~1.1e-3 low about 2-3 tau into the hold (the shape's slow flow under the
+    tension, which the lumped branches do not carry; docs/tension.md)."""
+    from tissuemech.fem import spheroid as fe
+
+    kw = dict(radius=A0, C=C, alpha=0.35, branches=[(1.5, 30.0)], displacement=0.26 * A0, ramp_time=0.3)
+    r = fe.compress(end_time=300.0, surface_tension=6e-3, **kw)
+    t, F = np.asarray(r.time), np.asarray(r.force)
+    hold = t >= 0.3
+    e = np.asarray(sph.force(t[hold], surface_tension=6e-3, **kw)) / F[hold] - 1
+    assert abs(e[0]) < 2e-4  # end of the ramp
+    assert abs(e[-1]) < 1e-4  # plateau
+    assert np.max(np.abs(e)) < 1.3e-3 and np.min(e) < -5e-4  # the documented mid-hold deficit, not more
