@@ -46,8 +46,8 @@ def _consistent_profile(recs):
     """Radii whose classic formula gives the true gamma at the last record's last sample (the drop's R1, R2, and R3
     set by the formula: a partly elastic aggregate's measured radii are not the drop's)."""
     t, s, d = recs[-1]
-    x = d / (2 * A0)
-    F = float(s[-1]) * np.pi * A0**2 / (1 - x)
+    r_mid = float(sph.midplane_radius(d, radius=A0, alpha=ALPHA, midplane="fem"))  # the records' midplane
+    F = float(s[-1]) * np.pi * r_mid**2
     st = drop.compress(d, radius=A0, surface_tension=GAMMA)
     R1, R2 = st.meridional_radius, st.equatorial_radius
     R3 = np.sqrt(F / (np.pi * GAMMA * (1 / R1 + 1 / R2)))

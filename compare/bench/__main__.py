@@ -18,6 +18,7 @@ SUITES = {
     "fem-protocols": "tissuemech.compare.bench.fem_protocols",
     "fem-liquid": "tissuemech.compare.bench.fem_liquid",
     "liquid-relaxation": "tissuemech.compare.bench.liquid_relaxation",
+    "tension-relaxation": "tissuemech.compare.bench.tension_relaxation",
     "fit-dense": "tissuemech.compare.bench.fit_dense",
     "scan-kernel": "tissuemech.compare.bench.scan_kernel",
     # checks run one by one (not part of "all")
@@ -34,6 +35,7 @@ SEPARATE = (
     "fem-protocols",
     "fem-liquid",
     "liquid-relaxation",
+    "tension-relaxation",
 )  # not part of "all"
 
 

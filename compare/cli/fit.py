@@ -504,11 +504,13 @@ def _run_tension(args: argparse.Namespace, radius: float) -> None:
     recs, forces = fit.load_records(
         list(args.files), radius=radius, displacements=disps, ramp_time=args.ramp_time, quantity=args.quantity
     )
+    if any(forces) and not all(forces):
+        raise ValueError("mix of force (N) and stress (Pa) files: give all records as the same quantity")
     profile = None if prof is None else tension.Profile(*prof)
     initial = None if args.surface_tension is None else {"gamma": args.surface_tension}
     res = tension.tension_relaxation(
         recs, radius=radius, ramp_time=args.ramp_time, n_branches=args.branches, alpha=args.alpha, initial=initial,
-        profile=profile,
+        profile=profile, midplane="incompressible" if all(forces) else "fem",
     )  # fmt: skip
     if args.profile_force_un is not None:
         print("note: --profile-force-un is for --profile alone; with records the force is the last record's")
@@ -523,6 +525,7 @@ def _run_tension(args: argparse.Namespace, radius: float) -> None:
         "displacement_m": [r[2] for r in recs],
         "ramp_time_s": args.ramp_time,
         "quantity": ["force_N" if f else "stress_Pa" for f in forces],
+        "midplane": "incompressible" if all(forces) else "fem",
         "profile_m": None if prof is None else dict(zip(("R1", "R2", "R3", "sd"), prof)),
         "n_points": [int(r[0].size) for r in recs],
     }

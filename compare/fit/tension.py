@@ -1,10 +1,10 @@
 r"""Fit the tissue surface tension gamma (with C, alpha and the Maxwell branches) to compression-relaxation records.
 
 Model: ``reduced.spheroid.nominal_stress(..., surface_tension=gamma)`` (the elastocapillary law of
-``reduced.capillary``: F_eq = C a0^2 R (f_plate + Gamma d), the branches driven by the elastic plate part, the
-incompressible midplane). A tension adds a force nearly linear in the approach (the drop's Laplace pressure on the
-contact disc, ~ 4 pi gamma a0 x) to the elastic ~x^1.5 one, and does not relax: records at two or more compression
-levels separate gamma from C.
+``reduced.capillary``: F_eq = C a0^2 R (f_plate + Gamma d), the branches driven by the instantaneous excess over it;
+the records' midplane: the ball's calibrated one, or the incompressible a0^2 / (1 - x) of force files). A tension adds
+a force nearly linear in the approach (the drop's Laplace pressure on the contact disc, ~ 4 pi gamma a0 x) to the
+elastic ~x^1.5 one, and does not relax: records at two or more compression levels separate gamma from C.
 
 Estimation: weighted least squares in the log-parameters ``(C, Gamma, [alpha], beta_m, tau_m)`` with Gamma = gamma /
 (C a0) bounded by the calibrated table (``scipy.optimize.least_squares``, exact ``jax.jacfwd`` Jacobian): an
@@ -15,7 +15,7 @@ gamma's interval from log gamma = log Gamma + log C + log a0 with their covarian
 Profile measurement (``profile=Profile(R1, R2, R3, sd)``, m): the classic plate-tensiometry formula
 gamma_p = F / (pi R3^2 (1/R1 + 1/R2)) (R1 the profile's meridional radius at the equator, R2 the equatorial radius,
 R3 the contact radius; exact for a liquid drop at rest, ``reduced.drop``) with F the record's measured force at the
-profile's time (nominal stress times the incompressible midplane area) is one more observation of gamma: the residual
+profile's time (nominal stress times the records' midplane area) is one more observation of gamma: the residual
 (gamma - gamma_p) / sd_p joins the likelihood, sd_p propagated to first order from the radii's sd and the record's
 noise (:func:`formula_tension`). For an aggregate that is still partly elastic the formula over-states gamma (the
 elastic stress adds to the Laplace pressure): give the profile at the end of a long hold, and compare the
@@ -141,9 +141,13 @@ def tension_relaxation(
     initial: dict[str, float] | None = None,
     max_nfev: int = 200,
     profile: Profile | None = None,
+    midplane: str = "fem",
 ) -> TensionFit:
     """Fit ``(C, gamma, alpha, beta_m, tau_m)`` to relaxation records ``(time [s], nominal_stress [Pa],
-    displacement [m])`` (one per compression level; the stress divides by the incompressible midplane area).
+    displacement [m])`` (one per compression level). ``midplane``: the area the records' stress divides the force by,
+    "fem" (default: the deformed ball's midplane, the tension-free calibrated g(x), as
+    ``reduced.spheroid.nominal_stress`` with a tension) or "incompressible" (a0^2 / (1 - x): how ``tissuemech fit``
+    turns force files into stress, so that force records are fitted as forces).
 
     ``alpha``: a number fixes it, None fits it (inside the elastocapillary table's alpha range). ``initial``: optional
     starting values by name (C, gamma, alpha, beta.., tau..). ``profile``: a :class:`Profile` measurement (m) entering
@@ -154,6 +158,8 @@ def tension_relaxation(
     from tissuemech.reduced import spheroid as sph
 
     recs = as_records(records)
+    if midplane not in ("fem", "incompressible"):
+        raise ValueError(f"midplane must be 'fem' or 'incompressible'; got {midplane!r}")
     a0, tr = float(radius), float(ramp_time)
     if not (a0 > 0 and tr > 0):
         raise ValueError(f"radius (m) and ramp_time (s) must be > 0; got {radius!r} m and {ramp_time!r} s")
@@ -182,7 +188,7 @@ def tension_relaxation(
     ys = tuple(jnp.asarray(r.nominal_stress) for r in recs)
     ds = tuple(float(r.displacement) for r in recs)
     nb = n_branches
-    prof = None if profile is None else _profile_force(profile, recs, a0, tr)
+    prof = None if profile is None else _profile_force(profile, recs, a0, tr, midplane, 0.5 if fit_alpha else alpha)
 
     def predict(theta: Any) -> list[Any]:
         p = dict(zip(names, jnp.exp(theta), strict=True))
@@ -191,7 +197,15 @@ def tension_relaxation(
         gam = p["Gamma"] * p["C"] * a0
         return [
             sph.nominal_stress(
-                t, radius=a0, C=p["C"], alpha=al, branches=br, displacement=d, ramp_time=tr, surface_tension=gam
+                t,
+                radius=a0,
+                C=p["C"],
+                alpha=al,
+                branches=br,
+                displacement=d,
+                ramp_time=tr,
+                surface_tension=gam,
+                midplane=midplane,
             )  # fmt: skip
             for t, d in zip(ts, ds, strict=True)
         ]
@@ -258,8 +272,12 @@ def tension_relaxation(
     return TensionFit(params, iv, noise, float(sol.cost), bool(sol.success), diags, prof_out)
 
 
-def _profile_force(profile: Profile, recs: Sequence[Any], a0: float, tr: float) -> tuple[float, float, int, float]:
-    """(F [N], the formula's gamma [N/m], record index, midplane area [m^2]) at the profile's time and record."""
+def _profile_force(
+    profile: Profile, recs: Sequence[Any], a0: float, tr: float, midplane: str = "fem", alpha: Any = 0.5
+) -> tuple[float, float, int, float]:
+    """(F [N], the formula's gamma [N/m], record index, midplane area [m^2]) at the profile's time and record; the
+    area is the records' ``midplane`` at ``alpha`` (0.5 when alpha is fitted: the calibrated g(x) moves by 1e-4 at
+    x = 0.1 and 1.4e-3 at x = 0.3 over alpha 0 .. 1)."""
     if not isinstance(profile, Profile):
         raise ValueError(f"profile must be a Profile(R1, R2, R3, sd) in m; got {profile!r}")
     if not (math.isfinite(profile.sd) and profile.sd > 0):
@@ -272,6 +290,9 @@ def _profile_force(profile: Profile, recs: Sequence[Any], a0: float, tr: float) 
     tp = float(r.time[-1]) if profile.time is None else float(profile.time)
     i = int(np.argmin(np.abs(r.time - tp)))
     x = float(r.displacement) / (2 * a0) * min(float(r.time[i]) / tr, 1.0)
-    area = math.pi * a0**2 / (1.0 - x)  # the incompressible midplane (as the records' nominal stress)
+    from tissuemech.reduced import spheroid as sph
+
+    r_mid = float(sph.midplane_radius(2 * a0 * x, radius=a0, alpha=float(alpha), midplane=midplane))
+    area = math.pi * r_mid**2  # the records' midplane
     F = float(r.nominal_stress[i]) * area
     return F, formula_tension(F, profile.R1, profile.R2, profile.R3)[0], k, area
