@@ -98,13 +98,18 @@ def test_tension_broadcasts_and_differentiates():
     np.testing.assert_allclose(float(dF), float(fd), rtol=1e-6)
 
 
-def test_stress_with_tension_uses_the_incompressible_midplane():
+def test_stress_with_tension_uses_the_balls_midplane():
     kw = dict(radius=A0, C=C, alpha=0.5, displacement=0.4 * A0, ramp_time=1.0)
     t = np.array([0.5, 2.0])
     s = np.asarray(sph.nominal_stress(t, surface_tension=GAMMA, **kw))
     F = np.asarray(sph.force(t, surface_tension=GAMMA, **kw))
-    x = np.minimum(t, 1.0) * 0.2
-    np.testing.assert_allclose(s, F / (np.pi * A0**2 / (1 - x)), rtol=1e-12)
+    d = np.minimum(t, 1.0) * 0.4 * A0
+    r_mid = np.asarray(sph.midplane_radius(d, radius=A0, alpha=0.5, midplane="fem"))
+    np.testing.assert_allclose(s, F / (np.pi * r_mid**2), rtol=1e-12)
+    # the FE ball with this tension (Gamma 0.2) at x = 0.1 has r_mid = 1.01451 a0 (level 1; tension-free 1.01334 a0):
+    # the calibrated midplane is 1.2e-3 narrow, the incompressible estimate 3.9 % wide
+    g = float(sph.midplane_radius(0.2 * A0, radius=A0, alpha=0.5, midplane="fem")) / A0
+    assert abs(g / 1.01451 - 1) < 1.3e-3 and abs(1 / np.sqrt(0.9) / 1.01451 - 1) > 0.035
 
 
 def test_out_of_range_inputs_raise():

@@ -54,6 +54,7 @@ class TensionFit(NamedTuple):
     success: bool
     diagnostics: tuple = ()
     profile: dict[str, float] | None = None
+    midplane: str = "fem"  # the records' midplane ("fem" or "incompressible": tension_relaxation's midplane=)
 
     def summary(self) -> str:
         """The parameter table with 95 % intervals, the noise and residual diagnostics per record, the profile."""
@@ -269,7 +270,7 @@ def tension_relaxation(
     diags = tuple(residual_diagnostics(r.nominal_stress - m) for m, r in zip(pred, recs, strict=True))
     if prof is not None:
         prof_out = dict(gamma_formula=prof[1], sd=float(psd), z=float((prof[1] - params["gamma"]) / psd), force=prof[0])
-    return TensionFit(params, iv, noise, float(sol.cost), bool(sol.success), diags, prof_out)
+    return TensionFit(params, iv, noise, float(sol.cost), bool(sol.success), diags, prof_out, midplane)
 
 
 def _profile_force(

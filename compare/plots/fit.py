@@ -142,7 +142,8 @@ def tension_fit_figure(records: Sequence[tuple], result: Any, *, radius: float, 
     fig, (ax, axr) = plt.subplots(2, 1, figsize=(6.4, 6.0), sharex=True, gridspec_kw=dict(height_ratios=(3, 1)))
     for k, (t, y, d) in enumerate(records):
         m = np.asarray(spheroid.nominal_stress(t, radius=radius, C=p["C"], alpha=p["alpha"], branches=br,
-                                               displacement=d, ramp_time=ramp_time, surface_tension=p["gamma"]))  # fmt: skip
+                                               displacement=d, ramp_time=ramp_time, surface_tension=p["gamma"],
+                                               midplane=getattr(result, "midplane", "fem")))  # fmt: skip
         ax.plot(t, y, ".", ms=3, color=f"C{k}", label=f"record {k + 1}: delta = {d / UM:.3g} um")
         ax.plot(t, m, "-", color=f"C{k}")
         axr.plot(t, y - m, ".", ms=3, color=f"C{k}")
