@@ -192,10 +192,12 @@ def _log_stretches(la, k, one_minus_k):
 
 def _G(s, alpha):
     """Integrand in s = log l, divided by C: 4 W'(I1)/C (l^3 + 1) / l^4 (dimensionless)."""
-    l2 = jnp.exp(2.0 * s)
-    lm4 = jnp.exp(-4.0 * s)
+    # one exponential per node, the powers by products; the barrier stops XLA folding them back into exponentials
+    l1 = jax.lax.optimization_barrier(jnp.exp(s))
+    l2 = l1 * l1
+    lm4 = 1.0 / (l2 * l2)
     I1 = 2.0 * l2 + lm4
-    return 4.0 * dW_dI1(I1, 1.0, alpha) * (l2 * jnp.exp(s) + 1.0) * lm4
+    return 4.0 * dW_dI1(I1, 1.0, alpha) * (l2 * l1 + 1.0) * lm4
 
 
 def _g(l, alpha):
