@@ -1,6 +1,7 @@
 """Tabulate the exact liquid drop's plate force for the reduced liquid law: ``reduced/data/drop_master.npz``.
 
-``python -m tissuemech.compare.calibrate_drop [--knots 361] [--out PATH]`` solves ``reduced.drop.compress`` (the
+``tissuemech calibrate-drop [--knots 361] [--out PATH]`` (``python -m tissuemech.compare.calibrate_drop`` is an alias)
+solves ``reduced.drop.compress`` (the
 Young-Laplace drop between non-wetting plates, contact angle 180 deg, solved to rtol 1e-12) at ``--knots`` points
 uniform in s = sqrt(x), x = delta / (2 a0) in [0, ``X_MAX``], and at the midpoint of every interval; it stores
 d(x) = F_drop / (gamma a0) at the knots and, as metadata, the largest relative error of the cubic spline in s
@@ -11,7 +12,6 @@ The midpoints are the hardest points of a cubic spline, so that error bounds the
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import time
@@ -29,13 +29,11 @@ def drop_values(x: np.ndarray) -> np.ndarray:
     return np.array([drop.compress(2.0 * float(v), radius=1.0, surface_tension=1.0).force if v > 0 else 0.0 for v in x])
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m tissuemech.compare.calibrate_drop", description=__doc__)
-    ap.add_argument("--knots", type=int, default=361, help="knots uniform in sqrt(x) on [0, X_MAX]")
-    ap.add_argument("--out", default=str(liquid.DATA_FILE), help="output .npz")
-    a = ap.parse_args(argv)
+def run(knots: int = 361, out: str | None = None, command: str | None = None) -> dict:
+    """Tabulate d(x) at ``knots`` knots (uniform in sqrt(x)), write ``out`` (default the shipped table) and return
+    the metadata (``command``: the provenance line stored in it)."""
     t0 = time.perf_counter()
-    s = np.linspace(0.0, np.sqrt(X_MAX), a.knots)
+    s = np.linspace(0.0, np.sqrt(X_MAX), knots)
     x = s**2
     d = drop_values(x)
     xm = ((s[:-1] + s[1:]) / 2) ** 2
@@ -46,16 +44,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     meta = dict(
         definition="d(x) = F_drop / (gamma a0) of the Young-Laplace drop between non-wetting plates (180 deg), "
         "x = delta / (2 a0); cubic spline in sqrt(x)",
-        command=f"python -m tissuemech.compare.calibrate_drop --knots {a.knots}",
-        knots=int(a.knots),
+        command=command or f"tissuemech calibrate-drop --knots {knots}",
+        knots=int(knots),
         spline_error_max=float(err[big].max()),
         spline_error_from_x=1e-3,
         spline_error_below=float(err[~big].max()) if (~big).any() else 0.0,
         wall_seconds=round(time.perf_counter() - t0, 1),
     )
-    np.savez(a.out, x=x, drop=d, metadata=json.dumps(meta))
-    print(json.dumps(meta, indent=1))
-    return 0
+    np.savez(str(liquid.DATA_FILE) if out is None else out, x=x, drop=d, metadata=json.dumps(meta))
+    return meta
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m tissuemech.compare.calibrate_drop``: an alias of ``tissuemech calibrate-drop``."""
+    from tissuemech.compare.cli.calibrate_drop import main as cli_main
+
+    return cli_main(argv)
 
 
 if __name__ == "__main__":

@@ -10,7 +10,7 @@ squeezed by the total approach delta(t) (m), x = delta / (2 a0). Its plate force
     f_b(x) = R(x; alpha, Gamma) (f_plate(x; alpha) + Gamma d(x)) - Gamma d(x),   Gamma = gamma / (C_ref a0),
 
 * long time (the branches relaxed, q_m -> 0): the exact drop d(x) = F_drop / (gamma a0) (``reduced.drop``,
-  tabulated once in s = sqrt(x) by ``python -m tissuemech.compare.calibrate_drop`` into ``data/drop_master.npz``:
+  tabulated once in s = sqrt(x) by ``tissuemech calibrate-drop`` into ``data/drop_master.npz``:
   481 knots, spline error <= 1.9e-9 from x = 1e-3 on, 6e-5 at x = 1e-5; in its metadata), which the FE liquid meets
   to 1e-4;
 * instantaneous (a ramp much faster than every tau_m: q_m = beta_m f_b): C_ref a0^2 R (f_plate + Gamma d), the
@@ -86,7 +86,7 @@ def drop_table(path: str | None = None) -> DropTable:
     p = Path(path) if path is not None else DATA_FILE
     if not p.exists():
         raise FileNotFoundError(
-            f"no drop table at {p}. Generate it with `python -m tissuemech.compare.calibrate_drop`."
+            f"no drop table at {p}. Generate it with `tissuemech calibrate-drop`."
         )
     with np.load(p, allow_pickle=False) as z:
         meta = json.loads(str(z["metadata"])) if "metadata" in z.files else {}

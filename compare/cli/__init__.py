@@ -45,6 +45,7 @@ COMMANDS: list[tuple[str, str]] = [
     ("calibrate", "tissuemech.compare.cli.calibrate"),
     ("calibrate-indentation", "tissuemech.compare.cli.calibrate_indentation"),
     ("calibrate-capillary", "tissuemech.compare.cli.calibrate_capillary"),
+    ("calibrate-drop", "tissuemech.compare.cli.calibrate_drop"),
     ("checks", "tissuemech.compare.cli.checks"),
     ("readme-tables", "tissuemech.compare.cli.readme_tables"),
     ("afm", "tissuemech.compare.cli.afm"),
