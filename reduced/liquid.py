@@ -85,9 +85,7 @@ def drop_table(path: str | None = None) -> DropTable:
     """The shipped drop table (or the one at ``path``)."""
     p = Path(path) if path is not None else DATA_FILE
     if not p.exists():
-        raise FileNotFoundError(
-            f"no drop table at {p}. Generate it with `tissuemech calibrate-drop`."
-        )
+        raise FileNotFoundError(f"no drop table at {p}. Generate it with `tissuemech calibrate-drop`.")
     with np.load(p, allow_pickle=False) as z:
         meta = json.loads(str(z["metadata"])) if "metadata" in z.files else {}
         return DropTable(z["x"], z["drop"], metadata=meta)
