@@ -356,14 +356,14 @@ class EdgeSearch(Generic[P]):
         return self._cache[key]
 
     def laplace_state(self, prob: P) -> np.ndarray:
-        """The free ball's equilibrium under its surface tension (u ~ 0, the Laplace pressure 2 gamma / a0 in the
-        mixed field), solved once on ``prob``'s mesh: every fitted mesh has the same dofs, and the state is nearly
-        mesh-independent (a uniform pressure, no deformation but the volumetric one)."""
+        """The free ball's equilibrium under its surface tension (u = 0, the Laplace pressure 2 gamma / a0 in the
+        mixed field: exact with the balanced reference of ``fem.surface``, where Newton starts at the solution),
+        solved once on ``prob``'s mesh: every fitted mesh has the same dofs, and the state is the same on all."""
         if self._laplace is None or self._laplace.shape[0] != prob.asm.ndof:
             gam = prob.asm.surface.gamma if prob.asm.surface is not None else 0.0
             fun = lambda x: prob.asm.internal(x, prob.mat, tangent="lazy")
             res = newton(
-                fun, np.zeros(prob.asm.ndof), free=prob.free, ref_norm=max(gam, 1e-12), rtol=self.rtol, xtol=1e-9,
+                fun, prob.asm.rest_state(), free=prob.free, ref_norm=max(gam, 1e-12), rtol=self.rtol, xtol=1e-9,
                 atol=prob.floor, admissible=prob.admissible, max_iter=25,
             )  # fmt: skip
             self._laplace = res.x
@@ -383,7 +383,8 @@ class EdgeSearch(Generic[P]):
             # q = 0 the first Newton steps of a fitted mesh's first state stall or diverge beyond gamma/(C a0) ~ 0.3)
             try:
                 affine = newton(
-                    lambda x: prob.asm.internal(x, prob.mat, tangent="lazy"), affine, free=prob.free, ref_norm=1.0,
+                    lambda x: prob.asm.internal(x, prob.mat, tangent="lazy"), prob.asm.rest_state(), free=prob.free,
+                    ref_norm=1.0,
                     rtol=1e-12, atol=prob.floor, admissible=prob.admissible,
                 ).x  # fmt: skip
             except NewtonError:  # (its corrections may stall at round-off on a fine mesh: the squeeze from q = 0)

@@ -271,6 +271,32 @@ class Assembler:
             return r, None
         return r, self._pattern.matrix(self._tangent_values(f, A, mat))
 
+    @property
+    def q_ref(self) -> float:
+        """The mixed field's value at rest (scaled mean Cauchy stress): -2 gamma / a of a surface tension with a
+        balanced reference (``fem.surface.SurfaceTension.balance_reference``), else 0."""
+        surf = self.surface
+        return 0.0 if surf is None else surf.gamma * surf.q_per_gamma
+
+    def rest_state(self) -> np.ndarray:
+        """x at rest: u = 0 and the mixed field at :attr:`q_ref` (the exact equilibrium of a balanced reference)."""
+        x = np.zeros(self.ndof)
+        if self.formulation == "mixed":
+            x[self.qdofs[:, 0]] = self.q_ref
+        return x
+
+    def tension_derivative(self, x: np.ndarray, mat: Material, surface: SurfaceTension | None = None) -> np.ndarray:
+        """d r / d gamma (scaled gamma) at x: dA/du + b on the displacement dofs and, with a balanced reference,
+        d(q_ref)/d gamma M e_1 / kappa on the mixed dofs, of ``surface`` (default: the attached one; zeros without
+        one). A surface that is not attached gives the derivative at gamma = 0 of attaching it."""
+        surf = self.surface if surface is None else surface
+        if surf is None:
+            return np.zeros(self.ndof)
+        r = surf.unit_residual(x, self.ndof)
+        if surf.q_per_gamma and self.formulation == "mixed":
+            r[self.n_u :] += (surf.q_per_gamma / mat.kappa) * self.M[:, :, 0].ravel()
+        return r
+
     def _fields(self, u: np.ndarray):
         """(f, q) at the points: 5-comp F (ne, nq, 5) and the mixed field (ne, nq) or None."""
         f = self.f_at(u)
@@ -285,6 +311,9 @@ class Assembler:
         if self.formulation == "mixed":  # the q-dofs of element e are n_u + 3 e + (0, 1, 2): no sum needed
             rq = np.matmul(self._psiT, ((J - 1.0) * self.w)[:, :, None])[..., 0]
             rq -= np.matmul(self.M, u[self.qdofs][:, :, None])[..., 0] / mat.kappa
+            q_ref = self.q_ref
+            if q_ref:  # the law q = q_ref + kappa (J - 1) of a balanced reference (fem.surface)
+                rq += (q_ref / mat.kappa) * self.M[:, :, 0]
             r[self.n_u :] = rq.ravel()
         return r
 
@@ -385,6 +414,7 @@ class Assembler:
             rq = (
                 np.einsum("eqa,eq->ea", self.psi, (J - 1.0) * self.w)
                 - np.einsum("eab,eb->ea", self.M, u[self.qdofs]) / mat.kappa
+                + (self.q_ref / mat.kappa) * self.M[:, :, 0]
             )
             re = np.concatenate([re, rq], axis=1)
         r = np.bincount(self.alldofs.ravel(), weights=re.ravel(), minlength=self.ndof)

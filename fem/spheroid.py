@@ -223,9 +223,11 @@ class BallProblem(SceneProblem):
         self, m: AxiMesh, mat: Material, beta, tau, rtol: float, surface_tension: float = 0.0, long_time: float = 1.0
     ):
         super().__init__(m, mat, "mixed", beta, tau)
+        self._unit_tension: SurfaceTension | None = None
         self.long_time = float(long_time)  # weight of the long-time Fung term (0: a Maxwell liquid, fem.viscoelastic)
         if surface_tension:  # scaled gamma / (C a0) on the whole outer surface (see ``compress``)
             self.asm.surface = SurfaceTension(m.X, m.edges["outer"], surface_tension)
+            self.asm.surface.balance_reference(self.asm, 1.0)  # the ball at rest is exact (fem.surface)
         self.sym = m.nodes["symmetry"]
         cand = np.setdiff1d(m.nodes["outer"], self.sym)
         self.plane = RigidPlane(m.X, cand)
@@ -237,6 +239,16 @@ class BallProblem(SceneProblem):
         self.rtol = rtol
         self.floor = roundoff_floor(mat.kappa, 1.0, SPHEROID_MARGIN)
         self.linear = Reuse(Symmetric())  # the factorisation kept across this mesh's solves (quasi-Newton first)
+
+    def tension_derivative(self, x: np.ndarray) -> np.ndarray:
+        """d r / d gamma (scaled) at x, with the balanced reference (``fem.surface``); without a tension the
+        derivative of adding one (a unit tension on the outer surface, balanced, built once)."""
+        if self.asm.surface is not None:
+            return self.asm.tension_derivative(x, self.mat)
+        if self._unit_tension is None:
+            self._unit_tension = SurfaceTension(self.m.X, self.m.edges["outer"], 1.0)
+            self._unit_tension.balance_reference(self.asm, 1.0)
+        return self.asm.tension_derivative(x, self.mat, self._unit_tension)
 
     def maxwell_factors(self, visco, dt: float | None):
         """(iso_scale, extra_S) of a step of dt [s] (``fem.problem.SceneProblem.maxwell_factors``) with the long-time
@@ -310,7 +322,7 @@ class BallProblem(SceneProblem):
         dr = {
             "alpha": sens.residual_derivative(lambda a: res(mat._replace(alpha=a)), mat.alpha),
             "kappa": sens.residual_derivative(lambda k: res(mat._replace(kappa=k)), mat.kappa),
-            "surface_tension": SurfaceTension(self.m.X, self.m.edges["outer"], 1.0).residual(x, self.asm.ndof),
+            "surface_tension": self.tension_derivative(x),
         }
         if moved is not None:  # the residual on the moved meshes with their own plate condition on the held dofs
             lo, hi, h = moved
@@ -907,7 +919,7 @@ class _TimeSensing:
         self.which = {b: ("beta", m) for b, _, m in branch_names(beta.size)} | {
             t: ("tau", m) for _, t, m in branch_names(beta.size)
         }
-        self.tension = SurfaceTension(prob.m.X, prob.m.edges["outer"], 1.0) if self.g else None
+        self.tension = bool(self.g)  # d r / d gamma: asm.tension_derivative
         visco0 = prob.maxwell_initial()
         P = len(names)
         self.dQ = np.zeros((P,) + visco0.Q.shape)
@@ -968,9 +980,10 @@ class _TimeSensing:
         R = sens.stress_residuals(asm, Pst)
         # ln C: k and g scale as 1 / C; r_q = ... - M q / k, so dr_q / dln C = -M q / k (and -g dr/dg)
         q = x[asm.qdofs]
+        q = q - np.asarray([asm.q_ref, 0.0, 0.0])  # the law q = q_ref + kappa (J - 1) (q_ref = -2 g: fem.surface)
         R[asm.n_u :, 0] = -(np.matmul(asm.M, q[:, :, None])[..., 0] / mat.kappa).ravel()
-        if self.tension is not None:
-            rg = self.tension.residual(x, asm.ndof)
+        if self.tension:
+            rg = prob.tension_derivative(x)
             R[:, 2] += rg
             R[:, 0] -= self.g * rg
         _, K = asm.internal(x, mat, extra_S=extra, iso_scale=iso, tangent=True)

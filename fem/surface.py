@@ -23,8 +23,20 @@ elastocapillary number gamma / (C L).
 Which part of the boundary carries gamma is the scene's choice (``fem.spheroid``: the whole outer surface,
 the wetted disc included, see there why that is the 180 degree contact angle).
 
-API: :class:`SurfaceTension` (``.area``, ``.residual``, ``.add_tangent``), attached to an assembler as
-``Assembler.surface`` (``fem.forms``): ``internal`` then includes it in the residual and the tangent.
+The balanced reference (:meth:`SurfaceTension.balance_reference`): a ball of radius a at rest under its tension
+carries the Laplace pressure 2 gamma / a with no deformation. The discrete surface (quadratic edges through nodes
+on the sphere) is not exactly a sphere: its nodal tension forces differ from those of a uniform pressure by the
+edges' approximation error (2.3e-5 of them on level 0, 3.4e-7 on level 3), so that without a correction the free
+ball deforms by that much and its pressure is 2 gamma / a only to that error. The reference state is therefore
+made an exact equilibrium: the mixed field's law becomes q = q_ref + kappa (J - 1) with q_ref = -2 gamma / a (the
+mean Cauchy stress of the ball at rest: the radius a is the one measured on the ball with its tension), and the
+tension's residual gets the constant vector gamma b, b = (2 / a) G - dA/du(0) with G the body's residual of a unit
+mean stress at rest (its pressure load on the discrete surface): b vanishes with the edges' error, and the ball at
+rest, u = 0 and q = -2 gamma / a, solves the discrete equations to round-off. ``internal`` includes both
+(``Assembler.q_ref``); ``Assembler.tension_derivative`` is the residual's derivative in gamma with them.
+
+API: :class:`SurfaceTension` (``.area``, ``.residual``, ``.add_tangent``, ``.balance_reference``), attached to an
+assembler as ``Assembler.surface`` (``fem.forms``): ``internal`` then includes it in the residual and the tangent.
 """
 
 from __future__ import annotations
@@ -32,7 +44,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from tissuemech.fem.forms import line_shape
+from tissuemech.fem.forms import Material, line_shape
 
 __all__ = ["SurfaceTension", "N_GAUSS"]
 
@@ -54,6 +66,27 @@ class SurfaceTension:
         self.N, self.dN = line_shape(edges.shape[1], xi)  # (nn, nq)
         self.dofs = np.stack([2 * edges, 2 * edges + 1], -1)  # (ned, nn, 2)
         self._pos: dict = {}
+        # the balanced reference (:meth:`balance_reference`): b per unit gamma on the displacement dofs, and
+        # q_ref / gamma of the mixed field (0: none)
+        self.balance: np.ndarray | None = None
+        self.q_per_gamma = 0.0
+
+    def balance_reference(self, asm, radius: float = 1.0) -> None:
+        """Make the body at rest (u = 0, mean stress q = -2 gamma / ``radius``, scaled) an exact equilibrium of the
+        assembler ``asm`` (``fem.forms.Assembler``, mixed) under this tension: see the module's docstring. The
+        surface must be the whole free surface of a ball of that radius (scaled), attached as ``asm.surface``."""
+        if asm.formulation != "mixed":
+            raise ValueError("the balanced reference of a surface tension needs the mixed formulation")
+        x = np.zeros(asm.ndof)
+        x[asm.qdofs[:, 0]] = 1.0  # q = 1 (psi = 1, X - Xc, Z - Zc per element)
+        saved, asm.surface = asm.surface, None
+        try:  # the body alone at rest under a unit mean stress: no deviatoric stress at F = I (any material)
+            G = asm.internal(x, Material(1.0, 0.1, 1.0), tangent=False)[0]
+        finally:
+            asm.surface = saved
+        G[asm.n_u :] = 0.0
+        self.balance = (2.0 / radius) * G - self.area_gradient(np.zeros(asm.ndof), asm.ndof)
+        self.q_per_gamma = -2.0 / radius
 
     def _geometry(self, u: np.ndarray):
         x = self.X[:, self.edges] + u[self.dofs].transpose(2, 0, 1)  # (2, ned, nn)
@@ -65,14 +98,26 @@ class SurfaceTension:
         r, _, _, l = self._geometry(u)
         return float(2 * np.pi * np.sum(r * l * self.wq))
 
-    def residual(self, u: np.ndarray, ndof: int) -> np.ndarray:
-        """gamma dA/du as a vector of length ``ndof`` (zeros off the edge dofs)."""
+    def area_gradient(self, u: np.ndarray, ndof: int) -> np.ndarray:
+        """dA/du (scaled by L) as a vector of length ``ndof`` (zeros off the edge dofs; no gamma, no balance)."""
         r, rp, zp, l = self._geometry(u)
-        c = 2 * np.pi * self.gamma * self.wq
+        c = 2 * np.pi * self.wq
         fe = np.empty(self.edges.shape + (2,))
         fe[..., 0] = np.einsum("eq,aq->ea", c * l, self.N) + np.einsum("eq,aq->ea", c * r * rp / l, self.dN)
         fe[..., 1] = np.einsum("eq,aq->ea", c * r * zp / l, self.dN)
         return np.bincount(self.dofs.ravel(), weights=fe.ravel(), minlength=ndof)
+
+    def unit_residual(self, u: np.ndarray, ndof: int) -> np.ndarray:
+        """dA/du + b (b: the balanced reference's vector, 0 without it): the residual per unit gamma."""
+        r = self.area_gradient(u, ndof)
+        if self.balance is not None:
+            r[: min(ndof, self.balance.size)] += self.balance[:ndof]
+        return r
+
+    def residual(self, u: np.ndarray, ndof: int) -> np.ndarray:
+        """gamma (dA/du + b) as a vector of length ``ndof`` (zeros off the edge dofs; b the balanced reference's
+        constant vector, :meth:`balance_reference`, 0 without it)."""
+        return self.gamma * self.unit_residual(u, ndof)
 
     def blocks(self, u: np.ndarray) -> np.ndarray:
         """gamma d2A/du2 per edge, (ned, nn, 2, nn, 2) (node, component) x (node, component)."""

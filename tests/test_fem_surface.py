@@ -61,9 +61,8 @@ def test_bad_input(ball):
                      surface_tension=-1e-3)  # fmt: skip
 
 
-def test_free_ball_carries_the_laplace_pressure():
-    """No load: the tension is balanced by the pressure 2 gamma / a0, with no deformation."""
-    m = sph.make_mesh(1, A0)
+def _free_ball(level):
+    m = sph.make_mesh(level, A0)
     gam = GAMMA / (C * A0)  # elastocapillary number (0.2)
     prob = sph.BallProblem(m, Material(1.0, 0.2, KAPPA / C), (), (), 1e-10, gam)
     fun = lambda x: prob.asm.internal(x, prob.mat, tangent="lazy")
@@ -71,29 +70,44 @@ def test_free_ball_carries_the_laplace_pressure():
                  admissible=prob.admissible)  # fmt: skip
     _, vm, q = prob.point_stresses(res.x)
     vm_el, p_el = prob.element_fields(vm, q, C)
-    # the hydrostatic pressure is the Laplace pressure (to the quadratic edges' approximation of the sphere)
-    np.testing.assert_allclose(p_el, 2 * GAMMA / A0, rtol=5e-5)
-    # no deviatoric stress and no displacement beyond the volumetric strain p / kappa
-    assert vm_el.max() < 1e-3 * 2 * GAMMA / A0
-    u = prob.displacement(res.x)
-    assert np.abs(u).max() < 20 * (2 * GAMMA / A0) / (3 * KAPPA) * A0
+    return prob, res.x, vm_el, p_el
 
 
-@pytest.mark.parametrize("level, p_tol", [(0, 3e-5), (1, 1e-5), (2, 2e-6)])
-def test_free_ball_laplace_pressure_converges(level, p_tol):
-    """The free ball's pressure is 2 gamma / a0 to the quadratic edges' approximation of the sphere, an error that
-    converges under refinement (measured max |p / (2 gamma / a0) - 1| = 2.3e-5, 7.0e-6, 1.0e-6 on levels 0, 1, 2)
-    while the displacement stays the volumetric one, 2 gamma / (3 kappa) a0, to a factor of ~100 or better."""
-    m = sph.make_mesh(level, A0)
-    gam = GAMMA / (C * A0)
-    prob = sph.BallProblem(m, Material(1.0, 0.2, KAPPA / C), (), (), 1e-10, gam)
-    fun = lambda x: prob.asm.internal(x, prob.mat, tangent="lazy")
-    res = newton(fun, np.zeros(prob.asm.ndof), free=prob.free, ref_norm=gam, rtol=1e-12, atol=prob.floor,
-                 admissible=prob.admissible)  # fmt: skip
-    _, vm, q = prob.point_stresses(res.x)
-    _, p_el = prob.element_fields(vm, q, C)
-    assert np.max(np.abs(p_el / (2 * GAMMA / A0) - 1)) < p_tol
-    assert np.abs(prob.displacement(res.x)).max() < 150 * (2 * GAMMA / A0) / (3 * KAPPA) * A0
+@pytest.mark.parametrize("level", [0, 1, 2])
+def test_free_ball_carries_the_laplace_pressure(level):
+    """No load: the tension is balanced by the pressure 2 gamma / a0 with no deformation, to round-off on every
+    level (the balanced reference, fem.surface; measured max |p / (2 gamma / a0) - 1| 4e-15 - 2e-14, von Mises / p
+    6e-15 - 3e-14, |u| / a0 6e-17 - 2e-16; before it 2.3e-5, 7.0e-6, 1.0e-6 and 1.3e-6 a0 on levels 0, 1, 2), from a
+    Newton that starts at u = 0, q = 0."""
+    prob, x, vm_el, p_el = _free_ball(level)
+    np.testing.assert_allclose(p_el, 2 * GAMMA / A0, rtol=1e-12)
+    assert vm_el.max() < 1e-12 * 2 * GAMMA / A0
+    assert np.abs(prob.displacement(x)).max() < 1e-14 * A0
+    # the state at rest is the exact equilibrium: its residual is round-off, also on the constrained dofs (the
+    # midplane carries no reaction)
+    r = prob.asm.internal(prob.asm.rest_state(), prob.mat, tangent=False)[0]
+    assert np.abs(r).max() < 1e-14
+    assert prob.asm.q_ref == pytest.approx(-2 * GAMMA / (C * A0), rel=1e-15)
+
+
+def test_balance_vanishes_under_refinement():
+    """The balanced reference's constant vector b (the discrete surface's departure from a uniform Laplace pressure)
+    on the free dofs: measured 4.3e-4, 5.5e-5, 6.9e-6 on levels 0, 1, 2 (order 3 in the element size); on the
+    constrained dofs it carries the cut's pressure and the equator's line tension (order 1), whose sums over the
+    midplane cancel to 4.9e-7, 7.7e-9, 1.2e-10."""
+    free_max, mid_sum = [], []
+    for level in (0, 1, 2):
+        prob = sph.BallProblem(sph.make_mesh(level, A0), Material(1.0, 0.2, KAPPA / C), (), (), 1e-10, 0.2)
+        b = prob.asm.surface.balance
+        fr = np.zeros(b.size, bool)
+        fr[prob.free] = True
+        bz, frz = b[1 : prob.asm.n_u : 2], fr[1 : prob.asm.n_u : 2]
+        free_max.append(np.abs(b[fr]).max())
+        mid_sum.append(abs(bz[~frz].sum()))
+        assert abs(bz.sum()) < 1e-13  # a rigid translation in z changes neither the area nor the volume
+    orders = np.log2(np.asarray(free_max[:-1]) / free_max[1:])
+    assert np.all(orders > 2.7), orders
+    assert free_max[0] < 1e-3 and mid_sum[0] < 1e-6 and mid_sum[-1] < 1e-9
 
 
 def _static(level, gamma, **kw):
@@ -141,26 +155,29 @@ def _errors(r, d):
 
 def test_liquid_creeps_to_the_drop():
     """C = 0 with one S180 branch, 20 % compression held to 1000 tau, coarse level: the stress has relaxed (the
-    last two steps agree to 1e-7) and the force, contact radius and midplane radius are the drop's (measured
-    -9.0e-5, -2.8e-4, -1.1e-5; the fitted edge where the surface leaves the plate tangentially)."""
+    last two steps agree to 2e-7: the liquid's nodes still slide slowly along the surface, which has no long-time
+    shear stiffness, under the discrete surface's tangential forces) and the force, contact radius and midplane
+    radius are the drop's (measured -8.3e-6, -2.2e-4, -5.7e-8 with the balanced reference; -9.0e-5, -2.8e-4,
+    -1.1e-5 before it; the fitted edge where the surface leaves the plate tangentially)."""
     r, d = _liquid(0, 0.2)
     assert set(r.parameters["contact"]) == {"fitted"}
-    assert abs(r.force[-1] / r.force[-2] - 1) < 1e-7
+    assert abs(r.force[-1] / r.force[-2] - 1) < 5e-7
     eF, eR3, eR2 = _errors(r, d)
-    assert abs(eF) < 2e-4 and abs(eR3) < 5e-4 and abs(eR2) < 3e-5
+    assert abs(eF) < 3e-5 and abs(eR3) < 4e-4 and abs(eR2) < 1e-6
     # during the hold the force fell from the instantaneous solid's to the drop's (a 7-fold relaxation)
     assert r.force.max() > 5 * d.force
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("approach, f_tol, r3_tol", [(0.1, 5e-5, 4e-4), (0.2, 1e-5, 3e-4), (0.4, 5e-6, 1e-4)])
+@pytest.mark.parametrize("approach, f_tol, r3_tol", [(0.1, 6e-6, 4e-4), (0.2, 2e-6, 3e-4), (0.4, 6e-7, 1e-4)])
 def test_liquid_limit_on_the_default_level(approach, f_tol, r3_tol):
-    """Level 1 at three compressions: the force within 1e-4 of the drop (measured -2.2e-5, -3.8e-6, -6.9e-7 at
-    delta = 0.1, 0.2, 0.4 a0), the contact radius within 4e-4 (-2.9e-4, -1.6e-4, -5.2e-5: it converges more
-    slowly, ~first order; level 0 -5.7e-4, -2.8e-4, -1.9e-4), the midplane radius within 2e-6."""
+    """Level 1 at three compressions: the force within 1e-5 of the drop (measured -1.8e-6, -5.8e-7, -1.6e-7 at
+    delta = 0.1, 0.2, 0.4 a0 with the balanced reference; -2.2e-5, -3.8e-6, -6.9e-7 before it), the contact radius
+    within 4e-4 (-2.8e-4, -1.6e-4, -4.3e-5: it converges more slowly, ~first order), the midplane radius within
+    1e-7 (-1.8e-8, -1.4e-8, -8.3e-9)."""
     r, d = _liquid(1, approach)
     eF, eR3, eR2 = _errors(r, d)
-    assert abs(eF) < f_tol and abs(eR3) < r3_tol and abs(eR2) < 2e-6
+    assert abs(eF) < f_tol and abs(eR3) < r3_tol and abs(eR2) < 1e-7
 
 
 @pytest.mark.slow
