@@ -50,11 +50,14 @@ def test_reference_richardson_recovers_a_second_order_limit():
 
 @pytest.mark.slow
 def test_reference_level_1_reproduces():
-    """The stored level-1 values are what capillary_curve gives now (one column, level 1)."""
+    """The stored level-1 values are what capillary_curve gives now (one column, level 1), to the balanced reference
+    of a surface tension (fem.surface), which came after them: it moves level-1 states by 6.2e-6 at x = 0.025 (the
+    smallest forces) down to 7e-8 at x = 0.25, level-2 ones by 8.4e-7 to 4.6e-8 (order 3), so the stored Richardson
+    reference of levels 1-3 moves by ~1e-7, far below the table's 3.2e-5 from it."""
     ref = _ref()
     p0 = ref["points"][0]
     col = [p for p in ref["points"] if p["alpha"] == p0["alpha"] and p["Gamma"] == p0["Gamma"]]
     xs = np.array([p["x"] for p in col])
     fe = cc.capillary_curve(alpha=p0["alpha"], Gamma=p0["Gamma"], x_max=xs[-1], n=xs.size, mesh=1)
     np.testing.assert_allclose(fe["x"], xs, rtol=1e-12)
-    np.testing.assert_allclose(fe["f"], [p["f_levels"]["1"] for p in col], rtol=1e-7)
+    np.testing.assert_allclose(fe["f"], [p["f_levels"]["1"] for p in col], rtol=1e-5)
