@@ -333,7 +333,10 @@ class EdgeSearch(Generic[P]):
 
     With a surface tension the edge condition is instead :func:`edge_slope` = 0 (the surface leaves the plate
     tangentially: the contact pressure jumps at the edge, so N_e does not vanish there), the first state starts
-    from the free ball's Laplace state (:meth:`laplace_state`) and a failed first edge guess is halved."""
+    from the free ball's Laplace state (:meth:`laplace_state`) and a failed first edge guess is halved. On a
+    wetting plate (a problem with ``contact_angle`` theta < pi, ``fem.spheroid.BallProblem``) it is Young's angle,
+    :func:`edge_angle` = 0, the first state comes from a continuation in the angle from pi (steps of
+    ``ANGLE_STEP``), and tensile nodes near the edge are allowed (the plate adheres)."""
 
     def __init__(
         self, radius: float, level: int, make_problem: Callable[[AxiMesh], P], rtol: float, tol: float = EDGE_TOL
@@ -345,9 +348,17 @@ class EdgeSearch(Generic[P]):
         self._laplace: np.ndarray | None = None
         self._no_laplace = False  # the free ball's Laplace state did not converge on this level (not retried)
         self.linear = Reuse(Symmetric())  # one factorisation kept across the fitted meshes (same size and pattern)
+        self._angle: float | None = None  # the contact angle every problem is set to (None: its own)
+        self._angle_started = False  # the first state of a wetting plate came from a continuation in the angle
 
     def problem(self, edge: float) -> P:
         """The problem on ``fitted_mesh(radius, level, edge)`` (the last 7 kept)."""
+        prob = self._problem(edge)
+        if self._angle is not None and getattr(prob, "contact_angle", np.pi) != self._angle:
+            prob.set_contact_angle(self._angle)  # type: ignore[attr-defined]
+        return prob
+
+    def _problem(self, edge: float) -> P:
         key = float(edge)
         if key not in self._cache:
             if len(self._cache) > 6:
@@ -435,13 +446,13 @@ class EdgeSearch(Generic[P]):
             F = float(N[act].sum())
             st = EdgeState(res.x, act, r, iso_scale, extra)
             phi = float(N[n_act - 1]) / max(F, 1e-300)
-            if prob.asm.surface is not None and prob.asm.surface.gamma > 0:  # tension: no kink at the edge
-                phi = edge_slope(pl, res.x, n_act)
+            if prob.asm.surface is not None and prob.asm.surface.gamma > 0:  # tension: the contact angle at the edge
+                phi = edge_angle(pl, res.x, n_act, getattr(prob, "contact_angle", np.pi))
             # a tensile node inside the last contact element: the zone is too large (a spurious root of
             # N_edge = 0 with the element lifting off in its middle): report it as negative
             inner = float(np.min(N[max(n_act - 3, 0) : n_act - 1])) / max(F, 1e-300)
-            if inner < 0:
-                phi = min(phi, inner)
+            if inner < 0 and getattr(prob, "contact_angle", np.pi) == np.pi:  # (not on a wetting plate: it adheres,
+                phi = min(phi, inner)  # and tension near the edge is its physics, as in JKR)
             # a free node beyond the edge below the plate: the zone is too small (report it as positive)
             g = pl.gap(res.x, 1.0 - d)[n_act : n_act + 6]
             if g.size and g.min() < -1e-9 * d:
@@ -489,6 +500,24 @@ class EdgeSearch(Generic[P]):
         lo, hi = EDGE_MIN, FITTED_EDGE_MAX  # phi(lo) > 0 > phi(hi) (bounds until evaluated)
         e_a = float(np.clip(edge0, lo, hi))
         prob_a = self.problem(e_a)
+        target = float(getattr(prob_a, "contact_angle", np.pi))
+        if target < np.pi and not self._angle_started and self._angle is None:
+            # a wetting plate adheres: the first contact is a finite disc (JKR-like), far from the Hertz guess;
+            # reach it by a continuation in the contact angle from the non-wetting pi, each state from the last
+            # (a failure propagates: the caller cuts the step, and the next first state continues again)
+            m = int(np.ceil((np.pi - target) / ANGLE_STEP))
+            x, e = x0, e_a
+            try:
+                for th in np.linspace(np.pi, target, m + 1):  # (the last one is the target)
+                    self._angle = float(th)
+                    sol = self.solve(d, e, x, load, visc)
+                    x, e = sol.state.x, sol.edge
+            finally:
+                self._angle = None
+                for p in self._cache.values():
+                    p.set_contact_angle(target)  # type: ignore[attr-defined]
+            self._angle_started = True
+            return sol
         tension = prob_a.asm.surface is not None and prob_a.asm.surface.gamma > 0
         n = 1
         for shrink in range(SHRINK_TRIES + 1):
@@ -564,6 +593,18 @@ def edge_slope(plane: RigidPlane, x: np.ndarray, n_act: int) -> float:
     return float(dz / dr)
 
 
+def edge_angle(plane: RigidPlane, x: np.ndarray, n_act: int, contact_angle: float = np.pi) -> float:
+    """The edge condition of a surface with tension on a plate of contact angle theta (rad, through the body):
+    :func:`edge_slope` at theta = pi (the surface leaves the plate tangentially), else (pi - theta) - psi with psi
+    = atan2(-dz, dr) the angle of the first free edge below the plate at the edge node (Young's angle: the free
+    surface leaves the plate at pi - theta below it, the wetted part pulling the edge inward by -gamma cos(theta)
+    per length, the free one along its tangent by gamma). Positive: the zone is too small (as edge_slope)."""
+    if contact_angle == np.pi:
+        return edge_slope(plane, x, n_act)
+    dr, dz = _edge_tangent(plane, x, n_act, True)
+    return float((np.pi - contact_angle) - np.arctan2(-dz, dr))
+
+
 def _edge_tangent(plane: RigidPlane, x: np.ndarray, n_act: int, reference: bool) -> tuple[float, float]:
     """2 d(r, z)/dxi at xi = -1 of the first free edge (``reference``: of X + x, else of the increment x alone)."""
     nodes = plane.nodes[n_act - 1 : n_act + 2]
@@ -580,6 +621,7 @@ def edge_slope_change(plane: RigidPlane, x: np.ndarray, n_act: int, dx: np.ndarr
     return (ddz * dr - dz * ddr) / dr**2
 
 
+ANGLE_STEP = np.radians(2.5)  # the continuation in the contact angle of a first wetting contact (EdgeSearch.solve)
 TENSION_START = 0.02  # gamma / (C a0) of the first state of EdgeSearch._tension_ramp (level 3 at 0.25 starts from 0.02, not from 0.2)
 _TENSION_RAMP = np.zeros(0)  # marker of the continuation guess in EdgeSearch._state
 

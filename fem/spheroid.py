@@ -220,7 +220,16 @@ class BallProblem(SceneProblem):
     floor of the residual (``fem.problem.roundoff_floor``, unit force scale)."""
 
     def __init__(
-        self, m: AxiMesh, mat: Material, beta, tau, rtol: float, surface_tension: float = 0.0, long_time: float = 1.0
+        self,
+        m: AxiMesh,
+        mat: Material,
+        beta,
+        tau,
+        rtol: float,
+        surface_tension: float = 0.0,
+        long_time: float = 1.0,
+        contact_angle: float = np.pi,
+        wet_nodes: int = 0,
     ):
         super().__init__(m, mat, "mixed", beta, tau)
         self._unit_tension: SurfaceTension | None = None
@@ -228,9 +237,16 @@ class BallProblem(SceneProblem):
         if surface_tension:  # scaled gamma / (C a0) on the whole outer surface (see ``compress``)
             self.asm.surface = SurfaceTension(m.X, m.edges["outer"], surface_tension)
             self.asm.surface.balance_reference(self.asm, 1.0)  # the ball at rest is exact (fem.surface)
+        self.contact_angle = float(contact_angle)  # of the plates (rad; pi: non-wetting), with a surface tension
         self.sym = m.nodes["symmetry"]
         cand = np.setdiff1d(m.nodes["outer"], self.sym)
         self.plane = RigidPlane(m.X, cand)
+        self._wet_edges: np.ndarray | None = None
+        if surface_tension and self.contact_angle != np.pi and wet_nodes:  # the plate's wetted part (fitted meshes)
+            wet = np.zeros(m.X.shape[1], bool)
+            wet[self.plane.nodes[:wet_nodes]] = True
+            self._wet_edges = np.all(wet[m.edges["outer"]], axis=1)
+            self.set_contact_angle(self.contact_angle)
         X = m.X
         eq = np.flatnonzero((np.abs(X[1]) < 1e-12) & (np.abs(X[0] - 1) < 1e-9))
         if eq.size != 1:
@@ -239,6 +255,13 @@ class BallProblem(SceneProblem):
         self.rtol = rtol
         self.floor = roundoff_floor(mat.kappa, 1.0, SPHEROID_MARGIN)
         self.linear = Reuse(Symmetric())  # the factorisation kept across this mesh's solves (quasi-Newton first)
+
+    def set_contact_angle(self, theta: float) -> None:
+        """The plates' contact angle (rad) on this problem's wetted edges (a continuation in the angle)."""
+        if self._wet_edges is None or self.asm.surface is None:
+            return
+        self.contact_angle = float(theta)
+        self.asm.surface.wet(self._wet_edges, self.contact_angle)
 
     def tension_derivative(self, x: np.ndarray) -> np.ndarray:
         """d r / d gamma (scaled) at x, with the balanced reference (``fem.surface``); without a tension the
@@ -400,6 +423,7 @@ def compress(
     n_static: int | None = None,
     rtol: float = 1e-10,
     surface_tension: float = 0.0,
+    contact_angle: float = np.pi,
     gradient: bool = False,
 ) -> SpheroidResult:
     """Compress the Fung ball between rigid frictionless plates, hold, and let it relax.
@@ -506,6 +530,14 @@ def compress(
             branches held long) is ``tissuemech.reduced.drop``. On fitted meshes the contact edge is then where the
             surface leaves the plate tangentially (``fem.contact.edge_slope``; the edge node's multiplier does not
             vanish: the contact pressure jumps there).
+        contact_angle: the plates' contact angle theta (rad, measured through the body; default pi, the
+            non-wetting plate above), with a ``surface_tension`` and fitted contact only: pi/2 < theta <= pi. The
+            wetted part of the surface then stores -gamma cos(theta) per area (Young: gamma_SL - gamma_SV; the
+            work of adhesion gamma (1 + cos theta) per wetted area, ``fem.surface.SurfaceTension.wet``) and the
+            fitted contact edge sits where the free surface leaves the plate at pi - theta below it
+            (``fem.contact.edge_angle``); the edge node then pulls on the plate (the line force gamma sin(theta)
+            per length of the contact line), which the plate force includes. The liquid limit is
+            ``tissuemech.reduced.drop.compress(..., contact_angle=theta)``.
         gradient: also return the exact sensitivities of the observables at every state,
             ``result.gradient = {"C": {"force": dF/dC (N/Pa), "midplane_radius": (m/Pa), "nominal_stress":
             (1/1)}, "alpha": {...per unit alpha}, "surface_tension": {...per N/m}, "beta" / "tau" (one branch;
@@ -544,6 +576,21 @@ def compress(
     """
     validate_positive("radius (the spheroid radius a0)", radius, "m")
     validate_nonnegative("surface_tension (gamma)", surface_tension, "N/m")
+    theta = float(contact_angle)
+    if not (np.isfinite(theta) and np.pi / 2 < theta <= np.pi):
+        raise ValueError(
+            f"contact_angle must be in (pi/2, pi] rad (90 to 180 deg through the body), got {contact_angle!r} rad: the FE "
+            "models non-wetting and partially wetting plates (reduced.drop takes any angle)"
+        )
+    if theta != np.pi:
+        if not surface_tension:
+            raise ValueError(
+                "contact_angle needs a surface_tension (N/m): without one the plate's wetting stores no energy"
+            )
+        if gradient:
+            raise ValueError(
+                "gradient=True needs contact_angle = pi (the edge condition's sensitivity is derived for pi)"
+            )
     long_time = 1.0  # the long-time term's weight (0: a Maxwell liquid)
     if _by_moduli(C, branches):  # a Maxwell liquid (C = 0) or branches given by their moduli (fem.viscoelastic)
         rel = ve.relative_branches(C, branches)
@@ -634,6 +681,11 @@ def compress(
     level = _level(mesh)
     warn_small_approach(_largest_x(proto, d_max, displacement, ramp_time, a0, C), level)
     treat = contact_treatment(contact if contact is not None else ("fitted" if level is not None else "nodal"))
+    if theta != np.pi and not (isinstance(treat, FittedEdge) and level is not None):
+        raise ValueError(
+            "contact_angle other than pi needs contact='fitted' on a mesh level (the wetted part and the contact "
+            "angle sit at the fitted edge node); node-by-node contact models the non-wetting plate only"
+        )
     if gradient and not static and isinstance(treat, FittedEdge):
         raise ValueError(
             "gradient=True in a time run needs contact='nodal' (one fixed mesh): the sensitivity of the Maxwell "
@@ -650,7 +702,8 @@ def compress(
     gam = float(surface_tension) / (C * a0)  # the elastocapillary number gamma / (C a0)
     fit = None
     if isinstance(treat, FittedEdge) and level is not None:
-        make = lambda m: BallProblem(m, mat, beta, tau, rtol, gam, long_time)
+        wet = 2 * int(FITTED_LEVELS[level][3]) + 1  # the fitted meshes' contact nodes (fem.contact.EdgeSearch)
+        make = lambda m: BallProblem(m, mat, beta, tau, rtol, gam, long_time, theta, wet)
         fit = (
             _SensingSearch(a0, level, make, rtol, tol=treat.tol)
             if gradient
@@ -834,6 +887,7 @@ def compress(
             n_steps=len(steps),
             **({"stepping": stepper} if stepper is not None else {}),
             **({"surface_tension": float(surface_tension)} if surface_tension else {}),
+            **({"contact_angle": theta} if theta != np.pi else {}),
             **(_protocol_parameters(proto, col["time"], touching) if proto is not None else {}),
         ),
         in_contact=touching,

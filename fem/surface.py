@@ -70,6 +70,23 @@ class SurfaceTension:
         # q_ref / gamma of the mixed field (0: none)
         self.balance: np.ndarray | None = None
         self.q_per_gamma = 0.0
+        # per-edge factors on gamma (None: 1): a wetted edge of a plate with contact angle theta stores
+        # gamma_SL - gamma_SV = -gamma cos(theta) per area (Young), see :meth:`wet`
+        self.weights: np.ndarray | None = None
+
+    def wet(self, edges_mask: np.ndarray, contact_angle: float) -> None:
+        """Give the edges ``edges_mask`` (bool, n_edges) the energy of a surface wetting a plate with contact angle
+        theta (rad, measured through the body): -gamma cos(theta) per area instead of gamma (1 at theta = pi, the
+        non-wetting plate, where nothing changes). Energy gamma (A_free - cos(theta) A_wet) = gamma A - gamma (1 +
+        cos(theta)) A_wet: the work of adhesion gamma (1 + cos(theta)) per wetted area."""
+        w = np.ones(self.edges.shape[0])
+        w[np.asarray(edges_mask, bool)] = -np.cos(contact_angle)
+        self.weights = None if np.all(w == 1.0) else w
+
+    def _c(self) -> np.ndarray:
+        """2 pi w_q (per edge weight): (n_edges, n_q) or (n_q,)."""
+        c = 2 * np.pi * self.wq
+        return c if self.weights is None else self.weights[:, None] * c
 
     def balance_reference(self, asm, radius: float = 1.0) -> None:
         """Make the body at rest (u = 0, mean stress q = -2 gamma / ``radius``, scaled) an exact equilibrium of the
@@ -80,12 +97,13 @@ class SurfaceTension:
         x = np.zeros(asm.ndof)
         x[asm.qdofs[:, 0]] = 1.0  # q = 1 (psi = 1, X - Xc, Z - Zc per element)
         saved, asm.surface = asm.surface, None
+        weights, self.weights = self.weights, None  # the free ball: no wetted part
         try:  # the body alone at rest under a unit mean stress: no deviatoric stress at F = I (any material)
             G = asm.internal(x, Material(1.0, 0.1, 1.0), tangent=False)[0]
+            G[asm.n_u :] = 0.0
+            self.balance = (2.0 / radius) * G - self.area_gradient(np.zeros(asm.ndof), asm.ndof)
         finally:
-            asm.surface = saved
-        G[asm.n_u :] = 0.0
-        self.balance = (2.0 / radius) * G - self.area_gradient(np.zeros(asm.ndof), asm.ndof)
+            asm.surface, self.weights = saved, weights
         self.q_per_gamma = -2.0 / radius
 
     def _geometry(self, u: np.ndarray):
@@ -94,14 +112,15 @@ class SurfaceTension:
         return r, rp, zp, np.hypot(rp, zp)
 
     def area(self, u: np.ndarray) -> float:
-        """Deformed area (scaled by L^2) of the surface swept by the edges (u: displacement or full vector)."""
+        """Deformed area (scaled by L^2) of the surface swept by the edges (u: displacement or full vector); with
+        :meth:`wet` the wetted edges count with their factor -cos(theta) (the energy per gamma)."""
         r, _, _, l = self._geometry(u)
-        return float(2 * np.pi * np.sum(r * l * self.wq))
+        return float(np.sum(r * l * self._c()))
 
     def area_gradient(self, u: np.ndarray, ndof: int) -> np.ndarray:
         """dA/du (scaled by L) as a vector of length ``ndof`` (zeros off the edge dofs; no gamma, no balance)."""
         r, rp, zp, l = self._geometry(u)
-        c = 2 * np.pi * self.wq
+        c = self._c()
         fe = np.empty(self.edges.shape + (2,))
         fe[..., 0] = np.einsum("eq,aq->ea", c * l, self.N) + np.einsum("eq,aq->ea", c * r * rp / l, self.dN)
         fe[..., 1] = np.einsum("eq,aq->ea", c * r * zp / l, self.dN)
@@ -122,7 +141,7 @@ class SurfaceTension:
     def blocks(self, u: np.ndarray) -> np.ndarray:
         """gamma d2A/du2 per edge, (ned, nn, 2, nn, 2) (node, component) x (node, component)."""
         r, rp, zp, l = self._geometry(u)
-        c = 2 * np.pi * self.gamma * self.wq
+        c = self.gamma * self._c()
         N, dN = self.N, self.dN
         NdN = np.einsum("aq,bq->abq", N, dN)
         dNdN = np.einsum("aq,bq->abq", dN, dN)
