@@ -576,7 +576,10 @@ def compress(
     """
     validate_positive("radius (the spheroid radius a0)", radius, "m")
     validate_nonnegative("surface_tension (gamma)", surface_tension, "N/m")
-    theta = float(contact_angle)
+    try:
+        theta = float(contact_angle)
+    except (TypeError, ValueError):
+        theta = float("nan")  # (named in the error below)
     if not (np.isfinite(theta) and np.pi / 2 < theta <= np.pi):
         raise ValueError(
             f"contact_angle must be in (pi/2, pi] rad (90 to 180 deg through the body), got {contact_angle!r} rad: the FE "

@@ -221,7 +221,7 @@ def test_wetted_edges_store_minus_gamma_cos_theta():
 
 def test_contact_angle_inputs():
     kw = dict(radius=A0, C=C, alpha=0.2, displacement=0.2 * A0, static=True, mesh=0)
-    for bad in (np.radians(90.0), 0.0, 4.0, np.nan):
+    for bad in (np.radians(90.0), 0.0, 4.0, np.nan, "150 deg", None):
         with pytest.raises(ValueError, match="contact_angle"):
             sph.compress(**kw, surface_tension=GAMMA, contact_angle=bad)
     with pytest.raises(ValueError, match="surface_tension"):
