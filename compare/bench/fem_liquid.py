@@ -26,6 +26,8 @@ import sys
 import time
 from collections.abc import Sequence
 
+import numpy as np
+
 from tissuemech.compare.bench.fem_spheroid import richardson
 from tissuemech.fem.spheroid import LEVELS, Branch, compress
 from tissuemech.reduced import drop
@@ -41,20 +43,26 @@ N_HOLD = 40
 QUANTITIES = ("force", "contact_radius", "midplane_radius")
 
 
-def liquid(level: int, approach: float) -> tuple[dict[str, float], float, float]:
+def liquid(level: int, approach: float, contact_angle: float = np.pi) -> tuple[dict[str, float], float, float]:
     """({F [N], R3 [m], R2 [m]} at the end of the hold, |F_end / F_before - 1|, wall [s]) on ``level`` for the total
-    approach ``approach`` (as a fraction of a0)."""
+    approach ``approach`` (as a fraction of a0), plates of ``contact_angle`` (rad)."""
     t0 = time.perf_counter()
     r = compress(
-        **LIQUID, displacement=approach * RADIUS, ramp_time=1.0, end_time=HOLD * TAU, mesh=level, n_hold=N_HOLD
+        **LIQUID,
+        displacement=approach * RADIUS,
+        ramp_time=1.0,
+        end_time=HOLD * TAU,
+        mesh=level,
+        n_hold=N_HOLD,
+        contact_angle=contact_angle,
     )
     out = {q: float(getattr(r, q)[-1]) for q in QUANTITIES}
     return out, abs(r.force[-1] / r.force[-2] - 1.0), time.perf_counter() - t0
 
 
-def exact(approach: float) -> dict[str, float]:
-    """The drop's {F [N], R3 [m], R2 [m]} at the approach (fraction of a0)."""
-    s = drop.compress(approach * RADIUS, radius=RADIUS, surface_tension=GAMMA)
+def exact(approach: float, contact_angle: float = np.pi) -> dict[str, float]:
+    """The drop's {F [N], R3 [m], R2 [m]} at the approach (fraction of a0), plates of ``contact_angle`` (rad)."""
+    s = drop.compress(approach * RADIUS, radius=RADIUS, surface_tension=GAMMA, contact_angle=contact_angle)
     return {"force": s.force, "contact_radius": s.contact_radius, "midplane_radius": s.equatorial_radius}
 
 
@@ -63,16 +71,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--levels", default="0,1,2", help="FE levels; the three finest give the Richardson estimate")
     ap.add_argument("--approaches", default="0.1,0.2,0.4", help="total approaches delta / a0")
     ap.add_argument("--quick", action="store_true", help="level 1 at delta = 0.2 a0 only")
+    ap.add_argument("--contact-angle", type=float, default=180.0, help="the plates' contact angle (deg, 90 < . <= 180)")
     a = ap.parse_args(argv)
+    theta = np.radians(a.contact_angle) if a.contact_angle != 180.0 else np.pi
     levels = [1] if a.quick else [int(v) for v in a.levels.split(",")]
     approaches = [0.2] if a.quick else [float(v) for v in a.approaches.split(",")]
     print(
         f"Maxwell liquid (C = 0, C_m = {E0 / 6:.4g} Pa, tau = {TAU:g} s, alpha = 0.2), a0 = {RADIUS * 1e6:g} um, gamma = "
         f"{GAMMA * 1e3:g} mN/m (gamma / (C_m a0) = {GAMMA / (E0 / 6 * RADIUS):.3f}), held to {HOLD:g} tau; "
-        "relative errors against reduced.drop"
+        f"plates at {a.contact_angle:g} deg; relative errors against reduced.drop"
     )
     for x in approaches:
-        ref = exact(x)
+        ref = exact(x, theta)
         print(
             f"\n## delta = {x:g} a0: drop F = {ref['force'] * 1e6:.7g} uN, R3 = {ref['contact_radius'] / RADIUS:.7f} a0, "
             f"R2 = {ref['midplane_radius'] / RADIUS:.7f} a0"
@@ -80,7 +90,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{'level':>6} {'F err':>10} {'R3 err':>10} {'R2 err':>10} {'last step':>10} {'wall s':>8}")
         vals: dict[int, dict[str, float]] = {}
         for lev in levels:
-            v, settle, wall = liquid(lev, x)
+            v, settle, wall = liquid(lev, x, theta)
             vals[lev] = v
             err = [v[q] / ref[q] - 1 for q in QUANTITIES]
             print(f"{lev:>6} " + " ".join(f"{e:>10.2e}" for e in err) + f" {settle:>10.1e} {wall:>8.1f}")
