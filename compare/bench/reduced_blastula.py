@@ -524,7 +524,7 @@ def workload_rows(n: int = 1_000_000, repeats: int = 3, seed: int = 0) -> list[d
     calls = transcendentals_per_point()
     n_tr = sum(v for k, v in calls.items() if k in TRANSCENDENTALS)
     t_exp = exp_seconds()
-    roof = 1.0 / (n_tr * t_exp)
+    roof = 1.0 / (n_tr * t_exp) if n_tr else float("nan")  # nan: no transcendental found in this backend's HLO
     what = f"{n:.0e} random shells (B/A {SHELL_RATIO[0]:g}-{SHELL_RATIO[1]:g}, alpha {SHELL_ALPHA[0]:g}-{SHELL_ALPHA[1]:g})"
     return [
         dict(
@@ -560,7 +560,21 @@ def main(argv: Sequence[str] | None = None) -> list[dict]:
     ap.add_argument("--baseline", type=int, default=2000, help="points in the scipy quad loop")
     ap.add_argument("--api-only", action="store_true", help="only part 1: eager calls against jit (issue 14)")
     ap.add_argument("--no-cli", action="store_true", help="skip the tissuemech blastula process timings")
+    ap.add_argument(
+        "--workload-only", action="store_true",
+        help="only the workload rows (issue 40 item 6: random shells), e.g. on a GPU machine",
+    )  # fmt: skip
     args = ap.parse_args(list(argv) if argv is not None else None)
+    if args.workload_only:
+        import jax
+
+        from tissuemech.compare.bench.common import machine_line
+
+        print(machine_line())
+        print(f"JAX {jax.__version__}, backend {jax.default_backend()}: {jax.devices()[0].device_kind}")
+        work = workload_rows(args.n)
+        print_rows(work)
+        return work
     api = api_rows(args.n) + ([] if args.no_cli else cli_rows())
     print_rows(api)
     api += dispatch_rows()

@@ -18,6 +18,7 @@ per chunk (flat in the number of curves: both run chunk by chunk).
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from collections.abc import Sequence
@@ -68,9 +69,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     ap.add_argument("--curves", type=float, default=1e5, help="curves (default 1e5)")
     ap.add_argument("--quick", action="store_true", help="1e4 curves")
+    ap.add_argument(
+        "--chunk", type=int, default=None,
+        help=f"curves per compiled call (default {CHUNK} on a CPU, the scan layer's; 2**18 on a GPU)",
+    )  # fmt: skip
+    ap.add_argument(
+        "--reference-curves", type=float, default=1e6,
+        help="curves of the NumPy closed form (and, on a GPU, of the same kernel on this machine's CPU): the first "
+        "ones of the same draw, timed alone, their rate compared (default 1e6, or all curves if fewer)",
+    )  # fmt: skip
     a = ap.parse_args(list(argv or []))
     n = int(1e4 if a.quick else a.curves)
+    backend = jax.default_backend()
+    chunk = a.chunk or (CHUNK if backend == "cpu" else 2**18)
+    n_ref = min(n, int(a.reference_curves))
     print(machine_line())
+    print(f"JAX {jax.__version__}, backend {backend}: {', '.join(str(d.device_kind) for d in jax.devices())}")
     t = np.asarray(default_times(TR, END))
     rng = np.random.default_rng(0)
     C = rng.uniform(100, 400, n)
@@ -78,36 +92,79 @@ def main(argv: Sequence[str] | None = None) -> int:
     tau = np.exp(rng.uniform(np.log(1.0), np.log(1000.0), n))
     X_app = rng.uniform(0.05, 0.3, n)
 
-    @jax.jit
-    def chunk_jax(C, beta, tau, X):
+    def kernel(C, beta, tau, X):
         one = lambda c, b, ta, x: spheroid.force(
             jnp.asarray(t), radius=A0, C=c, alpha=0.2, branches=[(b, ta)], displacement=2 * A0 * x, ramp_time=TR,
             equilibrium="hertz",
         )  # fmt: skip
         return jax.vmap(one)(C, beta, tau, X)
 
-    def run(fn) -> tuple[float, np.ndarray]:
-        outs = []
+    def run(fn, m: int, size: int, device=None, to_host: bool = True) -> tuple[float, float, np.ndarray]:
+        """Curves 0..m in chunks of ``size`` (the last one padded: one compiled shape), each chunk's forces
+        brought back to the host (what a scan keeps) unless ``to_host`` is False (then only the reference curves'
+        chunks are); returns (seconds, 0, the first n_ref curves' forces). Memory stays flat: only the reference
+        curves are kept."""
+        kept = []
         t0 = time.perf_counter()
-        for i in range(0, n, CHUNK):
-            s = slice(i, min(i + CHUNK, n))
+        for i in range(0, m, size):
+            s = slice(i, min(i + size, m))
             args = (C[s], beta[s], tau[s], X_app[s])
-            pad = CHUNK - (s.stop - s.start)  # one compiled shape: the last chunk padded
-            if pad and fn is chunk_jax:
+            pad = size - (s.stop - s.start)
+            if pad and device is not None:
                 args = tuple(np.concatenate([v, np.repeat(v[-1:], pad)]) for v in args)
-            out = np.asarray(jax.block_until_ready(fn(*args)))
-            outs.append(out[: s.stop - s.start])
-        return time.perf_counter() - t0, np.concatenate(outs)
+            if device is not None:
+                args = tuple(jax.device_put(v, device) for v in args)
+            res = jax.block_until_ready(fn(*args))
+            if not to_host and s.start >= n_ref:
+                continue
+            out = np.asarray(res)[: s.stop - s.start]
+            if s.start < n_ref:
+                kept.append(out[: max(0, min(s.stop, n_ref) - s.start)])
+        return time.perf_counter() - t0, 0.0, np.concatenate(kept)
 
-    jax.block_until_ready(chunk_jax(C[:CHUNK], beta[:CHUNK], tau[:CHUNK], X_app[:CHUNK]))  # compile
-    w_jax, F_jax = run(chunk_jax)
-    w_np, F_np = run(lambda C, beta, tau, X: closed_form(t, C, beta, tau, X))
+    dev = jax.devices()[0]
+    chunk_jax = jax.jit(kernel)
+    jax.block_until_ready(chunk_jax(*(jax.device_put(v[:1].repeat(chunk), dev) for v in (C, beta, tau, X_app))))
+    w_jax, _, F_jax = run(chunk_jax, n, chunk, dev)
+    w_np, _, F_np = run(lambda C, beta, tau, X: closed_form(t, C, beta, tau, X), n_ref, CHUNK)
     diff = float(np.max(np.abs(F_jax[:, 1:] / F_np[:, 1:] - 1.0)))
-    print(f"{n} curves x {t.size} times, chunks of {CHUNK}, Hertz law, one branch")
-    print(f"scan kernel (jit(vmap(spheroid.force)), quadrature): {w_jax:.3f} s, {n / w_jax:.3g} curves/s")
-    print(f"NumPy closed form (Dawson's integral):               {w_np:.3f} s, {n / w_np:.3g} curves/s")
-    print(f"ratio scan kernel / NumPy: {w_jax / w_np:.2f}x (target <= 3x); largest |F_jax / F_numpy - 1| = {diff:.2e}")
+    r_jax, r_np = n / w_jax, n_ref / w_np
+    print(f"{n} curves x {t.size} times, chunks of {chunk} ({backend}), Hertz law, one branch; forces to the host")
+    print(f"scan kernel (jit(vmap(spheroid.force)), quadrature, {backend}): {w_jax:.3f} s, {r_jax:.3g} curves/s")
+    print(f"NumPy closed form (Dawson's integral), {n_ref} curves, one core: {w_np:.3f} s, {r_np:.3g} curves/s")
+    print(
+        f"ratio scan kernel / NumPy (time per curve): {r_np / r_jax:.3g}x (target <= 3x); "
+        f"largest |F_jax / F_numpy - 1| = {diff:.2e} (first {n_ref} curves)"
+    )
+    if backend != "cpu":  # the kernel alone, its forces left on the device but the reference curves'
+        w_dev, _, _ = run(chunk_jax, n, chunk, dev, to_host=False)
+        print(
+            f"scan kernel, forces left on the {backend} (only the first {n_ref} curves' brought back): "
+            f"{w_dev:.3f} s, {n / w_dev:.3g} curves/s ({w_jax / w_dev:.2f}x the rate with every force to the host)"
+        )
+    if backend != "cpu":  # the same kernel on this machine's CPU: the GPU's speed-up over it
+        cpu = jax.devices("cpu")[0]
+        chunk_cpu = jax.jit(kernel, device=cpu) if _jit_takes_device() else jax.jit(kernel)
+        with jax.default_device(cpu):
+            jax.block_until_ready(chunk_cpu(*(jax.device_put(v[:CHUNK], cpu) for v in (C, beta, tau, X_app))))
+            w_cpu, _, F_cpu = run(chunk_cpu, n_ref, CHUNK, cpu)
+        r_cpu = n_ref / w_cpu
+        d_cpu = float(np.max(np.abs(F_jax[:, 1:] / F_cpu[:, 1:] - 1.0)))
+        print(
+            f"same kernel on this machine's CPU ({os.cpu_count()} cores, chunks of {CHUNK}), {n_ref} curves: "
+            f"{w_cpu:.3f} s, {r_cpu:.3g} curves/s; {backend} / CPU = {r_jax / r_cpu:.3g}x; "
+            f"largest |F_{backend} / F_cpu - 1| = {d_cpu:.2e}"
+        )
     return 0
+
+
+def _jit_takes_device() -> bool:
+    """``jax.jit(device=...)`` was deprecated and later removed: where absent, ``jax.default_device`` places it."""
+    import inspect
+
+    import jax
+
+    return "device" in inspect.signature(jax.jit).parameters
 
 
 if __name__ == "__main__":
