@@ -912,7 +912,7 @@ def _newton_update(x, lo, hi, pt, target, k, omk, alpha, xr, wr, tol, stop_when_
     return x_n, lo_n, hi_n, stop, r, d
 
 
-def _newton(pt, k, omk, alpha, x0, lo, hi, rule, max_iter, tol, stop_when_resolved=False):
+def _newton(pt, k, omk, alpha, x0, lo, hi, rule, max_iter, tol, stop_when_resolved=False, done=None, full=False):
     """Safeguarded Newton for p/C(exp(x)) = pt on the rising branch, bracket [lo, hi] in x.
 
     Newton is applied to asinh(p/C): linear for |p| << C, logarithmic for the exponentially
@@ -923,7 +923,8 @@ def _newton(pt, k, omk, alpha, x0, lo, hi, rule, max_iter, tol, stop_when_resolv
     passes :func:`_resolved` where the error that step leaves, |F''/(2 F')| step^2 (quadratic
     convergence, F = asinh(p/C) and its closed-form derivatives in x), is below 1e-15.
     Returns (x, r, d): the final x and the residual p/C - pt and slope dP/dx at the last point
-    evaluated (the one before the final Newton step), for the convergence check.
+    evaluated (the one before the final Newton step), for the convergence check; with ``full``
+    (x, lo, hi, done): the state to continue from (``done``: the lanes already stopped at entry).
     """
     target = jnp.arcsinh(pt)
     xr = jnp.asarray(rule[0])
@@ -949,9 +950,10 @@ def _newton(pt, k, omk, alpha, x0, lo, hi, rule, max_iter, tol, stop_when_resolv
         )
 
     nan = jnp.full(pt.shape, jnp.nan)
-    state = (x0, lo, hi, jnp.asarray(0), jnp.zeros(pt.shape, dtype=bool), nan, nan)
-    x, _, _, _, _, r, d = jax.lax.while_loop(cond, body, state)
-    return x, r, d
+    done0 = jnp.zeros(pt.shape, dtype=bool) if done is None else done
+    state = (x0, lo, hi, jnp.asarray(0), done0, nan, nan)
+    x, lo, hi, _, done, r, d = jax.lax.while_loop(cond, body, state)
+    return (x, lo, hi, done) if full else (x, r, d)
 
 
 _CHUNK = 1024  # large inputs are solved chunk by chunk: each chunk stops when its own lanes converge
@@ -1024,8 +1026,97 @@ def _solve_stretch(p_over_C, k, omk, alpha, max_stretch=INVERSE_STRETCH_RANGE[1]
         jnp.concatenate([v.ravel(), jnp.full((pad,), f, dtype=v.dtype)]).reshape(m, _CHUNK)
         for v, f in zip((pt, k, omk, alpha, mx), fills)
     )
-    outs = jax.lax.map(lambda b: _solve_block(*b, table=table), blocks)
+    if table is not None:
+        outs = jax.lax.map(lambda b: _solve_block(*b, table=table), blocks)
+    else:
+        outs = _solve_regrouped(*(v.reshape(-1, _REGROUP_CHUNK) for v in blocks))
     return tuple(o.ravel()[:n].reshape(pt.shape) for o in outs)
+
+
+_COARSE_FIRST = 7  # coarse Newton steps every lane takes before the unfinished lanes are regrouped
+# lanes per block of the regrouped stages (divides _CHUNK): smaller blocks stop sooner, larger ones pay less per
+# step; 256 measured fastest on random shells (`python -m tissuemech.compare.bench.reduced_blastula --workload-only`)
+_REGROUP_CHUNK = 256
+
+
+def _solve_regrouped(pt, k, omk, alpha, max_stretch):
+    """The inverse on (blocks, lanes) arrays of many shells, each Newton stage in two phases.
+
+    A block's Newton loop runs until its slowest lane stops: ~14 coarse steps per block of 1024 on
+    random shells where the mean lane needs 5.9 (a few lanes of small alpha whose root lies where
+    the curve is nearly flat converge linearly). So every lane takes at most ``_COARSE_FIRST``
+    coarse steps, then the unfinished ones (~6 %) are gathered into the first blocks and continue
+    there (a block with no unfinished lane stops at once), then go back to their places; the
+    20-point polish likewise: one step for every lane (no loop), the lanes it does not finish
+    regrouped for the rest. The same steps as the one-phase loops, lane by lane."""
+    coarse = np.polynomial.legendre.leggauss(_COARSE_NODES)
+    xr, wr = jnp.asarray(_X), jnp.asarray(_W)
+
+    def first(b):
+        pt_, k_, omk_, al_, mx_ = b
+        x0, lo, hi = _start(pt_, omk_, mx_)
+        return _newton(pt_, k_, omk_, al_, x0, lo, hi, coarse, _COARSE_FIRST, 1e-7, full=True)
+
+    x, lo, hi, done = jax.lax.map(first, (pt, k, omk, alpha, max_stretch))
+
+    def rest(b):
+        pt_, k_, omk_, al_, x_, lo_, hi_, done_ = b
+        left = _COARSE_ITER - _COARSE_FIRST
+        return _newton(pt_, k_, omk_, al_, x_, lo_, hi_, coarse, left, 1e-7, done=done_, full=True)[0]
+
+    x = _regrouped(rest, (pt, k, omk, alpha, x, lo, hi, done), done)
+
+    def polish_first(b):  # one 20-point step from the coarse root, every lane
+        pt_, k_, omk_, al_, mx_, x1 = b
+        _, lo, hi = _start(pt_, omk_, mx_)
+        return _newton_update(x1, lo, hi, pt_, jnp.arcsinh(pt_), k_, omk_, al_, xr, wr, 1e-13, True)
+
+    x2, lo, hi, stop, r, d = jax.lax.map(polish_first, (pt, k, omk, alpha, max_stretch, x))
+
+    def polish_rest(b):  # the lanes one step did not finish continue the loop where that step left them
+        pt_, k_, omk_, al_, x2_, lo_, hi_, r_, d_, stop_ = b
+        x, rr, dd = _newton(
+            pt_, k_, omk_, al_, x2_, lo_, hi_, (_X, _W), _FINE_ITER - 1, 1e-13, stop_when_resolved=True, done=stop_
+        )
+        return x, jnp.where(stop_, r_, rr), jnp.where(stop_, d_, dd)
+
+    x, r, d = _regrouped(polish_rest, (pt, k, omk, alpha, x2, lo, hi, r, d, stop), stop, outputs=3)
+    return jax.lax.map(lambda b: _finish(*b), (x, r, d, pt, k, omk, alpha))
+
+
+def _regrouped(fn, arrays, done, outputs=1):
+    """``jax.lax.map(fn, arrays)`` over blocks (rows), with the lanes not ``done`` moved to the first
+    blocks before (a stable partition by prefix sums, no sort) and back after: loops that stop when
+    a block's lanes are done then run only where work is left."""
+    shape = done.shape
+    u = ~done.ravel()
+    cu = jnp.cumsum(u)
+    dest = jnp.where(u, cu - 1, cu[-1] + jnp.cumsum(~u) - 1)  # each lane's place in the regrouped order
+    group = lambda v: jnp.zeros_like(v.ravel()).at[dest].set(v.ravel(), unique_indices=True).reshape(shape)
+    out = jax.lax.map(fn, tuple(group(v) for v in arrays))
+    outs = out if outputs > 1 else (out,)
+    back = tuple(o.ravel()[dest].reshape(shape) for o in outs)
+    return back if outputs > 1 else back[0]
+
+
+def _start(pt, omk, max_stretch):
+    """(x0, lo, hi): the small-strain start p/C ~ 8 (1 - k)(lambda_a - 1) in x = log lambda_a, inside the
+    search bracket [lo, hi] (x >= 0 for p >= 0, x <= 0 for p < 0)."""
+    xmin = np.log(INVERSE_STRETCH_RANGE[0])
+    xmax = jnp.log(jnp.clip(max_stretch, 1.0, INVERSE_STRETCH_RANGE[1]))
+    lo = jnp.where(pt >= 0.0, 0.0, xmin)
+    hi = jnp.where(pt >= 0.0, xmax, 0.0)
+    guess = jnp.log(jnp.maximum(1.0 + pt / (8.0 * omk), 1e-300))
+    return jnp.where((guess >= lo) & (guess <= hi), guess, 0.5 * (lo + hi)), lo, hi
+
+
+def _finish(x, r, d, pt, k, omk, alpha):
+    """(lambda_a, converged, rule_ok) from the polished x and the residual and slope of its last evaluation."""
+    la = jnp.exp(x)
+    # r, d are taken one Newton step before the returned x (see _newton)
+    converged = _resolved(r, d, pt) | (pt == 0.0)
+    c, _ = quadrature_indicator(la, k, omk, alpha)
+    return la, converged, c <= PANEL_INDICATOR
 
 
 def _solve_block(pt, k, omk, alpha, max_stretch, table=None, coarse_stage=True):
@@ -1033,16 +1124,11 @@ def _solve_block(pt, k, omk, alpha, max_stretch, table=None, coarse_stage=True):
     given (20-point rule only), else a 6-point stage first (``coarse_stage``; without it the 20-point
     Newton runs from the small-strain guess: a few more steps, but one loop less to compile, which is
     what a small call pays for most)."""
-    xmin = np.log(INVERSE_STRETCH_RANGE[0])
-    xmax = jnp.log(jnp.clip(max_stretch, 1.0, INVERSE_STRETCH_RANGE[1]))
-    lo = jnp.where(pt >= 0.0, 0.0, xmin)
-    hi = jnp.where(pt >= 0.0, xmax, 0.0)
-    # small-strain guess p/C ~ 8 (1 - k)(lambda_a - 1)
-    guess = jnp.log(jnp.maximum(1.0 + pt / (8.0 * omk), 1e-300))
-    x_small = jnp.where((guess >= lo) & (guess <= hi), guess, 0.5 * (lo + hi))
+    x_small, lo, hi = _start(pt, omk, max_stretch)
+    x0 = x_small
     if table is not None:
-        guess = jnp.where(pt == 0.0, 0.0, _table_start(pt, table, guess))
-    x0 = jnp.where((guess >= lo) & (guess <= hi), guess, 0.5 * (lo + hi))
+        guess = jnp.where(pt == 0.0, 0.0, _table_start(pt, table, x_small))
+        x0 = jnp.where((guess >= lo) & (guess <= hi), guess, 0.5 * (lo + hi))
 
     def two_stage(x0):
         if not coarse_stage:
@@ -1071,11 +1157,7 @@ def _solve_block(pt, k, omk, alpha, max_stretch, table=None, coarse_stage=True):
             lambda: tuple(jnp.where(failed, a, b) for a, b in zip(two_stage(x_small), (x, r, d))),
             lambda: (x, r, d),
         )
-    la = jnp.exp(x)
-    # r, d are taken one Newton step before the returned x (see _newton)
-    converged = _resolved(r, d, pt) | (pt == 0.0)
-    c, _ = quadrature_indicator(la, k, omk, alpha)
-    return la, converged, c <= PANEL_INDICATOR
+    return _finish(x, r, d, pt, k, omk, alpha)
 
 
 def inner_stretch_solve(

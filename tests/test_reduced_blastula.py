@@ -654,3 +654,35 @@ def test_concrete_parameters_inside_a_users_jit():
         np.testing.assert_allclose(np.asarray(out), np.asarray(eager), rtol=1e-13, atol=1e-12, err_msg=name)
     past = jax.jit(lambda q: bl.inner_stretch(np.array([100.0, 300.0]), **g) + q)(q)  # 300 Pa: past the limit
     assert np.isfinite(past[0]) and np.isnan(past[1])
+
+
+def test_regrouped_inverse_takes_the_per_block_loops_steps():
+    """Large calls with per-lane shells run each Newton stage in two phases: a few steps for every lane, then the
+    unfinished lanes (near-flat curves of small alpha that converge linearly) regrouped into the first blocks for
+    the rest. Lane by lane the same steps as the loops per block of 1024 (``_solve_block``): the same stretches
+    (to the last bits) and the same converged and rule flags, on random shells and lanes near and above the limit
+    point, at p = 0 and beyond the deflation range."""
+    import jax
+
+    from tissuemech.compare.bench.reduced_blastula import random_shells
+
+    n = 4 * bl._CHUNK
+    sh = random_shells(n, seed=3)
+    pt = np.asarray(sh["pressure"] / sh["C"], dtype=float)
+    pt[:8] = 0.0
+    pt[8:16] = -1e12
+    k, omk = bl._geometry(sh["A"], sh["B"])
+    args = [np.broadcast_to(np.asarray(v, dtype=float), (n,)).copy() for v in (pt, k, omk, sh["alpha"])]
+    B, al = (np.broadcast_to(np.asarray(v, dtype=float), (n,))[16:24] for v in (sh["B"], sh["alpha"]))
+    lim = bl.limit_point(inner_radius=sh["A"], outer_radius=B, C=1.0, alpha=al)
+    args[0][16:24] = np.where(np.isnan(lim.pressure), 1e3, 1.001 * np.nan_to_num(lim.pressure))  # above the limit
+    mx = np.full(n, bl.INVERSE_STRETCH_RANGE[1])
+    new = [np.asarray(v) for v in bl._solve_stretch(*args, mx)]
+    blocks = tuple(v.reshape(-1, bl._CHUNK) for v in (*args, mx))
+    old = [np.asarray(v).ravel() for v in jax.jit(lambda b: jax.lax.map(lambda c: bl._solve_block(*c), b))(blocks)]
+    for a, b in zip(new[1:], old[1:]):
+        assert np.array_equal(a, b)
+    ok = new[1]
+    assert ok[8:].sum() > 0.97 * (n - 8) and not ok[8:16].any()
+    np.testing.assert_allclose(new[0][ok], old[0][ok], rtol=1e-14, atol=0)
+    np.testing.assert_allclose(new[0][24:][ok[24:]], np.asarray(sh["stretch"])[24:][ok[24:]], rtol=1e-11)
