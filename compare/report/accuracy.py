@@ -32,7 +32,8 @@ def section(*, quick: bool = False) -> Section:
             note="FE labels: n_radial x n_circ Q2/P1 elements (kappa = 2.2 GPa: the FE converges to the slightly "
             "compressible shell, ~2e-5 in this error (~5e-6 in stretch) from the incompressible exact one, so its error "
             "stops falling there; 4x8 lies below by a cancellation of the two errors); diffrax labels: Dopri8 relative "
-            "tolerance; reduced paths jitted, the fastest of 21 calls after compile (compile time: 'first call [s]' in the table).",
+            "tolerance; reduced paths jitted, the fastest of "
+            f"{accuracy.reduced_calls(sec.quick)} calls after compile (compile time: 'first call [s]' in the table).",
         ),
         "accuracy_blastula.png",
     )

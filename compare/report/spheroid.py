@@ -130,7 +130,10 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
     if rs.DATA_FILE.exists():  # the master curves shipped with the package (python -m tissuemech.compare.calibrate)
         laws["shipped FE table"] = dict(equilibrium="fem")
     progress("spheroid: FE levels and reduced laws (Fig. 10 case)")
-    df, fe_runs = accuracy.spheroid_accuracy(meshes=levels, equilibria=laws, fe_repeats=fe_repeats, settings=law_text)
+    df, fe_runs = accuracy.spheroid_accuracy(
+        quick, meshes=levels, equilibria=laws, fe_repeats=fe_repeats, settings=law_text
+    )
+    calls = accuracy.reduced_calls(quick)
     nel = {m: int(r.mesh.mesh.nelements) for m, r in fe_runs.items()}
     df["setting"] = [
         (f"level {int(st.split()[1])} ({nel[int(st.split()[1])]} el.)" + (" reference" if "reference" in st else ""))
@@ -147,7 +150,7 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
             note="FE labels: fem.spheroid mesh level (number of Q2/P1 elements), "
             + ("one run" if quick else "the fastest of 3 runs")
             + ", mesh set-up included; reduced: the lumped Maxwell model with the law named "
-            "(jitted; the fastest of 21 calls after compile); 'static run on level "
+            f"(jitted; the fastest of {calls} calls after compile); 'static run on level "
             f"{ref_level}' is calibrated on the reference mesh, so it is not independent of the reference.",
         ),
         "accuracy_spheroid.png",
@@ -475,7 +478,7 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
         "",
         "error = max over t in {0.2 s, 1500 s} of |sigma~/sigma~_ref - 1|, sigma~_ref the Richardson extrapolation "
         "of the three finest FE levels with their observed order (row 'FE Richardson'); reduced = the lumped Maxwell model "
-        "(reduced.spheroid, exact-kernel quadrature path, jitted; wall time: the fastest of 21 calls after compile; "
+        f"(reduced.spheroid, exact-kernel quadrature path, jitted; wall time: the fastest of {calls} calls after compile; "
         "FE: the fastest of the runs of each level, mesh set-up included). The row 'static run on level "
         f"{ref_level}' (calibrated on the reference mesh) uses "
         f"an equilibrium table from one static FE run on the reference mesh ({calib_wall:.1f} s, not counted "

@@ -7,6 +7,7 @@ from collections.abc import Callable
 import numpy as np
 import pandas as pd
 
+from tissuemech.compare import runcache
 from tissuemech.compare.report.common import Section, md_table
 
 
@@ -28,6 +29,14 @@ def fe_jobs(quick: bool = False, spheroid: bool = True) -> list[tuple[Callable, 
 
     jobs = stability.kappa_jobs(mesh=_kappa_mesh(quick))
     return jobs + (stability.compression_jobs(*_compression_settings(quick)) if spheroid else [])
+
+
+def stiff_solver_job() -> tuple[Callable, dict, int]:
+    """The stiff-solver table (``studies.stability.stiff_solver_map``: three diffrax solvers, each compiled, ~5 s)
+    as a job the report's builder starts ahead on the second core."""
+    from tissuemech.compare.studies import stability
+
+    return stability.stiff_solver_map, {}, 1
 
 
 def section(
@@ -53,7 +62,7 @@ def section(
     visc, bounds = stability.viscous_step_map(
         np.geomspace(1e-2 if sec.quick else 1e-3, 1500.0, 24 if sec.quick else 34)
     )
-    stiff = stability.stiff_solver_map()
+    stiff = runcache.call(*stiff_solver_job()[:2]).result  # computed ahead by the builder's second process
     comp = None
     if spheroid_reason is None:
         progress("stability: compression depth")

@@ -15,10 +15,10 @@ pressure residual of that state against the exact incompressible shell,
   tolerance set to rtol in {1e-3 .. 1e-10} (its ``rtol=`` argument);
 * FE: ``fem.blastula.inflate`` (load control, kappa = 2.2 GPa) on 4 mesh levels (n_radial, n_circ).
 
-Wall times: the fastest of ``repeats`` calls after one warm-up call (``wall_time [s]``; 21 calls for
-the jitted reduced paths; the fastest call is the least disturbed by other work on a shared machine),
-with their spread ``wall_time min [s]`` .. ``wall_time max [s]`` and median ``wall_time median [s]``; JIT
-compile and mesh set-up of the warm-up call are in ``first call [s]``. ``pareto`` only lets a row
+Wall times: the fastest of ``repeats`` calls after one warm-up call (``wall_time [s]``; ``REDUCED_CALLS`` (21)
+calls for the jitted reduced paths, ``REDUCED_CALLS_QUICK`` (7) in quick mode; the fastest call is the least
+disturbed by other work on a shared machine), with their spread ``wall_time min [s]`` .. ``wall_time max [s]``
+and median ``wall_time median [s]``; JIT compile and mesh set-up of the warm-up call are in ``first call [s]``. ``pareto`` only lets a row
 dominate another when it is faster beyond the spread.
 
 Spheroid (``spheroid_accuracy``, needs ``fem.spheroid`` and ``reduced.spheroid``): the seed's Fig. 10
@@ -26,7 +26,7 @@ case; the reference is the converged FE value: the Richardson extrapolation of s
 finest contact-edge-fitted levels run (observed order; ``compare.bench.fem_spheroid.richardson``), so no
 method (not the finest level, not a table calibrated on one level) is compared with itself; error = max
 over t in {0.2 s, 1500 s} of |sigma~(t) / sigma~_ref(t) - 1| (sigma~ = F / A_mid, Pa). Methods: the
-reduced lumped model (jitted; the fastest of 21 calls after compile) with the Hertz law and with an
+reduced lumped model (jitted; the fastest of ``reduced_calls`` calls after compile) with the Hertz law and with an
 FE-calibrated law (tables passed by the caller), FE on every level (the fastest of ``fe_repeats`` runs,
 mesh set-up included in each).
 
@@ -75,6 +75,14 @@ __all__ = [
 
 
 _T = TypeVar("_T")
+
+REDUCED_CALLS = 21  # timed calls of a jitted reduced path (its fastest is the least disturbed by other work)
+REDUCED_CALLS_QUICK = 7  # the same in quick mode (the reduced rows' timing was ~4 s of a cold quick report)
+
+
+def reduced_calls(quick: bool) -> int:
+    """Timed calls of each jitted reduced path in the accuracy tables (after the compiling first call)."""
+    return REDUCED_CALLS_QUICK if quick else REDUCED_CALLS
 
 
 def timed_stats(fn: Callable[[], _T], repeats: int = 5) -> tuple[float, np.ndarray, _T]:
@@ -138,15 +146,15 @@ def blastula_fe_jobs(quick: bool = False, repeats: int = 3) -> list[tuple[Callab
     return [(inflate, dict(kw, mesh=m), max(int(repeats), 1) + 1) for m in (FE_MESHES_QUICK if quick else FE_MESHES)]
 
 
-def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
-    """Error against wall time for the reduced (quadrature, diffrax) and FE blastula paths.
+def blastula_reduced_job(quick: bool = False, repeats: int = 3) -> tuple[Callable, dict, int]:
+    """The reduced rows of :func:`blastula_accuracy` as one ``(function, keywords, repeats)`` job (what
+    ``compare.runcache.prefetch`` can start ahead: JAX compiles and timed calls, ~5-8 s)."""
+    return blastula_reduced_rows, dict(quick=bool(quick), repeats=int(repeats)), 1
 
-    Returns a DataFrame with columns method, setting, ``wall_time [s]`` (the fastest of ``repeats`` calls
-    after a warm-up), ``wall_time min [s]``, ``wall_time max [s]`` (their spread), ``wall_time median [s]``,
-    ``first call [s]``
-    (first call, includes JIT compile / mesh set-up), repeats, error (see the module docstring),
-    stretch_error (max |lambda_a / lambda_exact - 1|) and pareto (bool).
-    """
+
+def blastula_reduced_rows(quick: bool = False, repeats: int = 3) -> list[dict]:
+    """The reduced rows of :func:`blastula_accuracy` (quadrature inverse, diffrax forward at ``ODE_RTOLS``): each
+    jitted, timed over ``max(repeats, reduced_calls(quick))`` calls after the compiling first one."""
     import jax
 
     from tissuemech.reduced import blastula as bl
@@ -154,10 +162,10 @@ def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
     ps = np.asarray(PRESSURES)
     la_ex = np.array([shell_inner_stretch(p, outer_radius=B, alpha=ALPHA) for p in ps])
     geo = dict(inner_radius=A, outer_radius=B, C=C, alpha=ALPHA)
-    rows = []
+    rows: list[dict] = []
 
     inv = jax.jit(lambda q: bl.inner_stretch(q, **geo))
-    first, walls, la = timed_stats(lambda: jax.block_until_ready(inv(ps)), max(repeats, 21))
+    first, walls, la = timed_stats(lambda: jax.block_until_ready(inv(ps)), max(repeats, reduced_calls(quick)))
     la = np.asarray(la)
     rows.append(
         dict(
@@ -171,7 +179,7 @@ def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
 
     for rtol in ODE_RTOLS:
         fwd = jax.jit(lambda x, rtol=rtol: bl.pressure(x, **geo, method="ode", rtol=rtol))
-        first, walls, p = timed_stats(lambda: jax.block_until_ready(fwd(la_ex)), max(repeats, 21))
+        first, walls, p = timed_stats(lambda: jax.block_until_ready(fwd(la_ex)), max(repeats, reduced_calls(quick)))
         p = np.asarray(p)
         rows.append(
             dict(
@@ -182,6 +190,23 @@ def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
                 stretch_error=np.nan,
             )
         )
+
+    return rows
+
+
+def blastula_accuracy(quick: bool = False, repeats: int = 3) -> pd.DataFrame:
+    """Error against wall time for the reduced (quadrature, diffrax) and FE blastula paths.
+
+    Returns a DataFrame with columns method, setting, ``wall_time [s]`` (the fastest of ``repeats`` calls
+    after a warm-up), ``wall_time min [s]``, ``wall_time max [s]`` (their spread), ``wall_time median [s]``,
+    ``first call [s]``
+    (first call, includes JIT compile / mesh set-up), repeats, error (see the module docstring),
+    stretch_error (max |lambda_a / lambda_exact - 1|) and pareto (bool).
+    """
+    ps = np.asarray(PRESSURES)
+    la_ex = np.array([shell_inner_stretch(p, outer_radius=B, alpha=ALPHA) for p in ps])
+    # through the run cache, like the FE runs: the report's builder computes them ahead in its second process
+    rows = list(runcache.call(*blastula_reduced_job(quick, repeats)[:2]).result)
 
     for m, job in zip(FE_MESHES_QUICK if quick else FE_MESHES, blastula_fe_jobs(quick, repeats)):
         # through the run cache (compare.runcache): a later report reuses the runs and the times they took
@@ -322,7 +347,8 @@ def spheroid_accuracy(
     for name, kw in equilibria.items():
         fn = jax.jit(lambda tt, kw=kw: rs.nominal_stress(tt, **FIG10, **kw))  # tables become constants
         first, red_walls, s = timed_stats(
-            cast(Callable[[], np.ndarray], lambda fn=fn: np.asarray(jax.block_until_ready(fn(ts)))), 21
+            cast(Callable[[], np.ndarray], lambda fn=fn: np.asarray(jax.block_until_ready(fn(ts)))),
+            reduced_calls(quick),
         )
         rows.append(
             dict(
