@@ -144,7 +144,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         )
     if backend != "cpu":  # the same kernel on this machine's CPU: the GPU's speed-up over it
         cpu = jax.devices("cpu")[0]
-        chunk_cpu = jax.jit(kernel, device=cpu) if _jit_takes_device() else jax.jit(kernel)
+        chunk_cpu = jax.jit(kernel)  # runs where its inputs are committed (run puts them on the CPU)
         with jax.default_device(cpu):
             jax.block_until_ready(chunk_cpu(*(jax.device_put(v[:CHUNK], cpu) for v in (C, beta, tau, X_app))))
             w_cpu, _, F_cpu = run(chunk_cpu, n_ref, CHUNK, cpu)
@@ -156,15 +156,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             f"largest |F_{backend} / F_cpu - 1| = {d_cpu:.2e}"
         )
     return 0
-
-
-def _jit_takes_device() -> bool:
-    """``jax.jit(device=...)`` was deprecated and later removed: where absent, ``jax.default_device`` places it."""
-    import inspect
-
-    import jax
-
-    return "device" in inspect.signature(jax.jit).parameters
 
 
 if __name__ == "__main__":
