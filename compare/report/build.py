@@ -128,11 +128,20 @@ def build(
         if workers > 1:
             from tissuemech.compare.batch.pool import process_pool
 
-            jobs = fe_jobs(quick, spheroid=_spheroid_reason() is None)
             pool = stack.enter_context(process_pool(workers - 1))
+            pool.submit(warm_worker)  # the worker starts and imports the FE while this process lists the jobs
+            jobs = fe_jobs(quick, spheroid=_spheroid_reason() is None)
             stack.callback(runcache.cancel_pending)  # before the pool's shutdown: nothing left queued
             runcache.prefetch(pool, jobs[::-1])
         return _build(out_dir, quick=quick, progress=progress)
+
+
+def warm_worker() -> None:
+    """A second process's first task: import what its FE runs need (~2-3 s), so that it overlaps this process's
+    listing of the jobs (whose limit points compile a JAX program) instead of following it."""
+    with contextlib.suppress(Exception):  # an import error is the run's to report, where it is imported again
+        import tissuemech.fem.blastula
+        import tissuemech.fem.spheroid  # noqa: F401
 
 
 def fe_jobs(quick: bool = False, spheroid: bool = True) -> list[tuple[Callable, dict, int]]:
