@@ -1199,7 +1199,9 @@ def inner_stretch_solve(
     la = _inverse(pt, k, omk, alpha, mx)
     A, B = (jnp.asarray(v, dtype=jnp.float64) for v in (inner_radius, outer_radius))
     valid = (A > 0) & (B > A) & jnp.isfinite(B) & (C > 0) & jnp.isfinite(C) & (alpha >= 0) & jnp.isfinite(alpha)
-    la = jnp.where(valid, la, jnp.nan)  # a shell or material that eager calls refuse: NaN, not converged
+    # a pressure of +-inf is no state either (the search would stop at its bracket's end, 0.5 or 10)
+    valid = valid & jnp.isfinite(jnp.asarray(pressure, dtype=jnp.float64))
+    la = jnp.where(valid, la, jnp.nan)  # input that eager calls refuse: NaN, not converged
     return la, ~jnp.isnan(la)
 
 

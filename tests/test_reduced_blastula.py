@@ -686,3 +686,21 @@ def test_regrouped_inverse_takes_the_per_block_loops_steps():
     assert ok[8:].sum() > 0.97 * (n - 8) and not ok[8:16].any()
     np.testing.assert_allclose(new[0][ok], old[0][ok], rtol=1e-14, atol=0)
     np.testing.assert_allclose(new[0][24:][ok[24:]], np.asarray(sh["stretch"])[24:][ok[24:]], rtol=1e-11)
+
+
+@pytest.mark.parametrize("n", [8, 3 * 1024 + 5])
+def test_inverse_solve_of_non_finite_pressure_is_nan(n):
+    """``inner_stretch_solve`` (no input check) gives NaN and converged False for a pressure of NaN, +inf or -inf,
+    eager and under jit, in small calls and in large per-lane calls (the search would otherwise stop at its
+    bracket's end, lambda_a = 0.5 for -inf: a number that is no state)."""
+    import jax
+
+    p = np.full(n, 100.0)
+    p[:3] = [np.nan, np.inf, -np.inf]
+    B = np.full(n, 75e-6)
+    kw = dict(inner_radius=A, outer_radius=B, C=C, alpha=0.2)
+    for fn in (bl.inner_stretch_solve, jax.jit(lambda q: bl.inner_stretch_solve(q, **kw))):
+        la, ok = (np.asarray(v) for v in (fn(p, **kw) if fn is bl.inner_stretch_solve else fn(p)))
+        assert np.isnan(la[:3]).all() and not ok[:3].any()
+        assert ok[3:].all()
+        np.testing.assert_allclose(la[3:], float(bl.inner_stretch(100.0, **{**kw, "outer_radius": 75e-6})), rtol=1e-12)
