@@ -50,6 +50,8 @@ CACHE_ENV = "TISSUEMECH_CACHE_DIR"
 NO_CACHE_ENV = "TISSUEMECH_NO_CACHE"
 _STATE: dict[str, Any] = {"dir": None, "enabled": None}  # None: from the environment
 _PENDING: dict[str, Any] = {}  # key -> future of a prefetched run (prefetch)
+_JOBS: dict[str, tuple[Callable, dict[str, Any], int]] = {}  # key -> the prefetched run's (fn, kwargs, repeats)
+_STOLEN: dict[str, Timed] = {}  # key -> a prefetched run this process took back and ran while it waited
 Job = tuple  # (fn, kwargs, repeats): one run for prefetch
 
 
@@ -192,10 +194,18 @@ def call(fn: Callable, kwargs: dict[str, Any], *, repeats: int = 1) -> Timed:
     fastest); the wall times are the runs', measured when they ran. A run :func:`prefetch` started in another
     process is waited for (or, not yet started there, taken back and run here)."""
     repeats = max(int(repeats), 1)
-    k = _job_key(fn, kwargs, repeats) if (_enabled() or _PENDING) else None
+    k = _job_key(fn, kwargs, repeats) if (_enabled() or _PENDING or _STOLEN) else None
+    if k and k in _STOLEN:
+        _count("taken back")
+        timed = _STOLEN.pop(k)
+        _count("cached" if timed.cached else "run here")
+        return timed
     fut = _PENDING.pop(k, None) if k else None
+    _JOBS.pop(k, None) if k else None
     if fut is not None:
         if not fut.cancel():
+            while not fut.done() and _steal_one():  # running over there: do the last queued run here meanwhile
+                pass
             try:
                 timed = fut.result()
                 _count("prefetched" if not timed.cached else "cached")
@@ -207,6 +217,23 @@ def call(fn: Callable, kwargs: dict[str, Any], *, repeats: int = 1) -> Timed:
     timed = _cached_run(fn, kwargs, repeats)
     _count("cached" if timed.cached else "run here")
     return timed
+
+
+def _steal_one() -> bool:
+    """Take back the prefetched run that would start last over there (not started yet) and run it here, keeping its
+    result for the :func:`call` that asks for it: while this process waits for a run in progress in the other one,
+    both work (the runs asked for last are the farthest from starting there). False where none is left to take."""
+    for k in reversed(list(_PENDING)):
+        fut = _PENDING[k]
+        if fut.cancel():
+            del _PENDING[k]
+            fn, kwargs, repeats = _JOBS.pop(k)
+            try:
+                _STOLEN[k] = _cached_run(fn, kwargs, repeats)
+            except Exception:  # its own call runs it again, where the error reaches that caller
+                pass
+            return True
+    return False
 
 
 _COUNTS: dict[str, int] = {}
@@ -269,6 +296,7 @@ def prefetch(executor: Any, jobs: list[Job]) -> int:
         if _enabled() and (_folder() / k[:2] / f"{k}.pkl").exists():
             continue
         _PENDING[k] = executor.submit(_cached_run, fn, kwargs, repeats)
+        _JOBS[k] = (fn, kwargs, repeats)
         n += 1
     return n
 
@@ -278,6 +306,8 @@ def cancel_pending() -> None:
     for fut in _PENDING.values():
         fut.cancel()
     _PENDING.clear()
+    _JOBS.clear()
+    _STOLEN.clear()
 
 
 def clear(folder: str | Path | None = None) -> int:

@@ -176,3 +176,22 @@ def test_fe_jobs_list_every_prefetched_run_once_and_cacheable():
         "tissuemech.fem.spheroid.compress",
         "tissuemech.compare.calibrate.static_curve",
     }
+
+
+def test_the_second_process_runs_the_last_sections_first_and_in_order():
+    """The second process's queue: the spheroid and tension runs first, in the order the builder asks for them (so the
+    first one asked for is ready first), then the earlier sections' runs from the back (the builder takes those back
+    from the front: the two meet in the middle)."""
+    from tissuemech.compare import runcache
+    from tissuemech.compare.report.build import fe_jobs, fe_jobs_early, fe_jobs_late, worker_order
+
+    assert worker_order([1, 2, 3], ["a", "b"]) == ["a", "b", 3, 2, 1]
+    early, late = fe_jobs_early(quick=True), fe_jobs_late(quick=True)
+    assert early and late
+    key = lambda jobs: [runcache.key(fn, {"kwargs": kw, "repeats": r}) for fn, kw, r in jobs]
+    assert key(fe_jobs(quick=True)) == key(early) + key(late)
+    assert {f"{fn.__module__}.{fn.__name__}" for fn, _, _ in late} >= {
+        "tissuemech.compare.calibrate.static_curve",
+        "tissuemech.compare.studies.tensiometry.sweep",
+    }
+    assert fe_jobs_late(quick=True, spheroid=False) == []

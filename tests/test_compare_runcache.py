@@ -4,6 +4,7 @@ of an input is a new key; prefetched runs are collected; uncacheable arguments r
 from __future__ import annotations
 
 import concurrent.futures as cf
+import threading
 
 import numpy as np
 import pytest
@@ -75,3 +76,44 @@ def test_counts_say_where_each_run_came_from(cache):
     runcache.call(square, dict(x=3.0))
     assert runcache.counts() == {"run here": 1, "cached": 1}
     assert runcache.counts(reset=True) and runcache.counts() == {}
+
+
+STARTED = threading.Event()
+RELEASE = threading.Event()
+
+
+def blocking(*, x):
+    """A run that starts over there and waits until the run that releases it has been done (here)."""
+    STARTED.set()
+    assert RELEASE.wait(60), "the release run never ran"
+    return x
+
+
+def release(*, x):
+    CALLS.append(dict(x=x, thread=threading.get_ident()))
+    RELEASE.set()
+    return x
+
+
+def test_waiting_for_a_run_in_progress_does_the_last_queued_runs_here(cache):
+    """While this process waits for a prefetched run that has started over there, it takes back the queued runs from
+    the end of the queue (the farthest from starting there) and runs them itself; their own calls then return those
+    results without running them again."""
+    STARTED.clear()
+    RELEASE.clear()
+    runcache.counts(reset=True)
+    here = threading.get_ident()
+    with cf.ThreadPoolExecutor(1) as pool:
+        jobs = [(blocking, dict(x=1.0), 1), (release, dict(x=2.0), 1), (square, dict(x=3.0), 1)]
+        assert runcache.prefetch(pool, jobs) == 3
+        assert STARTED.wait(60)
+        first = runcache.call(blocking, dict(x=1.0))  # running there: square, then release run here meanwhile
+        assert first.result == 1.0 and not first.cached
+        assert [c["x"] for c in CALLS] == [3.0, 2.0]  # from the back of the queue
+        assert CALLS[1]["thread"] == here
+        n = len(CALLS)
+        assert float(runcache.call(square, dict(x=3.0)).result) == 9.0
+        assert runcache.call(release, dict(x=2.0)).result == 2.0
+        assert len(CALLS) == n  # taken back and run while waiting: not run again
+    assert runcache.counts() == {"prefetched": 1, "taken back": 2, "run here": 2}
+    runcache.cancel_pending()

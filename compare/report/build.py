@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 
 from tissuemech.compare.report.common import Section
+from tissuemech.compare.runcache import Job
 
 __all__ = ["build", "fe_jobs", "FIGURES", "TABLES", "SPHEROID_FIGURES", "SPHEROID_TABLES"]
 
@@ -130,9 +131,9 @@ def build(
 
             pool = stack.enter_context(process_pool(workers - 1))
             pool.submit(warm_worker)  # the worker starts and imports the FE while this process lists the jobs
-            jobs = fe_jobs(quick, spheroid=_spheroid_reason() is None)
+            spheroid = _spheroid_reason() is None
             stack.callback(runcache.cancel_pending)  # before the pool's shutdown: nothing left queued
-            runcache.prefetch(pool, jobs[::-1])
+            runcache.prefetch(pool, worker_order(fe_jobs_early(quick, spheroid), fe_jobs_late(quick, spheroid)))
         return _build(out_dir, quick=quick, progress=progress)
 
 
@@ -144,14 +145,22 @@ def warm_worker() -> None:
         import tissuemech.fem.spheroid  # noqa: F401
 
 
-def fe_jobs(quick: bool = False, spheroid: bool = True) -> list[tuple[Callable, dict, int]]:
-    """Every section's FE runs as ``(function, keywords, repeats)``, in the order the builder asks for them
-    (stability map, blastula figures, blastula accuracy, then with ``spheroid`` the spheroid section and surface
-    tension). The limit-point runs are not listed (their load-control sweeps end in an expected ``LimitPointError``);
-    an optional section whose jobs cannot be listed (an import error) is left out: it runs, or fails, in place."""
-    from tissuemech.compare.report import accuracy, blastula, stability
+def worker_order(early: list[Job], late: list[Job]) -> list[Job]:
+    """The second process's order of the FE runs: the last sections' runs (``late``: spheroid, surface tension) first
+    and in the order this process will ask for them, then the first sections' runs (``early``) from the back.
 
-    jobs = stability.fe_jobs(quick, spheroid=spheroid) + blastula.fe_jobs(quick) + accuracy.fe_jobs(quick)
+    This process reaches the spheroid section ~20 s in (quick) and needs its runs one after the other from its
+    first line on (the calibration run, then the levels): run in that order they are ready when asked for (run
+    from the back, the first one asked for came last: this process waited ~4 s for it); meanwhile this process
+    works through the early sections from the front and takes back their runs the second has not started (the two
+    meet in the middle)."""
+    return list(late) + list(early)[::-1]
+
+
+def fe_jobs_late(quick: bool = False, spheroid: bool = True) -> list[Job]:
+    """The spheroid and surface-tension sections' FE runs (none without ``spheroid``), in the order they are asked for;
+    an optional section whose jobs cannot be listed (an import error) is left out: it runs, or fails, in place."""
+    jobs: list[Job] = []
     if spheroid:
         for name in ("spheroid", "tension"):
             try:
@@ -160,6 +169,22 @@ def fe_jobs(quick: bool = False, spheroid: bool = True) -> list[tuple[Callable, 
             except Exception:  # reported by the section itself (_guarded)
                 continue
     return jobs
+
+
+def fe_jobs(quick: bool = False, spheroid: bool = True) -> list[tuple[Callable, dict, int]]:
+    """Every section's FE runs as ``(function, keywords, repeats)``, in the order the builder asks for them
+    (stability map, blastula figures, blastula accuracy, then with ``spheroid`` the spheroid section and surface
+    tension). The limit-point runs are not listed (their load-control sweeps end in an expected ``LimitPointError``);
+    an optional section whose jobs cannot be listed (an import error) is left out: it runs, or fails, in place."""
+    return fe_jobs_early(quick, spheroid) + fe_jobs_late(quick, spheroid)
+
+
+def fe_jobs_early(quick: bool = False, spheroid: bool = True) -> list[Job]:
+    """The stability map's, blastula figures' and blastula accuracy's FE runs (the stability map's compression depth
+    with ``spheroid``), in the order they are asked for."""
+    from tissuemech.compare.report import accuracy, blastula, stability
+
+    return stability.fe_jobs(quick, spheroid=spheroid) + blastula.fe_jobs(quick) + accuracy.fe_jobs(quick)
 
 
 def _spheroid_reason() -> str | None:

@@ -159,8 +159,11 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
     keep = ref.time > 0
     t_ref, s_ref = ref.time[keep], ref.nominal_stress[keep]
     t_dense = np.concatenate([np.linspace(0, 0.2, 21)[1:], np.geomspace(0.2, 1500, 80)[1:]])
-    dense = {k: np.asarray(rs.nominal_stress(t_dense, **fig10, **kw)) for k, kw in laws.items()}
-    at_ref = {k: np.asarray(rs.nominal_stress(t_ref, **fig10, **kw)) for k, kw in laws.items()}
+    # one call per law at the dense and the reference times together: one compiled program per law, not two
+    t_both = np.concatenate([t_dense, t_ref])
+    both = {k: np.asarray(rs.nominal_stress(t_both, **fig10, **kw)) for k, kw in laws.items()}
+    dense = {k: v[: t_dense.size] for k, v in both.items()}
+    at_ref = {k: v[t_dense.size :] for k, v in both.items()}
     # the mesh error of the reference curve at every step: the next coarser level against it
     coarser = levels[-2]
     fe_c = fe_runs[coarser]
@@ -188,8 +191,8 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
         equilibrium=eq10,
         midplane=mid10,
     )
-    fit_curve = np.asarray(rs.nominal_stress(t_dense, **fit_kw))
-    fit_at_ref = np.asarray(rs.nominal_stress(t_ref, **fit_kw))
+    fit_both = np.asarray(rs.nominal_stress(t_both, **fit_kw))  # the calibrated law's program (same law, times)
+    fit_curve, fit_at_ref = fit_both[: t_dense.size], fit_both[t_dense.size :]
 
     def fit_text(n: str, unit: str) -> str:
         if fit.kinds.get(n) == "none":  # alpha: the calibrated table is one alpha's curve, the model ignores alpha
@@ -282,9 +285,10 @@ def section(*, quick: bool = False, progress: Callable[[str], None] = lambda _: 
         vm_static = np.exp(np.where(lx < ld[0], lv[0] + slope0 * (lx - ld[0]), np.interp(lx, ld, lv)))
         return vm_static * F_red / F_eq, F_red
 
-    vm_red, F_red = vm_reduced(t89)
     keep89 = fe89.time > 0
-    vm89_worst = _worst(vm_reduced(fe89.time[keep89])[0], fe89.mean_von_mises[keep89], fe89.time[keep89])
+    vm_both, F_both = vm_reduced(np.concatenate([t89, fe89.time[keep89]]))  # one compiled program for both
+    vm_red, F_red = vm_both[: t89.size], F_both[: t89.size]
+    vm89_worst = _worst(vm_both[t89.size :], fe89.mean_von_mises[keep89], fe89.time[keep89])
     sec.save(
         figures.fig9(
             fe89,
