@@ -195,3 +195,35 @@ def test_the_second_process_runs_the_last_sections_first_and_in_order():
         "tissuemech.compare.studies.tensiometry.sweep",
     }
     assert fe_jobs_late(quick=True, spheroid=False) == []
+
+
+def test_figures_written_by_the_second_process_are_the_figures_drawn_here(tmp_path):
+    """The builder's figure writer: figures sent (pickled) to another executor come out as the same PNG bytes as
+    figures written here; without an executor, and where the executor fails, they are written here."""
+    import concurrent.futures as cf
+
+    from tissuemech.compare.plots import pyplot
+    from tissuemech.compare.report.build import _FigureWriter, write_figures
+
+    plt = pyplot()
+
+    def figs():
+        fig, ax = plt.subplots(figsize=(3, 2))
+        ax.plot([0, 1, 2], [1, 0, 2], "k-o", label="a curve")
+        ax.legend()
+        return {"curve.png": fig}
+
+    (tmp_path / "here").mkdir()
+    assert write_figures(tmp_path / "here", figs()) == ["curve.png"]
+    reference = (tmp_path / "here" / "curve.png").read_bytes()
+    for name, pool in (("pool", cf.ThreadPoolExecutor(1)), ("none", None), ("broken", cf.ThreadPoolExecutor(1))):
+        out = tmp_path / name
+        out.mkdir()
+        if name == "broken":
+            pool.shutdown()  # submit raises: written here at the end
+        writer = _FigureWriter(out, pool)
+        writer.submit(figs())
+        writer.finish()
+        assert (out / "curve.png").read_bytes() == reference, name
+        if pool is not None:
+            pool.shutdown()

@@ -29,6 +29,7 @@ from __future__ import annotations
 import contextlib
 import importlib
 import json
+import pickle
 import platform
 import time
 import traceback
@@ -98,14 +99,64 @@ def _guarded(
         return sec
 
 
-def _write(out: Path, sec: Section, written: list[str]) -> None:
+FIGURE_DPI = 110
+
+
+def write_figures(out: str | Path, figures: dict[str, Any] | bytes) -> list[str]:
+    """Write ``figures`` ({file name: matplotlib figure}, or those pickled) as PNG files into the folder ``out`` and
+    close them; returns the names. What the second process runs for the builder once its FE runs are done."""
     from tissuemech.compare.plots import pyplot
 
     plt = pyplot()
-    for name, fig in sec.figures.items():
-        fig.savefig(out / name, dpi=110)
+    figs = pickle.loads(figures) if isinstance(figures, bytes) else figures
+    for name, fig in figs.items():
+        fig.savefig(Path(out) / name, dpi=FIGURE_DPI)
         plt.close(fig)
-        written.append(name)
+    return list(figs)
+
+
+class _FigureWriter:
+    """Writes each section's figures as soon as the section is done: in the second process (``pool``) after its
+    queued FE runs, the figures pickled here (drawing and compressing a PNG takes ~0.3 s a figure, the second
+    process is idle by then), or here when there is no pool. :meth:`finish` writes here what the second process has
+    not started (taken back, as the FE runs are) or could not write, and waits for the rest."""
+
+    def __init__(self, out: Path, pool: Any = None):
+        self.out, self.pool = out, pool
+        self.pending: list[tuple[dict[str, Any], Any]] = []
+
+    def submit(self, figures: dict[str, Any]) -> None:
+        if not figures:
+            return
+        fut = None
+        if self.pool is not None:
+            with contextlib.suppress(Exception):  # an unpicklable figure, a broken pool: written here at the end
+                fut = self.pool.submit(write_figures, str(self.out), pickle.dumps(figures))
+        self.pending.append((figures, fut))
+
+    def finish(self) -> None:
+        later = []
+        for figures, fut in self.pending:
+            if fut is None or fut.cancel():
+                write_figures(self.out, figures)
+            else:
+                later.append((figures, fut))
+        for figures, fut in later:
+            try:
+                fut.result()
+            except Exception:  # it failed over there: write them here, where an error reaches the caller
+                write_figures(self.out, figures)
+            from tissuemech.compare.plots import pyplot
+
+            for fig in figures.values():
+                pyplot().close(fig)
+        self.pending.clear()
+
+
+def _write(out: Path, sec: Section, written: list[str]) -> None:
+    """The section's tables (CSV) into ``out``; its figures' names into ``written`` (:class:`_FigureWriter` writes
+    them)."""
+    written.extend(sec.figures)
     for name, df in sec.tables.items():
         df.to_csv(out / name, index=False)
         written.append(name)
@@ -125,6 +176,7 @@ def build(
     """
     from tissuemech.compare import runcache
 
+    pool = None
     with contextlib.ExitStack() as stack:
         if workers > 1:
             from tissuemech.compare.batch.pool import process_pool
@@ -134,7 +186,7 @@ def build(
             spheroid = _spheroid_reason() is None
             stack.callback(runcache.cancel_pending)  # before the pool's shutdown: nothing left queued
             runcache.prefetch(pool, worker_order(fe_jobs_early(quick, spheroid), fe_jobs_late(quick, spheroid)))
-        return _build(out_dir, quick=quick, progress=progress)
+        return _build(out_dir, quick=quick, progress=progress, pool=pool)
 
 
 def warm_worker() -> None:
@@ -193,7 +245,7 @@ def _spheroid_reason() -> str | None:
     return spheroid_available()
 
 
-def _build(out_dir: str | Path, *, quick: bool, progress: bool) -> dict:
+def _build(out_dir: str | Path, *, quick: bool, progress: bool, pool: Any = None) -> dict:
     from tqdm.auto import tqdm
 
     import tissuemech.reduced  # noqa: F401  (float64 JAX)
@@ -208,6 +260,7 @@ def _build(out_dir: str | Path, *, quick: bool, progress: bool) -> dict:
     runcache.counts(reset=True)
     reason = spheroid_available()
     done: dict[str, Section] = {}
+    figures = _FigureWriter(out, pool)  # each section's figures are written as soon as it is done
     bar = tqdm(total=13 if reason is None else 7, desc="tissuemech report", disable=not progress, unit="step")
 
     def step(label: str) -> None:  # one tick per milestone inside the sections, so long stages show progress
@@ -233,26 +286,32 @@ def _build(out_dir: str | Path, *, quick: bool, progress: bool) -> dict:
         limit = stability_study.limit_point_map(mesh="default")
     with timed("stability map"):
         done["stability map"] = stability.section(limit, quick=quick, spheroid_reason=reason, progress=step)
+    figures.submit(done["stability map"].figures)
     with timed("blastula figures"):
         done["blastula figures"] = blastula.section(limit[1], quick=quick, progress=step)
+    figures.submit(done["blastula figures"].figures)
     step("blastula accuracy")
     with timed("blastula accuracy"):
         done["blastula accuracy"] = accuracy.section(quick=quick)
+    figures.submit(done["blastula accuracy"].figures)
     if reason is None:
         with timed("spheroid figures + accuracy"):
             done["spheroid figures + accuracy"] = _guarded(
                 "spheroid", lambda: spheroid.section(quick=quick, progress=step), quick=quick
             )
+        figures.submit(done["spheroid figures + accuracy"].figures)
         with timed("surface tension"):
             done["surface tension"] = _guarded(
                 "tension", lambda: tension.section(quick=quick, progress=step), quick=quick, title="5. Surface tension"
             )
+        figures.submit(done["surface tension"].figures)
     for sec in done.values():
         summary.update(sec.summary)
     step("seed comparison, writing")
     bar.close()
     done["seed comparison"] = seed_comparison.section(limit[0], summary, quick=quick)
     summary.update(done["seed comparison"].summary)
+    figures.submit(done["seed comparison"].figures)
     if reason is not None:
         done["spheroid figures + accuracy"] = Section(
             "spheroid",
@@ -266,6 +325,7 @@ def _build(out_dir: str | Path, *, quick: bool, progress: bool) -> dict:
         for key in order:
             _write(out, done[key], written)
             md += done[key].md
+        figures.finish()
     total = time.perf_counter() - t_start
     summary["total_wall_s"] = total
     summary["section_times"] = times
