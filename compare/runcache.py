@@ -18,10 +18,13 @@ filling the cache at once never read a half-written entry.
 
 from __future__ import annotations
 
+import concurrent.futures as cf
 import contextlib
+import functools
 import hashlib
 import os
 import pickle
+import threading
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -52,6 +55,9 @@ _STATE: dict[str, Any] = {"dir": None, "enabled": None}  # None: from the enviro
 _PENDING: dict[str, Any] = {}  # key -> future of a prefetched run (prefetch)
 _JOBS: dict[str, tuple[Callable, dict[str, Any], int]] = {}  # key -> the prefetched run's (fn, kwargs, repeats)
 _STOLEN: dict[str, Timed] = {}  # key -> a prefetched run this process took back and ran while it waited
+_QUEUE: list[tuple[cf.Future, tuple]] = []  # prefetched runs not yet handed to the executor, in its order
+_FEED: dict[str, Any] = {}  # the executor runs are handed to, and its free workers
+_LOCK = threading.Lock()
 Job = tuple  # (fn, kwargs, repeats): one run for prefetch
 
 
@@ -284,10 +290,14 @@ def _cached_run(fn: Callable, kwargs: dict[str, Any], repeats: int) -> Timed:
     return Timed(result, tuple(walls), False)
 
 
-def prefetch(executor: Any, jobs: list[Job]) -> int:
-    """Start ``jobs`` (``(fn, kwargs, repeats)``, in the order they will be asked for) on ``executor`` (e.g. one
-    worker process on the second core: ``compare.batch.pool.process_pool(1)``) unless the cache holds them; a later
-    :func:`call` of the same run collects it. Returns the number started."""
+def prefetch(executor: Any, jobs: list[Job], *, workers: int = 1) -> int:
+    """Start ``jobs`` (``(fn, kwargs, repeats)``, in the order given) on ``executor`` (e.g. one worker process on the
+    second core: ``compare.batch.pool.process_pool(1)``) unless the cache holds them; a later :func:`call` of the same
+    run collects it. Returns the number queued.
+
+    The runs are handed to the executor one per free worker (``workers``: how many it runs at once), the rest wait
+    here: a run not yet handed over can always be taken back (an executor's own queue marks the runs it has
+    accepted as running, and a process pool accepts one more than it runs)."""
     n = 0
     for fn, kwargs, repeats in jobs:
         k = _job_key(fn, kwargs, max(int(repeats), 1))
@@ -295,15 +305,58 @@ def prefetch(executor: Any, jobs: list[Job]) -> int:
             continue
         if _enabled() and (_folder() / k[:2] / f"{k}.pkl").exists():
             continue
-        _PENDING[k] = executor.submit(_cached_run, fn, kwargs, repeats)
+        fut: cf.Future = cf.Future()
+        _PENDING[k] = fut
         _JOBS[k] = (fn, kwargs, repeats)
+        with _LOCK:
+            _QUEUE.append((fut, (fn, kwargs, repeats)))
         n += 1
+    with _LOCK:
+        _FEED["executor"] = executor
+        _FEED["free"] = _FEED.get("free", 0) + max(int(workers), 1)
+    _feed()
     return n
+
+
+def _feed() -> None:
+    """Hand the next queued runs to the executor while it has a free worker (runs taken back are skipped)."""
+    while True:
+        with _LOCK:
+            if _FEED.get("free", 0) <= 0 or not _QUEUE:
+                return
+            fut, job = _QUEUE.pop(0)
+            if not fut.set_running_or_notify_cancel():  # taken back (cancelled) before it was handed over
+                continue
+            _FEED["free"] -= 1
+            executor = _FEED["executor"]
+        try:
+            inner = executor.submit(_cached_run, *job)
+        except Exception as exc:  # the executor is shut down or broken: the caller runs it itself
+            fut.set_exception(exc)
+            with _LOCK:
+                _FEED["free"] += 1
+            continue
+        inner.add_done_callback(functools.partial(_handed_back, fut))
+
+
+def _handed_back(fut: cf.Future, inner: cf.Future) -> None:
+    """The executor finished a run: its result (or error) to the run's own future, then the next run to the worker."""
+    try:
+        fut.set_result(inner.result())
+    except BaseException as exc:  # the error, a cancellation included, goes to the caller of call
+        fut.set_exception(exc if isinstance(exc, Exception) else RuntimeError(repr(exc)))
+    with _LOCK:
+        _FEED["free"] = _FEED.get("free", 0) + 1
+    _feed()
 
 
 def cancel_pending() -> None:
     """Forget the prefetched runs nobody asked for (cancelling those not started)."""
-    for fut in _PENDING.values():
+    with _LOCK:
+        queued = [fut for fut, _ in _QUEUE]
+        _QUEUE.clear()
+        _FEED.clear()
+    for fut in queued + list(_PENDING.values()):
         fut.cancel()
     _PENDING.clear()
     _JOBS.clear()

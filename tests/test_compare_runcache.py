@@ -85,7 +85,7 @@ RELEASE = threading.Event()
 def blocking(*, x):
     """A run that starts over there and waits until the run that releases it has been done (here)."""
     STARTED.set()
-    assert RELEASE.wait(60), "the release run never ran"
+    assert RELEASE.wait(20), "the release run never ran"
     return x
 
 
@@ -95,15 +95,45 @@ def release(*, x):
     return x
 
 
-def test_waiting_for_a_run_in_progress_does_the_last_queued_runs_here(cache):
+class AcceptingExecutor:
+    """Accepts every run at once and marks it running, as a process pool's call queue does with the runs it takes
+    ahead of its workers (they can no longer be cancelled), and runs them one after another in one thread."""
+
+    def __init__(self):
+        self.pool = cf.ThreadPoolExecutor(1)
+
+    def submit(self, fn, /, *args, **kwargs):
+        fut: cf.Future = cf.Future()
+        fut.set_running_or_notify_cancel()
+
+        def run():
+            try:
+                fut.set_result(fn(*args, **kwargs))
+            except BaseException as exc:
+                fut.set_exception(exc)
+
+        self.pool.submit(run)
+        return fut
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        RELEASE.set()  # a failed test must not leave the thread waiting
+        self.pool.shutdown()
+
+
+@pytest.mark.parametrize("executor", [lambda: cf.ThreadPoolExecutor(1), AcceptingExecutor], ids=["queue", "accepting"])
+def test_waiting_for_a_run_in_progress_does_the_last_queued_runs_here(cache, executor):
     """While this process waits for a prefetched run that has started over there, it takes back the queued runs from
     the end of the queue (the farthest from starting there) and runs them itself; their own calls then return those
-    results without running them again."""
+    results without running them again. The runs are handed over one per free worker, so that this holds also for an
+    executor that accepts (and marks running) more runs than it runs."""
     STARTED.clear()
     RELEASE.clear()
     runcache.counts(reset=True)
     here = threading.get_ident()
-    with cf.ThreadPoolExecutor(1) as pool:
+    with executor() as pool:
         jobs = [(blocking, dict(x=1.0), 1), (release, dict(x=2.0), 1), (square, dict(x=3.0), 1)]
         assert runcache.prefetch(pool, jobs) == 3
         assert STARTED.wait(60)
