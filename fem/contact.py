@@ -58,7 +58,7 @@ from tissuemech.fem.mesh import FITTED_EDGE_MAX, FITTED_LEVELS, FITTED_SPLIT, Ax
 from tissuemech.fem.newton import NewtonError, newton
 from tissuemech.fem.stepping import Step, TimedState
 from tissuemech.fem.timestepping import march
-from tissuemech.fem.transfer import deformation_at, gauss_transfer
+from tissuemech.fem.transfer import deformation_at, gauss_transfer, gauss_transfers
 
 log = logging.getLogger(__name__)
 
@@ -689,21 +689,26 @@ def replayed_history(
     point search."""
     shape = m.quadrature_points.shape[1:] + (5,)
     state = ve.initial_state(np.asarray(beta).size, shape)
+    groups = []  # (k, j): consecutive steps on one mesh
     k = 0
     while k < len(path):
         j = k + 1
         while j < len(path) and path[j][0] is path[k][0]:
             j += 1
+        groups.append((k, j))
+        k = j
+    # one point search of m's Gauss points in every step's mesh (fem.transfer.locate_many)
+    transfers = gauss_transfers([path[k][0] for k, _ in groups], m, continuous=True) if smooth else []
+    for g, (k, j) in enumerate(groups):
         mk = path[k][0]
         if smooth:
-            S = gauss_transfer(mk, m, continuous=True)(np.stack([p[2] for p in path[k:j]]))
+            S = transfers[g](np.stack([p[2] for p in path[k:j]]))
         elif mk is m:
             S = np.stack([p[2] for p in path[k:j]])
         else:
             f = deformation_at(mk, np.stack([p[1] for p in path[k:j]]), m)
             S = cm.iso_second_piola(f.reshape((-1,) + shape), mat.C, mat.alpha).reshape(f.shape)
         state = ve.replay(state, beta, tau, zip([p[3] for p in path[k:j]], S))
-        k = j
     return state
 
 

@@ -22,7 +22,15 @@ import numpy as np
 
 from tissuemech.fem.mesh import AxiMesh
 
-__all__ = ["gauss_transfer", "deformation_at", "locate", "local_coordinates", "lagrange2"]
+__all__ = [
+    "gauss_transfer",
+    "gauss_transfers",
+    "deformation_at",
+    "locate",
+    "locate_many",
+    "local_coordinates",
+    "lagrange2",
+]
 
 
 def lagrange2(t: np.ndarray):
@@ -72,41 +80,108 @@ def locate(mesh: AxiMesh, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     dimensionless) in the Q2 ``mesh``: the element of the nearest Gauss point first, then those of the next
     nearest Gauss points and element centres; a point outside every element (just outside the discretised
     boundary) gets the element it is least outside of (its coordinates then leave [0, 1]^2 slightly)."""
-    b = mesh.basis
-    ne, nq = mesh.quadrature_points.shape[1:]
-    ref = np.asarray(b.elem.doflocs, float).T  # (2, 9): the Q2 nodes in [0, 1]^2 (isoparametric geometry)
-    xe = b.doflocs[:, b.element_dofs]  # (2, 9, n_el)
-    G_ref = np.tile(np.asarray(b.X, float), (1, ne))  # the reference coordinates of every Gauss point (2, n)
-    excess_of = lambda lc: np.max(np.maximum(np.maximum(-lc, lc - 1.0), 0.0), axis=0)
-    points, centres = mesh.search_trees()
-    # first the element of the nearest Gauss point, from that point's reference coordinates (10 Newton
-    # steps: a point inside converges in ~5, in one where the meshes coincide; most points that move are found
-    # there too, issue 14); the others are looked for below
-    _, near = points.query(pts.T)
-    elem = near // nq
-    loc = local_coordinates(xe[:, :, elem], ref, pts, iters=10, start=G_ref[:, near])
-    excess = excess_of(loc)
-    out = np.flatnonzero(excess > 1e-10)
-    if out.size:
-        # the rest (near strongly graded elements, or just outside the discretised boundary): the elements of
-        # the 16 nearest Gauss points (from their reference coordinates) and of the 8 nearest element centres
-        # (from the centre), in one pass, taken in that order: the first that contains the point wins, else the
-        # least excess (a point-by-point search's choice)
+    return locate_many([mesh], pts)[0]
+
+
+def _excess(lc: np.ndarray) -> np.ndarray:
+    """How far reference coordinates (2, n) lie outside [0, 1]^2 (0 inside)."""
+    return np.max(np.maximum(np.maximum(-lc, lc - 1.0), 0.0), axis=0)
+
+
+_CANDIDATES_PER_ROUND = 4  # the second pass of the point search tries this many candidate elements per round
+
+
+def locate_many(meshes: list[AxiMesh], pts: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """:func:`locate` of the same points in several meshes (e.g. the fitted meshes of a time run's steps): the
+    Newton inversions of all meshes run as one array computation, in each of the two passes (a point's iterates
+    are its own: the same result as one call per mesh, without the array overhead of many small calls)."""
+    ref = np.asarray(meshes[0].basis.elem.doflocs, float).T  # (2, 9): the Q2 nodes in [0, 1]^2 (isoparametric)
+    n = pts.shape[1]
+    # first the element of the nearest Gauss point, from that point's reference coordinates (10 Newton steps: a
+    # point inside converges in ~5, in one where the meshes coincide; most points that move are found there too,
+    # issue 14)
+    first = []
+    for mesh in meshes:
+        nq = mesh.quadrature_points.shape[2]
+        _, near = mesh.search_trees()[0].query(pts.T)
+        first.append((near // nq, _element_nodes(mesh), _gauss_reference(mesh)[:, near]))
+    loc_all = local_coordinates(
+        np.concatenate([xe[:, :, elem] for elem, xe, _ in first], axis=2),
+        ref,
+        np.tile(pts, (1, len(meshes))),
+        iters=10,
+        start=np.concatenate([start for _, _, start in first], axis=1),
+    )
+    elems = [elem.copy() for elem, _, _ in first]
+    locs = [loc_all[:, i * n : (i + 1) * n].copy() for i in range(len(meshes))]
+    # the rest (near strongly graded elements, or just outside the discretised boundary): the elements of the 16
+    # nearest Gauss points (from their reference coordinates) and of the 8 nearest element centres (from the
+    # centre), in one pass, taken in that order: the first that contains the point wins, else the least excess (a
+    # point-by-point search's choice)
+    rest = []  # (mesh index, points, candidates (n_out, nc), starts (2, n_out, nc))
+    for i, mesh in enumerate(meshes):
+        out = np.flatnonzero(_excess(locs[i]) > 1e-10)
+        if not out.size:
+            continue
+        ne, nq = mesh.quadrature_points.shape[1:]
+        points, centres = mesh.search_trees()
         _, near = points.query(pts[:, out].T, k=min(16, ne * nq))
         _, cen = centres.query(pts[:, out].T, k=min(8, ne))
         cand = np.concatenate([near // nq, cen.reshape(out.size, -1)], axis=1)
-        start = np.concatenate([G_ref[:, near], np.full((2, out.size, cand.shape[1] - near.shape[1]), 0.5)], axis=2)
-        nc = cand.shape[1]
-        lc = local_coordinates(
-            xe[:, :, cand.ravel()], ref, np.repeat(pts[:, out], nc, axis=1), iters=10, start=start.reshape(2, -1)
-        ).reshape(2, out.size, nc)
-        ex = excess_of(lc.reshape(2, -1)).reshape(out.size, nc)
-        best = excess[out]
-        for j in range(nc):
-            better = (best > 1e-10) & (ex[:, j] < best - 1e-14)
-            k = out[better]
-            best[better], elem[k], loc[:, k] = ex[better, j], cand[better, j], lc[:, better, j]
-    return elem, loc
+        start = np.full((2,) + cand.shape, 0.5)
+        start[:, :, : near.shape[1]] = _gauss_reference(mesh)[:, near]
+        rest.append((i, out, cand, start))
+    if not rest:
+        return list(zip(elems, locs))
+    nc = rest[0][2].shape[1]
+    groups = [rest] if all(c.shape[1] == nc for _, _, c, _ in rest) else [[r] for r in rest]  # tiny meshes: apart
+    for group in groups:
+        k_nc = group[0][2].shape[1]
+        nodes = [_element_nodes(meshes[i]) for i, _, _, _ in group]
+        offsets = np.cumsum([0] + [xe.shape[2] for xe in nodes])[:-1]
+        xe_all = np.concatenate(nodes, axis=2)  # the group's meshes' elements, one numbering (offsets)
+        cand = np.concatenate([c for _, _, c, _ in group])  # (N, nc) elements of each point's own mesh
+        gcand = np.concatenate([c + o for (_, _, c, _), o in zip(group, offsets)])  # in the joint numbering
+        start = np.concatenate([st for _, _, _, st in group], axis=1)  # (2, N, nc)
+        p_out = np.concatenate([pts[:, out] for _, out, _, _ in group], axis=1)  # (2, N)
+        best = np.concatenate([_excess(locs[i][:, out]) for i, out, _, _ in group])
+        el = np.concatenate([elems[i][out] for i, out, _, _ in group])
+        lo = np.concatenate([locs[i][:, out] for i, out, _, _ in group], axis=1)
+        # the candidates a few at a time, each round for the points no candidate has contained yet (a later
+        # candidate cannot replace one that contains the point): the same choice as all at once, ~1/4 the work
+        for j0 in range(0, k_nc, _CANDIDATES_PER_ROUND):
+            r = np.flatnonzero(best > 1e-10)
+            if not r.size:
+                break
+            js = np.arange(j0, min(j0 + _CANDIDATES_PER_ROUND, k_nc))
+            lc = local_coordinates(
+                xe_all[:, :, gcand[r][:, js].ravel()],
+                ref,
+                np.repeat(p_out[:, r], js.size, axis=1),
+                iters=10,
+                start=start[:, r][:, :, js].reshape(2, -1),
+            ).reshape(2, r.size, js.size)
+            ex = _excess(lc.reshape(2, -1)).reshape(r.size, js.size)
+            for jj, j in enumerate(js):
+                better = (best[r] > 1e-10) & (ex[:, jj] < best[r] - 1e-14)
+                b = r[better]
+                best[b], el[b], lo[:, b] = ex[better, jj], cand[b, j], lc[:, better, jj]
+        a = 0
+        for i, out, _, _ in group:
+            elems[i][out], locs[i][:, out] = el[a : a + out.size], lo[:, a : a + out.size]
+            a += out.size
+    return list(zip(elems, locs))
+
+
+def _element_nodes(mesh: AxiMesh) -> np.ndarray:
+    """The node coordinates of every element (2, 9, n_el)."""
+    b = mesh.basis
+    return b.doflocs[:, b.element_dofs]
+
+
+def _gauss_reference(mesh: AxiMesh) -> np.ndarray:
+    """The reference coordinates in [0, 1]^2 of every Gauss point, element by element (2, n_el n_qp)."""
+    return np.tile(np.asarray(mesh.basis.X, float), (1, mesh.quadrature_points.shape[1]))
 
 
 def gauss_transfer(old: AxiMesh, new: AxiMesh, continuous: bool = False) -> Callable[[np.ndarray], np.ndarray]:
@@ -118,10 +193,24 @@ def gauss_transfer(old: AxiMesh, new: AxiMesh, continuous: bool = False) -> Call
     at the element's nodes are averaged over the elements that share a node and the continuous Q2 field is
     evaluated instead (still exact for quadratic fields; continuous in the new points' positions, so a search
     over trial meshes sees no jumps where a point crosses an old element's boundary)."""
+    return gauss_transfers([old], new, continuous)[0]
+
+
+def gauss_transfers(
+    olds: list[AxiMesh], new: AxiMesh, continuous: bool = False
+) -> list[Callable[[np.ndarray], np.ndarray]]:
+    """:func:`gauss_transfer` from each of ``olds`` to ``new`` (one point search for all: :func:`locate_many`)."""
+    pts = new.quadrature_points.reshape(2, -1)
+    return [_transfer(old, new, elem, loc, continuous) for old, (elem, loc) in zip(olds, locate_many(olds, pts))]
+
+
+def _transfer(
+    old: AxiMesh, new: AxiMesh, elem: np.ndarray, loc: np.ndarray, continuous: bool
+) -> Callable[[np.ndarray], np.ndarray]:
+    """The transfer of :func:`gauss_transfer` with ``new``'s Gauss points located in ``old`` (``elem``, ``loc``)."""
     xq = new.quadrature_points  # (2, n_el, n_qp)
     ne, nq = xq.shape[1:]
     pts = xq.reshape(2, -1)
-    elem, loc = locate(old, pts)
     G = np.asarray(old.basis.X)  # (2, n_qp) in [0, 1]^2
     powers = [(i, j) for i in range(3) for j in range(3)]
     V = np.stack([G[0] ** i * G[1] ** j for i, j in powers], axis=1)  # (n_qp, 9)

@@ -3,7 +3,7 @@
 import numpy as np
 
 from tissuemech.fem.mesh import fitted_mesh
-from tissuemech.fem.transfer import deformation_at, gauss_transfer, local_coordinates
+from tissuemech.fem.transfer import deformation_at, gauss_transfer, lagrange2, local_coordinates
 
 A0 = 500e-6
 
@@ -85,3 +85,27 @@ def test_continuous_transfer_is_continuous_and_stable_when_chained():
     t1 = gauss_transfer(old, fitted_mesh(A0, 1, 0.25), continuous=True)(f)
     t2 = gauss_transfer(old, fitted_mesh(A0, 1, 0.25 + 1e-9), continuous=True)(f)
     assert np.abs(t1 - t2).max() < 1e-6
+
+
+def test_locating_in_many_meshes_at_once_is_locating_in_each():
+    """fem.transfer.locate_many (the replayed history's one search over every step's mesh) finds the same elements
+    and reference coordinates as one search per mesh, for fitted meshes whose edges differ a little (every point
+    found in the first pass) and a lot (points that change element go through the candidate rounds)."""
+    from tissuemech.fem.transfer import locate, locate_many
+
+    target = fitted_mesh(A0, 1, 0.3)
+    pts = target.quadrature_points.reshape(2, -1)
+    meshes = [fitted_mesh(A0, 1, e) for e in (0.05, 0.2, 0.29, 0.3, 0.45)]
+    for mesh, (elem, loc) in zip(meshes, locate_many(meshes, pts)):
+        e1, l1 = locate(mesh, pts)
+        assert np.array_equal(elem, e1)
+        np.testing.assert_allclose(loc, l1, rtol=0, atol=1e-13)
+        inside = np.all((loc >= -1e-10) & (loc <= 1 + 1e-10), axis=0)
+        assert inside.mean() > 0.99
+        # the element's isoparametric map at the coordinates found gives the point back
+        b = mesh.basis
+        ref = np.asarray(b.elem.doflocs, float).T
+        ia, ib = (np.rint(2.0 * r).astype(int) for r in ref)
+        (v0, _), (v1, _) = lagrange2(loc[0]), lagrange2(loc[1])
+        x = np.einsum("ikn,kn->in", b.doflocs[:, b.element_dofs][:, :, elem], v0[ia] * v1[ib])
+        assert np.max(np.abs(x - pts)[:, inside]) < 1e-12
