@@ -185,7 +185,8 @@ def build(
             pool.submit(warm_worker)  # the worker starts and imports the FE while this process lists the jobs
             spheroid = _spheroid_reason() is None
             stack.callback(runcache.cancel_pending)  # before the pool's shutdown: nothing left queued
-            runcache.prefetch(pool, worker_order(fe_jobs_early(quick, spheroid), fe_jobs_late(quick, spheroid)))
+            late = fe_jobs_late(quick, spheroid, longest_first=True)
+            runcache.prefetch(pool, worker_order(fe_jobs_early(quick, spheroid), late))
         return _build(out_dir, quick=quick, progress=progress, pool=pool)
 
 
@@ -209,15 +210,18 @@ def worker_order(early: list[Job], late: list[Job]) -> list[Job]:
     return list(late) + list(early)[::-1]
 
 
-def fe_jobs_late(quick: bool = False, spheroid: bool = True) -> list[Job]:
-    """The spheroid and surface-tension sections' FE runs (none without ``spheroid``), in the order they are asked for;
-    an optional section whose jobs cannot be listed (an import error) is left out: it runs, or fails, in place."""
+def fe_jobs_late(quick: bool = False, spheroid: bool = True, longest_first: bool = False) -> list[Job]:
+    """The spheroid and surface-tension sections' FE runs (none without ``spheroid``), in the order they are asked for
+    (``longest_first``: the spheroid's convergence-in-time runs longest first, see ``report.spheroid.fe_jobs``); an
+    optional section whose jobs cannot be listed (an import error) is left out: it runs, or fails, in place."""
     jobs: list[Job] = []
     if spheroid:
         for name in ("spheroid", "tension"):
             try:
                 module = importlib.import_module(f"tissuemech.compare.report.{name}")
-                jobs += module.fe_jobs(quick)
+                jobs += (
+                    module.fe_jobs(quick, longest_first=longest_first) if name == "spheroid" else module.fe_jobs(quick)
+                )
             except Exception:  # reported by the section itself (_guarded)
                 continue
     return jobs

@@ -73,19 +73,23 @@ def _fig89_jobs(mesh89: str) -> list[tuple[Callable, dict, int]]:
     ]
 
 
-def fe_jobs(quick: bool = False) -> list[tuple[Callable, dict, int]]:
+def fe_jobs(quick: bool = False, *, longest_first: bool = False) -> list[tuple[Callable, dict, int]]:
     """The section's FE runs as ``(function, keywords, repeats)`` in the order it asks for them: the report's builder
-    starts them ahead on the second core (``compare.runcache.prefetch``)."""
+    starts them ahead on the second core (``compare.runcache.prefetch``). ``longest_first``: the convergence-in-time
+    runs (last) from the longest (the tightest tolerance, the most steps) to the shortest, the order the second
+    process takes them in: this process, taking back the runs at the end of the queue while it waits, then gets the
+    short ones (in a full report the two longest took 19-20 s each, and the one taken last set the end)."""
     from tissuemech.compare.studies.accuracy import spheroid_fe_jobs, time_convergence_jobs
 
     levels, repeats, mesh89 = _levels(quick)
     fig10 = cases.FIG10
+    in_time = time_convergence_jobs(quick)  # fixed step counts rising, then adaptive tolerances falling
     return [
         _static_job(fig10["displacement"] / (2 * fig10["radius"]), fig10["alpha"], levels[-1]),
         *spheroid_fe_jobs(levels, repeats),
         *_fig89_jobs(mesh89),
         _static_job(FIG89["displacement"] / (2 * FIG89["radius"]), FIG89["alpha"], mesh89),
-        *time_convergence_jobs(quick),  # the convergence in time (report.accuracy.time_convergence), last
+        *(in_time[::-1] if longest_first else in_time),  # the convergence in time (report.accuracy.time_convergence)
     ]
 
 
