@@ -51,8 +51,9 @@ def test_blastula_table_and_plot(tmp_path, capsys):
 
 def test_blastula_curves_solve_every_set_with_one_shape(monkeypatch):
     """Every Fig. 4/5 set goes through the inverse with the same array shape (one compiled program for
-    the command, not one per set length: ``tissuemech blastula --step 50`` compiled the inverse twice), and
-    the entries past a set's limit point are NaN, not a solution of the 0 Pa stand-in."""
+    the command, not one per set length: ``tissuemech blastula --step 50`` compiled the inverse twice); tables of up
+    to ``ONE_POINT_ROWS`` rows take one-point calls (the program other commands compile too) and agree with the array
+    path; the entries past a set's limit point are NaN, not a solution of the 0 Pa stand-in."""
     from tissuemech.reduced import blastula
 
     shapes = []
@@ -63,11 +64,17 @@ def test_blastula_curves_solve_every_set_with_one_shape(monkeypatch):
         return real(p, **kw)
 
     monkeypatch.setattr(blastula, "inner_stretch", recording)
-    curves = cli_blastula.blastula_curves(200.0, 50e-6, 1000.0, 50.0)
-    assert len(shapes) == len(curves) == 7 and set(shapes) == {(21,)}
-    burst = [c for c in curves if c["limit"] is not None]
-    assert burst and all(np.isnan(c["inner_stretch"][c["pressure"] >= c["limit"].pressure]).all() for c in burst)
-    assert all(np.isfinite(c["inner_stretch"][c["pressure"] < c["limit"].pressure]).all() for c in burst)
+    curves = cli_blastula.blastula_curves(200.0, 50e-6, 1000.0, 10.0)  # 101 rows: one array call per set
+    assert len(shapes) == len(curves) == 7 and set(shapes) == {(101,)}
+    shapes.clear()
+    few = cli_blastula.blastula_curves(200.0, 50e-6, 1000.0, 50.0)  # 21 rows: one-point calls
+    assert 21 <= cli_blastula.ONE_POINT_ROWS < 101 and set(shapes) == {()}
+    for c, f in zip(curves, few):
+        np.testing.assert_allclose(f["inner_stretch"], c["inner_stretch"][::5], rtol=1e-13, atol=0)
+    for cs in (curves, few):
+        burst = [c for c in cs if c["limit"] is not None]
+        assert burst and all(np.isnan(c["inner_stretch"][c["pressure"] >= c["limit"].pressure]).all() for c in burst)
+        assert all(np.isfinite(c["inner_stretch"][c["pressure"] < c["limit"].pressure]).all() for c in burst)
 
 
 def test_spheroid_table_and_plot(tmp_path, capsys):

@@ -37,6 +37,7 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
 
 
 MAX_TABLE_ROWS = 10_000  # the table: max_pressure / step rows at most
+ONE_POINT_ROWS = 32  # tables of up to this many rows solve each row by a one-point call (~50 us each)
 
 
 JIT_CACHE_OPT_OUT = "TISSUEMECH_NO_JIT_CACHE"  # set to 1 to keep the command from writing compiled programs
@@ -97,11 +98,17 @@ def blastula_curves(C: float, inner_radius: float, max_pressure: float, step: fl
         geo = dict(inner_radius=inner_radius, outer_radius=B)
         lim = blastula.limit_point(**geo, C=C, alpha=alpha)
         ok = pressures < lim.pressure if lim is not None else np.ones_like(pressures, bool)
-        # every set solves the full pressure array (0 Pa, lambda_a = 1 exactly, past its limit point), so
-        # all sets share one compiled program (a per-set length would compile the inverse once per length)
-        la = np.where(
-            ok, np.asarray(blastula.inner_stretch(np.where(ok, pressures, 0.0), **geo, C=C, alpha=alpha)), np.nan
-        )
+        if pressures.size <= ONE_POINT_ROWS:
+            # one-point calls: the compiled program every one-point call uses (the report's too), which JAX's
+            # program cache then holds for a first run of this command after other commands
+            la = np.array([float(blastula.inner_stretch(p, **geo, C=C, alpha=alpha)) if k else np.nan
+                           for p, k in zip(pressures, ok)])  # fmt: skip
+        else:
+            # every set solves the full pressure array (0 Pa, lambda_a = 1 exactly, past its limit point), so
+            # all sets share one compiled program (a per-set length would compile the inverse once per length)
+            la = np.where(
+                ok, np.asarray(blastula.inner_stretch(np.where(ok, pressures, 0.0), **geo, C=C, alpha=alpha)), np.nan
+            )
         lb = np.where(ok, np.asarray(blastula.outer_stretch(np.where(ok, la, 1.0), **geo)), np.nan)
         out.append(
             dict(

@@ -39,7 +39,7 @@ def blastula_figure(
                 )
             else:
                 la_top = 1.6 * float(lim.inner_stretch)
-            la = np.linspace(1.0, la_top, 600)
+            la = np.linspace(1.0, la_top, 300)  # (300 points: the compiled program of the report's curves)
             p = np.asarray(blastula.pressure(la, **geo))
             keep = p <= max_pressure * 1.0001
             (line,) = ax.plot(la[keep], p[keep], label=label + " (inner)")
