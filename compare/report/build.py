@@ -21,7 +21,8 @@ Programmatic use: ``build(out_dir, quick=False) -> dict`` (the summary).
 Each section is a module of this package whose ``section(...)`` returns a ``Section`` (markdown,
 figures, tables, summary entries); ``build`` computes them, then writes the files and joins the
 markdown in document order: seed comparison, blastula (Figs 3-5), blastula accuracy, spheroid
-(Figs 8-10 and its accuracy), stability map.
+(Figs 8-10 and its accuracy), stability map. With two processes (the default) the FE runs are shared between
+them and the figures are written by the second one (``build``'s docstring).
 """
 
 from __future__ import annotations
@@ -169,9 +170,11 @@ def build(
 
     Args: out_dir the folder (created if missing); quick coarse meshes and fewer levels; progress
     show a progress bar on stderr; workers the processes the FE runs share (2: every section's FE runs
-    (:func:`fe_jobs`) are started at once, in REVERSE order, in a second process through the run cache
-    ``compare.runcache``, while this one works through the sections in order: the two meet in the middle, and a run
-    not yet started there when this process reaches it is taken back and run here; 1: one after the other).
+    (:func:`fe_jobs`) are queued at once for a second process through the run cache ``compare.runcache``, in the
+    order of :func:`worker_order`, while this one works through the sections in order: a run not yet started there
+    when this process reaches it is taken back and run here, and while this process waits for a run in progress
+    there it runs the runs queued last; each section's figures are written as soon as the section is done, by the
+    second process once its runs are done; 1: one after the other, the figures written at the end).
     Returns the summary dict (also written as ``summary.json``).
     """
     from tissuemech.compare import runcache
