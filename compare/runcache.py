@@ -207,7 +207,8 @@ def call(fn: Callable, kwargs: dict[str, Any], *, repeats: int = 1) -> Timed:
         _count("cached" if timed.cached else "run here")
         return timed
     fut = _PENDING.pop(k, None) if k else None
-    _JOBS.pop(k, None) if k else None
+    if k:
+        _JOBS.pop(k, None)
     if fut is not None:
         if not fut.cancel():
             while not fut.done() and _steal_one():  # running over there: do the last queued run here meanwhile

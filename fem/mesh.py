@@ -65,12 +65,18 @@ class AxiMesh:
         """(k-d tree of the quadrature points, k-d tree of the element centres) in reference coordinates, built
         once per mesh (``fem.transfer`` locates points in the mesh with them)."""
         if "search_trees" not in self._cache:
-            xe = self.basis.doflocs[:, self.basis.element_dofs]
             self._cache["search_trees"] = (
                 cKDTree(self.quadrature_points.reshape(2, -1).T),
-                cKDTree(xe.mean(axis=1).T),
+                cKDTree(self.element_nodes().mean(axis=1).T),
             )
         return self._cache["search_trees"]
+
+    def element_nodes(self) -> np.ndarray:
+        """Reference coordinates of every element's nodes (2, nodes per element, n_elements), dimensionless
+        (gathered once per mesh: ``fem.transfer`` inverts the element maps with them)."""
+        if "element_nodes" not in self._cache:
+            self._cache["element_nodes"] = self.basis.doflocs[:, self.basis.element_dofs]
+        return self._cache["element_nodes"]
 
     @property
     def quadrature_points(self) -> np.ndarray:

@@ -104,7 +104,7 @@ def locate_many(meshes: list[AxiMesh], pts: np.ndarray) -> list[tuple[np.ndarray
     for mesh in meshes:
         nq = mesh.quadrature_points.shape[2]
         _, near = mesh.search_trees()[0].query(pts.T)
-        first.append((near // nq, _element_nodes(mesh), _gauss_reference(mesh)[:, near]))
+        first.append((near // nq, mesh.element_nodes(), _gauss_reference(mesh)[:, near]))
     loc_all = local_coordinates(
         np.concatenate([xe[:, :, elem] for elem, xe, _ in first], axis=2),
         ref,
@@ -137,7 +137,7 @@ def locate_many(meshes: list[AxiMesh], pts: np.ndarray) -> list[tuple[np.ndarray
     groups = [rest] if all(c.shape[1] == nc for _, _, c, _ in rest) else [[r] for r in rest]  # tiny meshes: apart
     for group in groups:
         k_nc = group[0][2].shape[1]
-        nodes = [_element_nodes(meshes[i]) for i, _, _, _ in group]
+        nodes = [meshes[i].element_nodes() for i, _, _, _ in group]
         offsets = np.cumsum([0] + [xe.shape[2] for xe in nodes])[:-1]
         xe_all = np.concatenate(nodes, axis=2)  # the group's meshes' elements, one numbering (offsets)
         cand = np.concatenate([c for _, _, c, _ in group])  # (N, nc) elements of each point's own mesh
@@ -171,12 +171,6 @@ def locate_many(meshes: list[AxiMesh], pts: np.ndarray) -> list[tuple[np.ndarray
             elems[i][out], locs[i][:, out] = el[a : a + out.size], lo[:, a : a + out.size]
             a += out.size
     return list(zip(elems, locs))
-
-
-def _element_nodes(mesh: AxiMesh) -> np.ndarray:
-    """The node coordinates of every element (2, 9, n_el)."""
-    b = mesh.basis
-    return b.doflocs[:, b.element_dofs]
 
 
 def _gauss_reference(mesh: AxiMesh) -> np.ndarray:

@@ -136,6 +136,8 @@ class _FigureWriter:
         self.pending.append((figures, fut))
 
     def finish(self) -> None:
+        from tissuemech.compare.plots import pyplot
+
         later = []
         for figures, fut in self.pending:
             if fut is None or fut.cancel():
@@ -147,8 +149,6 @@ class _FigureWriter:
                 fut.result()
             except Exception:  # it failed over there: write them here, where an error reaches the caller
                 write_figures(self.out, figures)
-            from tissuemech.compare.plots import pyplot
-
             for fig in figures.values():
                 pyplot().close(fig)
         self.pending.clear()
