@@ -69,7 +69,8 @@ def _record(n: int, seed: int | None = 5):
 @pytest.mark.slow
 def test_binned_fit_matches_the_full_fit():
     """2e4 samples in ~1500 bins: the estimates move by a small fraction of the interval, the 95 % widths agree
-    within 5 %, the noise estimate within 1 %; the result says how many bins were fitted."""
+    within 3 % (the error model runs on the samples at the binned estimate), the noise estimate within 1 %; the
+    result says how many bins were fitted."""
     t, y = _record(20_000)
     rec = [(t, y, 200e-6)]
     full = fit.relaxation(rec, radius=500e-6, ramp_time=2.0, compress=False)
@@ -82,7 +83,7 @@ def test_binned_fit_matches_the_full_fit():
         lo, hi = full.intervals[n]
         blo, bhi = binned.intervals[n]
         assert abs(binned.params[n] - full.params[n]) < 0.1 * (hi - lo), n
-        assert (bhi - blo) == pytest.approx(hi - lo, rel=0.05), n
+        assert (bhi - blo) == pytest.approx(hi - lo, rel=0.03), n
     assert "bin means" in binned.summary()
 
 
@@ -113,63 +114,42 @@ def _ar1_noise(n: int, rho: float, seed: int) -> np.ndarray:
     return lfilter([np.sqrt(1 - rho**2)], [1.0, -rho], e)
 
 
-@pytest.mark.parametrize("rho", [0.0, 0.5, 0.9])
-def test_bin_means_covariance_is_the_samples_ar1_covariance(rho):
-    """The bin means' covariance under AR(1) noise (closed form, summed over neighbouring bins until rho^gap
-    underflows) equals A R A' with R_ik = rho^|i - k| the samples' correlation and A the averaging matrix."""
-    from tissuemech.compare.fit.compress import ar1_mean_covariance
-
-    rng = np.random.default_rng(2)
-    count = rng.integers(1, 40, size=60).astype(float)
-    n = int(count.sum())
-    k = np.arange(n)
-    R = rho ** np.abs(k[:, None] - k[None, :])
-    A = np.zeros((count.size, n))
-    ends = np.cumsum(count).astype(int)
-    for b, (lo, hi) in enumerate(zip(ends - count.astype(int), ends)):
-        A[b, lo:hi] = 1.0 / (hi - lo)
-    K = A @ R @ A.T
-    X = rng.standard_normal((count.size, 3))
-    M, k_diag = ar1_mean_covariance(count, rho, X)
-    np.testing.assert_allclose(k_diag, np.diag(K), rtol=1e-12)
-    np.testing.assert_allclose(M, X.T @ K @ X, rtol=1e-10, atol=1e-12 * float(np.abs(M).max()))
-
-
-def test_sample_correlation_from_the_bins_is_the_samples():
-    """The samples' residual lag-1 correlation and mean square, from the bins' sums and a model linear in each bin,
-    are those computed sample by sample (to round-off), for any bin offsets and slopes."""
-    from tissuemech.compare.fit.compress import sample_ar1
-
-    t = np.linspace(0.01, 20.0, 5000)
-    y = np.sin(t) + 0.1 * _ar1_noise(t.size, 0.8, 4)
-    b = bin_record(t, y, ramp_time=2.0, bins=120)
-    rng = np.random.default_rng(5)
-    offset = 0.01 * rng.standard_normal(b.count.size)
-    slope = 0.1 * rng.standard_normal(b.count.size)
-    c = b.count.astype(int)
-    model = np.repeat(b.stress - offset, c) + np.repeat(slope, c) * (t - np.repeat(b.time, c))
-    r = y - model
-    rho, s2 = sample_ar1(b, offset, slope)
-    assert rho == pytest.approx(float(r[1:] @ r[:-1]) / float(r @ r), rel=1e-10)
-    assert s2 == pytest.approx(float(r @ r) / t.size, rel=1e-10)
-
-
 @pytest.mark.slow
 def test_binned_fit_under_ar1_noise_matches_the_full_fit():
-    """AR(1) noise of lag-1 correlation 0.9 on 2e4 samples: the binned fit's estimates are the full fit's (every
-    ramp sample its own bin, no bin-size floor), the samples' correlation is found from the bins' sums, and the 95 %
-    widths of beta and tau agree within 5 %. C and alpha rest on the 2 s ramp, where the full fit's HAC is itself an
-    estimate from few samples: over noise realisations (5e4 samples, seeds 1-4) the ratio binned / full was
-    0.94-1.23 while the binned widths stayed within 4 % of the exact AR(1) sandwich at the truth."""
-    t, y0 = _record(20_000, seed=None)
+    """AR(1) noise of lag-1 correlation 0.9 on 3e4 samples: the binned fit's estimates are the full fit's, and its
+    error model runs on every sample at its estimate, so the correlation it finds and the 95 % widths of all four
+    parameters are the full fit's (C and alpha rest on the 2 s ramp, where the HAC is an estimate from few
+    samples: an error model on the bin means missed the full fit's widths there by up to 23 %)."""
+    t, y0 = _record(30_000, seed=None)
     y = y0 + 0.01 * float(y0.max()) * _ar1_noise(t.size, 0.9, 7)
     rec = [(t, y, 200e-6)]
     full = fit.relaxation(rec, radius=500e-6, ramp_time=2.0, compress=False)
     binned = fit.relaxation(rec, radius=500e-6, ramp_time=2.0, compress=True)
-    assert binned.correlation[0] == pytest.approx(full.correlation[0], abs=0.01)
+    assert 100 < binned.bins[0] < 2000
+    assert binned.correlation[0] == pytest.approx(full.correlation[0], abs=0.005)
     for n in full.names:
         lo, hi = full.intervals[n]
         blo, bhi = binned.intervals[n]
         assert abs(binned.params[n] - full.params[n]) < 0.02 * (hi - lo), n
-        ratio = (bhi - blo) / (hi - lo)
-        assert 0.95 < ratio < 1.05 if n in ("beta", "tau") else 0.75 < ratio < 1.35, (n, ratio)
+        assert (bhi - blo) == pytest.approx(hi - lo, rel=0.03), n
+
+
+def test_sample_evaluator_is_the_residuals_model_and_jacobian_in_any_chunks():
+    """The error model's pass over every sample (chunks of one compiled shape, the last one padded) gives the
+    model and its Jacobian of the fit's own residual, to round-off, for two records of different lengths."""
+    import jax.numpy as jnp
+
+    from tissuemech.compare.fit.model import default_model, residual_builder, sample_evaluator
+    from tissuemech.compare.fit.records import Record
+
+    t1, y1 = _record(2_300)
+    t2, y2 = _record(900, seed=6)
+    recs = [Record(t1, y1, 200e-6), Record(t2, 0.5 * y2, 150e-6)]
+    theta = np.log([140.0, 0.3, 0.5, 15.0])
+    res, jac, scale = residual_builder(recs, 500e-6, 2.0, 1, "fem", default_model())
+    model_ref = np.asarray(res(jnp.asarray(theta))) * scale + np.concatenate([y1, 0.5 * y2])
+    jac_ref = np.asarray(jac(jnp.asarray(theta))) * scale
+    model, J = sample_evaluator(recs, 500e-6, 2.0, 1, "fem", default_model(), chunk=700)(theta)
+    assert model.shape == (3_200,) and J.shape == (3_200, 4)
+    np.testing.assert_allclose(model, model_ref, rtol=1e-12, atol=1e-12 * float(np.abs(model_ref).max()))
+    np.testing.assert_allclose(J, jac_ref, rtol=1e-10, atol=1e-10 * float(np.abs(jac_ref).max()))

@@ -9,11 +9,9 @@
    compression, fit, intervals, figure), its wall time and the load average.
 
 ``--seeds 1,2,3,4`` runs part 1 on several noise realisations and prints the ratios per seed; ``--misfit M`` gives
-the record a smooth misfit (the curve times 1 + M sin(2 pi log(t + ramp) / log(t_end + ramp))). ``--parametric``
-adds a third fit: the full record with every sample (nearly) its own bin, i.e. the full fit with the binned fit's
-AR(1) noise term instead of the full fit's HAC, which tells the binning's error from the noise-term estimators'
-difference. Under AR(1) noise the HAC on the full record scatters over realisations where the parameter's
-information sits on few samples (C and alpha on the 2 s ramp; see docs/benchmarks.md).
+the record a smooth misfit (the curve times 1 + M sin(2 pi log(t + ramp) / log(t_end + ramp))). The binned fit's
+intervals come from the error model on every sample at its estimate (:mod:`tissuemech.compare.fit.compress`), so
+the widths differ from the full fit's by the estimate's shift only.
 ``--skip-full`` leaves out the full fit of part 1 (it takes about a minute on 1e5 samples), ``--skip-cli`` part 2.
 """
 
@@ -63,12 +61,9 @@ def make_record(samples: int, rho: float = 0.0, seed: int = 1, misfit: float = 0
     return t, y + NOISE * float(np.max(y)) * e
 
 
-def compare_fits(
-    samples: int, rho: float = 0.0, full: bool = True, seed: int = 1, misfit: float = 0.0, parametric: bool = False
-) -> list[dict]:
+def compare_fits(samples: int, rho: float = 0.0, full: bool = True, seed: int = 1, misfit: float = 0.0) -> list[dict]:
     """Rows per parameter: estimate and 95 % width, binned and full, and their ratios; plus the fits' times
-    (``seed``: the noise realisation; ``parametric``: also the full record in (nearly) one bin per sample, module
-    doc)."""
+    (``seed``: the noise realisation)."""
     from tissuemech.compare import fit
 
     t, y = make_record(samples, rho, seed, misfit)
@@ -77,7 +72,6 @@ def compare_fits(
     runs = {}
     plan: list[tuple[str, bool | int | str]] = [("binned", "auto")]
     plan += [("full", False)] if full else []
-    plan += [("full AR(1)", samples)] if parametric else []
     for name, compress in plan:
         c0 = time.perf_counter()
         res = fit.relaxation(rec, compress=compress, **kw)
@@ -94,12 +88,9 @@ def compare_fits(
                     "full": f.params[n],
                     "full 95% width": wf,
                     "estimate shift / full width": (b.params[n] - f.params[n]) / wf,
-                    "width binned / full": row["binned 95% width"] / wf,
+                    "width binned / full - 1": row["binned 95% width"] / wf - 1.0,
                 }
             )
-        if parametric:
-            g = runs["full AR(1)"][0]
-            row["width binned / full AR(1)"] = row["binned 95% width"] / np.subtract(*g.intervals[n][::-1])
         rows.append(row)
     for name, (res, wall) in runs.items():
         rows.append({"parameter": f"{name} fit: {sum(res.bins) or samples} points", "fit incl. compile [s]": wall})
@@ -138,7 +129,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=1, help="noise realisation of part 1 (default 1)")
     ap.add_argument("--seeds", default="", help="several noise realisations of part 1, e.g. 1,2,3,4 (over --seed)")
     ap.add_argument("--misfit", type=float, default=0.0, help="relative size of a smooth misfit (default 0)")
-    ap.add_argument("--parametric", action="store_true", help="also the full record with the AR(1) noise term")
     ap.add_argument("--big", type=float, default=1e6, help="samples of the end-to-end record (default 1e6)")
     ap.add_argument("--skip-full", action="store_true", help="no full fit (only the binned one)")
     ap.add_argument("--skip-cli", action="store_true", help="no end-to-end run of tissuemech fit")
@@ -149,7 +139,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(machine_line())
     for seed in [int(s) for s in a.seeds.split(",")] if a.seeds else [a.seed]:
         print(f"binned vs full fit, {int(a.samples)} samples, noise rho {a.rho:g}, misfit {a.misfit:g}, seed {seed}")
-        print_rows(compare_fits(int(a.samples), a.rho, not a.skip_full, seed, a.misfit, a.parametric))
+        print_rows(compare_fits(int(a.samples), a.rho, not a.skip_full, seed, a.misfit))
     if not a.skip_cli:
         print_rows([cli_time(int(a.big))])
     return 0

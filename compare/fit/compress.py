@@ -17,15 +17,14 @@ The statistics stay those of the full record (:func:`tissuemech.compare.fit.rela
 * the noise sd s_j of each record is estimated from both the bin means' weighted residuals (B_j - P B_j / B
   degrees of freedom) and the scatter inside the bins about each bin's least-squares line (n_b - 2 each), i.e.
   from nearly all the samples, like the full fit's RSS_j / (n_j - P n_j / N);
-* the robust error model (:mod:`.diagnostics`) runs on the bin means in the fit's weighted units, except for its
-  noise term: the bin means get the covariance that AR(1) noise of the samples implies
-  (:func:`ar1_mean_covariance`, neighbouring bins' correlation included), with the lag-1 correlation and variance
-  of the samples' residuals computed from the bins' sums (:func:`sample_ar1`: the numbers the full record's fit
-  prewhitens with), so the binned fit needs no floor on the bin size. A HAC estimate on the bin means (the
-  earlier method, with bins of at least twice the integrated correlation time, :func:`min_samples`) rested on the
-  13-26 ramp bins that carry C and alpha: under AR(1) noise of lag-1 correlation 0.9 its widths scattered by
-  +-20 % over noise realisations. A smooth misfit shows in the bins as it does in the samples (the discrepancy's
-  REML statistics are the same sums over time; each bin mean at the samples' long-run variance);
+* the error model of the intervals (:mod:`.diagnostics`: HAC noise term, smooth discrepancy) runs on every
+  sample, at the binned estimate: one pass of the model and its Jacobian over the records (in chunks of one
+  compiled shape, :func:`tissuemech.compare.fit.model.sample_evaluator`), so a compressed fit's intervals are its
+  full fit's, up to the estimate's shift. Earlier error models on the bin means missed the full fit's widths: a HAC
+  of the bin means rested on the 13-26 ramp bins that carry C and alpha (+-20 % under AR(1) noise), a parametric
+  AR(1) term of the bin means (the samples' rho) was closer to the exact AR(1) sandwich than the full fit's HAC but
+  9 % narrower than it on white noise (the full record's HAC estimates C's noise from the few hundred ramp samples
+  that carry it and errs upward there: docs/benchmarks.md, issue 40);
 * the residual diagnostics (lag-1 autocorrelation, runs test) are those of the bin means: they test the model's
   shape (a misfit stands out more clearly once the noise is averaged), not the samples' short-range correlation.
 
@@ -35,7 +34,6 @@ full fit on a 1e5-sample record, and the end-to-end time of ``tissuemech fit`` o
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -47,8 +45,6 @@ __all__ = [
     "Binned",
     "bin_record",
     "bins_for",
-    "sample_ar1",
-    "ar1_mean_covariance",
 ]
 
 DEFAULT_BINS = 2000  # bins per record of a compressed fit (about 1/4 over the ramp, the rest log-spaced in the hold)
@@ -69,7 +65,6 @@ class Binned:
     ss_within: float
     dof_within: int
     samples: int
-    lag_stats: np.ndarray | None = None  # (bins, 10) sums for the samples' lag-1 correlation (:func:`sample_ar1`)
 
 
 def bin_edges(t_end: float, ramp_time: float, bins: int, dt_min: float) -> np.ndarray:
@@ -91,7 +86,7 @@ def bin_record(
     """Average one record (times ascending, s; stress Pa) in about ``bins`` bins (module doc); ``ramp_time`` (s)
     the loading ramp's duration. Bins without samples are dropped; bins of fewer than ``min_count`` samples are
     merged with their neighbours (e.g. ``min_samples(stress)``: nearly independent bin means under correlated
-    noise; not needed by the fit, whose noise term covers the bin means' correlation)."""
+    noise; not needed by the fit, whose error model runs on the samples)."""
     t = np.asarray(time, dtype=float)
     y = np.asarray(stress, dtype=float)
     if bins < 2:
@@ -115,29 +110,6 @@ def bin_record(
     line = np.where(stt > 0, sty**2 / np.where(stt > 0, stt, 1.0), 0.0)
     ss = np.maximum(syy - line, 0.0)
     big = count >= 3
-    # the sums :func:`sample_ar1` needs: products of neighbouring samples of one bin (each about its bin's mean time
-    # and stress), and each bin's first and last sample
-    bin_of = np.repeat(np.arange(count.size), count)
-    same = np.append(bin_of[1:] == bin_of[:-1], False)  # sample k and k + 1 lie in one bin
-
-    def pair_sum(p: np.ndarray) -> np.ndarray:
-        return np.add.reduceat(np.where(same, np.append(p, 0.0), 0.0), starts)
-
-    ends = starts + count - 1
-    lag_stats = np.column_stack(
-        [
-            syy,
-            sty,
-            stt,
-            pair_sum(dyb[:-1] * dyb[1:]),
-            pair_sum(dyb[:-1] * dtb[1:] + dtb[:-1] * dyb[1:]),
-            pair_sum(dtb[:-1] * dtb[1:]),
-            dyb[starts],
-            dtb[starts],
-            dyb[ends],
-            dtb[ends],
-        ]
-    )
     return Binned(
         time=t_mean,
         stress=y_mean,
@@ -145,56 +117,7 @@ def bin_record(
         ss_within=float(np.sum(ss[big])),
         dof_within=int(np.sum(count[big] - 2)),
         samples=int(t.size),
-        lag_stats=lag_stats,
     )
-
-
-def sample_ar1(binned: Binned, offset: np.ndarray, slope: np.ndarray) -> tuple[float, float]:
-    """Lag-1 autocorrelation rho and mean square s^2 (Pa^2) of the samples' residuals (data - model) over the
-    whole record, from the bins' sums (``binned.lag_stats``) with the model linear across each bin: ``offset``
-    (Pa) each bin mean's residual, ``slope`` (Pa/s) the model's time derivative in each bin. These are the
-    numbers the full record's fit prewhitens with (:func:`tissuemech.compare.fit.diagnostics.hac`); the noise
-    inside a bin, its slope included, counts as in the samples."""
-    if binned.lag_stats is None:
-        raise ValueError("the bins carry no lag sums (lag_stats): bin the record with bin_record")
-    syy, sty, stt, saa1, sat1, stt1, a_f, t_f, a_l, t_l = binned.lag_stats.T
-    n, c, d = binned.count, np.asarray(offset, dtype=float), np.asarray(slope, dtype=float)
-    s0 = syy - 2.0 * d * sty + d * d * stt + n * c * c
-    s1 = saa1 - d * sat1 + d * d * stt1 - c * (a_f + a_l) + c * d * (t_f + t_l) + (n - 1.0) * c * c
-    first, last = a_f - d * t_f + c, a_l - d * t_l + c
-    total = float(np.sum(s0))
-    if total <= 0:
-        return 0.0, 0.0
-    rho = (float(np.sum(s1)) + float(last[:-1] @ first[1:])) / total
-    return rho, total / binned.samples
-
-
-def ar1_mean_covariance(count: np.ndarray, rho: float, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """X' K X and diag(K), with K the covariance of the bin means (bins of ``count`` consecutive samples, in time
-    order) of AR(1) noise of lag-1 correlation ``rho`` (0 <= rho < 1) and unit variance: the sum over a bin of
-    n samples has variance n (1 + rho) / (1 - rho) - 2 rho (1 - rho^n) / (1 - rho)^2, two bins a gap of g samples
-    apart (last of the one to first of the other) the covariance rho^g (1 - rho^n_a) (1 - rho^n_b) / (1 - rho)^2.
-    ``X`` (bins, p); the bins' covariances are summed until rho^gap underflows."""
-    n = np.asarray(count, dtype=float)
-    X = np.asarray(X, dtype=float)
-    if rho <= 0.0:
-        k_diag = 1.0 / n
-        return (X * k_diag[:, None]).T @ X, k_diag
-    q = 1.0 - rho
-    k_diag = (n * (1.0 + rho) / q - 2.0 * rho * (1.0 - rho**n) / q**2) / n**2
-    out = (X * k_diag[:, None]).T @ X
-    ends = np.cumsum(n)  # one past each bin's last sample
-    starts = ends - n
-    tail = (1.0 - rho**n) / (q * n)  # (1 - rho^n) / ((1 - rho) n) per bin
-    log_rho = math.log(rho)
-    for lag in range(1, n.size):
-        gap = starts[lag:] - (ends[:-lag] - 1.0)
-        w = np.exp(gap * log_rho) * tail[:-lag] * tail[lag:]
-        if float(np.max(w)) < 1e-17 * float(np.max(k_diag)):
-            break
-        G = (X[:-lag] * w[:, None]).T @ X[lag:]
-        out = out + G + G.T
-    return out, k_diag
 
 
 def noise_correlation(y: np.ndarray, window: int = 25) -> float:

@@ -22,8 +22,8 @@ covariance changes. In the fit's weighted units (residual r_k, Jacobian rows J_k
 * the rest, u, by a heteroscedasticity- and autocorrelation-consistent (HAC) long-run covariance of the scores
   g_k = J_k u_k: AR(1) prewhitening with the residuals' lag-1 autocorrelation (clipped to [0, 0.97]), a Bartlett
   kernel of Andrews' automatic bandwidth on the whitened scores, recoloured by 1 / (1 - rho)^2
-  (Andrews & Monahan 1992); a record fitted as bin means (:mod:`.compress`) gets instead the parametric AR(1)
-  term of :func:`binned_ar1` (the samples' rho and variance, the bin means' exact AR(1) covariance);
+  (Andrews & Monahan 1992); a record fitted as bin means (:mod:`.compress`) gets all of this from its samples
+  (the model and its Jacobian at every sample, at the binned estimate), as its full fit would;
 * cov = A^-1 B A^-1 with A = J'J (the Gauss-Newton matrix, model-error factors included) and
   B = HAC(u) + eps_d^2 J'D D'J (+ the model-error factors' prior rows).
 
@@ -40,8 +40,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tissuemech.compare.fit.compress import Binned, ar1_mean_covariance, sample_ar1
-
 __all__ = [
     "RecordDiagnostics",
     "residual_diagnostics",
@@ -52,7 +50,6 @@ __all__ = [
     "discrepancy_basis",
     "ErrorModelFit",
     "robust_covariance",
-    "binned_ar1",
 ]
 
 ERROR_MODELS = ("robust", "white", "ess", "hac", "discrepancy")
@@ -154,36 +151,6 @@ def hac(g: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, float]:
     return S / (1.0 - rho) ** 2, rho
 
 
-def binned_ar1(
-    J: np.ndarray,
-    u: np.ndarray,
-    sig: np.ndarray,
-    model: np.ndarray,
-    time: np.ndarray,
-    ramp_time: float,
-    binned: Binned,
-) -> tuple[np.ndarray, float, np.ndarray]:
-    """The noise term of one record fitted as bin means: J' Sigma J with Sigma the covariance of the bin means
-    under AR(1) noise of the samples (:func:`tissuemech.compare.fit.compress.ar1_mean_covariance`), its lag-1
-    correlation rho and variance those of the samples' residuals (:func:`tissuemech.compare.fit.compress.sample_ar1`:
-    inside each bin the samples about their mean and slope, the model's slope from the bin means' model values
-    on each side of the ramp's end, plus the bin's residual ``u``), i.e. what the full record's fit prewhitens with.
-    A HAC estimate from the bin means instead rests on the few bins that carry a parameter (13-26 ramp bins carry C
-    and alpha in a dense record): its widths scattered by +-20 % about the full fit's under AR(1) noise.
-    ``J`` (bins, p) and ``u`` the bins' weighted Jacobian and residual (model - data) / ``sig``, ``model`` (Pa) and
-    ``time`` (s) the bins' model values and mean times. Returns (J' Sigma J, rho, each bin mean's long-run variance
-    in weighted units: s^2 (1 + rho) / ((1 - rho) n_b), what a smooth shape sees, for the discrepancy's REML)."""
-    t = np.asarray(time, dtype=float)
-    slope = np.zeros(t.size)
-    for seg in (t <= ramp_time, t > ramp_time):  # the loading's kink at the ramp's end is a bin edge
-        if np.count_nonzero(seg) >= 2:
-            slope[seg] = np.gradient(model[seg], t[seg])
-    rho, s2 = sample_ar1(binned, -u * sig, slope)
-    rho = min(max(rho, 0.0), RHO_MAX)
-    S, _ = ar1_mean_covariance(binned.count, rho, J * (math.sqrt(s2) / sig)[:, None])
-    return S, rho, s2 * (1.0 + rho) / (1.0 - rho) / binned.count / sig**2
-
-
 @dataclass
 class ErrorModelFit:
     """What :func:`robust_covariance` found: the log-parameter covariance under each error model
@@ -252,7 +219,6 @@ def robust_covariance(
     ramp_time: float,
     white: np.ndarray | None = None,
     misfit: float = 0.0,
-    binned: Sequence[Binned | None] | None = None,
 ) -> ErrorModelFit:
     """Covariances of the log-parameters under each error model (module doc).
 
@@ -262,9 +228,8 @@ def robust_covariance(
             the model-error factors applied) and ``sig`` the noise sd (Pa) of each data point, ``times`` each
             record's times (s); ``white`` the Gauss-Newton covariance of the log-parameters if already
             computed (else from J); ``misfit`` a lower bound of the discrepancy's relative size (RMS per shape
-            term), what is known of the model's accuracy beyond what the residuals show; ``binned`` per record
-            its bins (:class:`tissuemech.compare.fit.compress.Binned`) where the data points are bin means, else
-            None: such a record's noise term is :func:`binned_ar1`'s instead of the HAC of its bin means.
+            term), what is known of the model's accuracy beyond what the residuals show. A compressed fit
+            passes every sample here (:func:`tissuemech.compare.fit.estimation.full_record_terms`), not its bins.
     """
     Jd, rd = J[:n_data], r[:n_data]
     Jp = J[n_data:]
@@ -301,25 +266,15 @@ def robust_covariance(
     uh = u / np.sqrt(1.0 - lev)
     B_hac = np.zeros((nz, nz))
     rhos = []
-    bin_sd: dict[int, np.ndarray] = {}
     for j in range(R):
         rows = np.nonzero(idx == j)[0]
-        b_j = binned[j] if binned is not None else None
-        if b_j is not None:
-            S, rho, var_b = binned_ar1(Jd[rows], uh[rows], sig[rows], model[rows], times[j], ramp_time, b_j)
-            bin_sd[j] = np.sqrt(var_b)
-        else:
-            S, rho = hac(Jd[rows] * uh[rows, None], uh[rows])
+        S, rho = hac(Jd[rows] * uh[rows, None], uh[rows])
         B_hac += S
         rhos.append(rho)
     # REML of the discrepancy's size, with each record's correlated noise at its long-run level along the smooth
-    # shapes ((1 + rho) / (1 - rho) times its variance; a bin mean at its AR(1) variance): correlated noise is not
-    # taken for a misfit
+    # shapes ((1 + rho) / (1 - rho) times its variance): correlated noise is not taken for a misfit
     longrun = np.array([(1.0 + r_) / (1.0 - r_) for r_ in rhos]) if R else np.ones(0)
-    sd_pts = (scale * np.sqrt(longrun))[idx]
-    for j, sd_j in bin_sd.items():
-        sd_pts[idx == j] = sd_j
-    w = 1.0 / sd_pts
+    w = 1.0 / (scale * np.sqrt(longrun))[idx]
     lam, n_est = _reml_discrepancy(rd * w, Jd * w[:, None], D * w[:, None])
     if misfit > 0 and misfit**2 >= lam:  # the user's lower bound: a known prior, no estimation uncertainty
         lam, n_est = misfit**2, 1e9

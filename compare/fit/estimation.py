@@ -25,6 +25,7 @@ from tissuemech.compare.fit.model import (
     parameter_names,
     ramp_model_error,
     residual_builder,
+    sample_evaluator,
     search_bounds,
     stated_accuracy,
     table_of,
@@ -44,11 +45,23 @@ __all__ = [
     "HERTZ_X_WARN",
     "HERTZ_X_MAX",
     "HertzRangeWarning",
+    "FullRecords",
+    "full_record_terms",
 ]
 
 NOISE_FREE_REL = 1e-9  # RMS residual below this fraction of the record's peak: noise-free (synthetic) data
 HERTZ_X_WARN = 0.1  # approach / diameter beyond which the small-strain Hertz law's force error exceeds ~15 %
 HERTZ_X_MAX = 0.5  # ... and beyond which (an approach past the radius) a Hertz fit is refused
+
+
+@dataclasses.dataclass(frozen=True)
+class FullRecords:
+    """The records a compressed fit was binned from (:mod:`tissuemech.compare.fit.compress`), for the error model of
+    its intervals: ``records`` every sample, ``evaluate`` theta (log-parameters) -> (model Pa, d model / d theta Pa)
+    at all of them (:func:`tissuemech.compare.fit.model.sample_evaluator`)."""
+
+    records: Sequence[Record]
+    evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
 class HertzRangeWarning(UserWarning):
@@ -188,6 +201,9 @@ def relaxation(
         errors=errors,
         misfit=misfit,
         binned=binned,
+        full=None
+        if not any(binned)
+        else FullRecords(recs, sample_evaluator(recs, radius, ramp_time, n_branches, equilibrium, model)),
     )
     if isinstance(model_error, str):  # "auto": the lumped model's ramp error for the fitted branches (issue 35)
         ramp_eps = ramp_model_error(dict(res.params), n_branches, float(ramp_time), x)
@@ -256,6 +272,7 @@ def estimate(
     errors: str,
     misfit: float,
     binned: Sequence[Any] | None = None,
+    full: FullRecords | None = None,
 ) -> FitResult:
     """The fit behind :func:`relaxation` and :func:`tissuemech.compare.fit.protocols.records_fit`: weighted least
     squares from ``p0`` of the residual ``res_fn`` (log-parameters -> (model - data) / ``scale``, its Jacobian
@@ -263,7 +280,8 @@ def estimate(
     the units of ``scale``), per-record noise, the model-error factors ``eps``, the error model and the 95 % intervals
     (module doc of :mod:`tissuemech.compare.fit`). ``ramp_time`` (s) sets the relaxation times' lower search bound and
     the discrepancy's log-time axis. ``binned``: per record its bins (:mod:`tissuemech.compare.fit.compress`) when
-    ``recs[j]`` holds bin means, else None."""
+    ``recs[j]`` holds bin means, else None; ``full`` then the records they were binned from: the error model of the
+    intervals runs on every sample at the estimate (:func:`full_record_terms`), as the full record's fit's does."""
     P, R = len(names), len(recs)
     binned = list(binned) if binned is not None else [None] * R
     lo_t, hi_t = search_bounds(
@@ -366,19 +384,13 @@ def estimate(
         cov_used = cov
         tqs = np.full(P, tq)
     else:
+        if full is None:
+            terms = (Jz, r, prob.idx, N, model_z, prob.sig, [rec.time for rec in recs])
+        else:
+            terms = full_record_terms(full, z, prob)
+        J_e, r_e, idx_e, n_e, model_e, sig_e, times_e = terms
         emf = robust_covariance(
-            Jz,
-            r,
-            prob.idx,
-            N,
-            P,
-            model_z,
-            prob.sig,
-            [rec.time for rec in recs],
-            float(ramp_time),
-            white=cov,
-            misfit=misfit,
-            binned=binned,
+            J_e, r_e, idx_e, n_e, P, model_e, sig_e, times_e, float(ramp_time), white=cov, misfit=misfit
         )
         for m, c_m in emf.covariances.items():  # Wald intervals under every error model, for comparison studies
             t_m = _quantiles(emf, m, P, dof)
@@ -481,6 +493,31 @@ def estimate(
         wald_by_error_model=wald_by_model,
         bins=tuple(0 if b is None else int(b.count.size) for b in binned),
     )
+
+
+def full_record_terms(full: FullRecords, z: np.ndarray, prob: Problem) -> tuple:
+    """What :func:`tissuemech.compare.fit.diagnostics.robust_covariance` needs, at every sample of the records a
+    compressed fit was binned from, at its estimate ``z``: the weighted Jacobian and residual (model-error factors'
+    columns and prior rows included, as :meth:`Problem.jac`), each sample's record, their number, the model with
+    its factors (Pa), each sample's noise sd (Pa: its record's, the one the bins were weighted with) and the
+    records' times (s). One pass of the model and its Jacobian over the samples (chunked): the intervals are then
+    the full record's fit's, up to the estimate's shift (bins move it by a small fraction of the interval)."""
+    P, R = prob.P, prob.R
+    model, Jm = full.evaluate(z[:P])
+    idx = np.concatenate([np.full(rec.time.size, j) for j, rec in enumerate(full.records)])
+    y = np.concatenate([rec.nominal_stress for rec in full.records])
+    first = np.array([int(np.flatnonzero(prob.idx == j)[0]) for j in range(R)])
+    sd = (prob.sig * np.sqrt(prob.count))[first][idx]  # per-sample noise sd of each record (Pa)
+    f = np.exp(z[P:])[idx] if prob.eps > 0 else np.ones(idx.size)
+    m = model * f
+    J = Jm * (f / sd)[:, None]
+    r = (m - y) / sd
+    if prob.eps > 0:
+        Je = np.zeros((idx.size, R))
+        Je[np.arange(idx.size), idx] = m / sd
+        J = np.vstack([np.hstack([J, Je]), np.hstack([np.zeros((R, P)), np.eye(R) / prob.eps])])
+        r = np.concatenate([r, z[P:] / prob.eps])
+    return J, r, idx, idx.size, m, sd, [rec.time for rec in full.records]
 
 
 def _binned_rss(prob: Problem, rdata: np.ndarray, noise: np.ndarray) -> float:

@@ -29,6 +29,8 @@ __all__ = [
     "incompressible_model",
     "initial_guess",
     "residual_builder",
+    "EVALUATION_CHUNK",
+    "sample_evaluator",
     "table_of",
     "model_error_of",
     "stated_accuracy",
@@ -125,9 +127,57 @@ def _residual(theta, ts, ys, ds, scale, radius, ramp_time, model, equilibrium, n
     return jnp.concatenate([(m - y) / scale for m, y in zip(pred, ys)])
 
 
+def _value_and_jacobian(theta, t, d, radius, ramp_time, model, equilibrium, nb):
+    """One record's model (Pa) at times ``t`` and its Jacobian in theta (Pa per unit log-parameter), one pass."""
+
+    def f(th):
+        m = _predict(th, (t,), (d,), radius, ramp_time, model, equilibrium, nb)[0]
+        return m, m
+
+    jac, value = jax.jacfwd(f, has_aux=True)(theta)
+    return value, jac
+
+
 _STATIC = ("radius", "ramp_time", "model", "equilibrium", "nb")
 _residual_jit = jax.jit(_residual, static_argnames=_STATIC)
 _jacobian_jit = jax.jit(jax.jacfwd(_residual), static_argnames=_STATIC)
+_value_and_jacobian_jit = jax.jit(_value_and_jacobian, static_argnames=_STATIC)
+
+EVALUATION_CHUNK = 2**16  # samples per call of :func:`sample_evaluator`'s compiled program (one shape for any record)
+
+
+def sample_evaluator(records, radius, ramp_time, n_branches, equilibrium, model, chunk: int = EVALUATION_CHUNK):
+    """theta (log-parameters) -> (model (Pa), d model / d theta (Pa)) at every sample of ``records``, in their
+    order: what a compressed fit's error model needs of the full records (:mod:`tissuemech.compare.fit.compress`).
+    The samples go through one compiled program in chunks of ``chunk`` (the last one padded with its last time), so
+    records of any length share it and memory stays flat in their length."""
+    radius, ramp_time = float(radius), float(ramp_time)
+    try:
+        hash(equilibrium)
+        kw = dict(radius=radius, ramp_time=ramp_time, model=model, equilibrium=equilibrium, nb=n_branches)
+        call = lambda th, t, d: _value_and_jacobian_jit(th, t, d, **kw)
+    except TypeError:  # unhashable equilibria (arrays) are closed over
+        call = jax.jit(
+            lambda th, t, d: _value_and_jacobian(th, t, d, radius, ramp_time, model, equilibrium, n_branches)
+        )
+
+    def evaluate(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        th = jnp.asarray(theta, dtype=float)
+        values, jacs = [], []
+        for rec in records:
+            t = np.asarray(rec.time, dtype=float)
+            d = jnp.asarray(float(rec.displacement))
+            for lo in range(0, t.size, chunk):
+                piece = t[lo : lo + chunk]
+                n = piece.size
+                if n < chunk:
+                    piece = np.concatenate([piece, np.full(chunk - n, piece[-1])])
+                v, j = call(th, jnp.asarray(piece), d)
+                values.append(np.asarray(v)[:n])
+                jacs.append(np.asarray(j)[:n])
+        return np.concatenate(values), np.concatenate(jacs)
+
+    return evaluate
 
 
 def residual_builder(records, radius, ramp_time, n_branches, equilibrium, model):
