@@ -50,6 +50,7 @@ __all__ = [
     "discrepancy_basis",
     "ErrorModelFit",
     "robust_covariance",
+    "orthonormal_basis",
 ]
 
 ERROR_MODELS = ("robust", "white", "ess", "hac", "discrepancy")
@@ -166,6 +167,23 @@ class ErrorModelFit:
     discrepancy_share: np.ndarray  # per parameter: fraction of the robust variance from the discrepancy term
 
 
+def orthonormal_basis(X: np.ndarray, rtol: float = 1e-14) -> np.ndarray:
+    """An orthonormal basis (n, rank) of the column space of a tall ``X`` (n, m), rank-revealing: the columns
+    scaled to unit norm, then twice X <- X V diag(lambda)^-1/2 from the eigenpairs of X'X, dropping on the first
+    pass the directions with lambda <= ``rtol`` lambda_max (singular values below ~1e-7 of the largest; the
+    second pass restores orthogonality to round-off, as CholeskyQR2). Dependent columns, such as the fit's d model /
+    d ln C and the discrepancy's constant term (the model is proportional to C), add no direction: a Householder
+    QR gave them a column of rounding noise whose squares put a leverage of up to ~1 on single rows. For n = 1e6,
+    m = 11: 0.12 s (numpy's reduced QR 0.83 s)."""
+    s = np.linalg.norm(X, axis=0)
+    Q = X[:, s > 0] / s[s > 0]
+    for first in (True, False):
+        lam, V = np.linalg.eigh(Q.T @ Q)
+        keep = lam > (rtol if first else 0.5) * max(float(lam.max()), 1e-300) if lam.size else lam > 0
+        Q = Q @ (V[:, keep] / np.sqrt(lam[keep]))
+    return Q
+
+
 def _reml_discrepancy(r: np.ndarray, X: np.ndarray, D: np.ndarray) -> tuple[float, float]:
     """REML estimate of lambda in r = X b + D a + e, a ~ N(0, lambda I), e ~ N(0, I): with P the projection off X,
     maximise -1/2 sum_b [log(1 + lambda mu_b) - lambda c_b^2 / (1 + lambda mu_b)] over lambda >= 0, where mu_b are
@@ -248,12 +266,11 @@ def robust_covariance(
         blocks.append(Dj)
     D = np.hstack(blocks) if blocks else np.zeros((n_data, 0))
     # rough residual: what is left after the parameters' and the smooth discrepancy's linear fit
-    XD = np.hstack([Jd, D])
-    coef, *_ = np.linalg.lstsq(XD, rd, rcond=None)
-    u = rd - XD @ coef
+    Q = orthonormal_basis(np.hstack([Jd, D]))
+    u = rd - Q @ (Q.T @ rd)
     # per record: the rough noise scale (the fit's weights assumed white noise of RSS_j / dof), for the REML
     scale = np.empty(R)
-    n_par = XD.shape[1]
+    n_par = Q.shape[1]
     for j in range(R):
         uj = u[idx == j]
         dof = max(uj.size * (1.0 - n_par / max(n_data, 1)), 1.0)
@@ -261,7 +278,6 @@ def robust_covariance(
     scale = np.maximum(scale, 1e-12)
     # HAC of the rough residual's scores, per record (records independent); each residual scaled by
     # 1 / sqrt(1 - leverage) of the linear fit that made it (HC2: unbiased for white noise of any leverage)
-    Q, _ = np.linalg.qr(XD)
     lev = np.clip(np.sum(Q**2, axis=1), 0.0, 0.99)
     uh = u / np.sqrt(1.0 - lev)
     B_hac = np.zeros((nz, nz))
