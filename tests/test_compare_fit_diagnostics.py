@@ -145,3 +145,22 @@ def test_a_declared_misfit_bounds_the_discrepancy_from_below():
     assert w(r1, "C") > 3 * w(r0, "C")
     with pytest.raises(ValueError, match="misfit"):
         _fit(recs, misfit=-0.1)
+
+
+def test_orthonormal_basis_reveals_the_rank_and_gives_the_hat_matrix_leverages():
+    """Columns with exact dependences (as the fit's d model / d ln C and the discrepancy's constant term, the model
+    being proportional to C) and one nearly dependent one (1e-5 apart): the basis has the rank's columns, is
+    orthonormal to round-off, spans the columns, and its squared rows are the hat matrix's diagonal from an SVD cut
+    at the rank (sum = rank); a plain QR's leverages sum to the column count instead."""
+    rng = np.random.default_rng(3)
+    n = 500
+    A = rng.standard_normal((n, 4)) * np.exp(rng.standard_normal(n))[:, None]
+    X = np.column_stack([A, 3.0 * A[:, 0], A[:, 1] - 2.0 * A[:, 2], A[:, 3] + 1e-5 * rng.standard_normal(n)])
+    Q = diagnostics.orthonormal_basis(X)
+    assert Q.shape == (n, 5)
+    np.testing.assert_allclose(Q.T @ Q, np.eye(5), atol=1e-12)
+    np.testing.assert_allclose(Q @ (Q.T @ X), X, atol=1e-10 * float(np.abs(X).max()))
+    U, s, _ = np.linalg.svd(X, full_matrices=False)
+    hat = np.sum(U[:, s > 1e-9 * s[0]] ** 2, axis=1)
+    np.testing.assert_allclose(np.sum(Q**2, axis=1), hat, atol=1e-10)
+    assert np.sum(np.linalg.qr(X)[0] ** 2) == pytest.approx(7.0)  # what the leverages summed to before
