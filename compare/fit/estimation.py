@@ -202,7 +202,7 @@ def relaxation(
         misfit=misfit,
         binned=binned,
         full=None
-        if not any(binned)
+        if all(b is None or b.count.max() == 1 for b in binned)  # nothing averaged: the bins are the samples
         else FullRecords(recs, sample_evaluator(recs, radius, ramp_time, n_branches, equilibrium, model)),
     )
     if isinstance(model_error, str):  # "auto": the lumped model's ramp error for the fitted branches (issue 35)
