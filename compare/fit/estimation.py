@@ -502,22 +502,17 @@ def full_record_terms(full: FullRecords, z: np.ndarray, prob: Problem) -> tuple:
     its factors (Pa), each sample's noise sd (Pa: its record's, the one the bins were weighted with) and the
     records' times (s). One pass of the model and its Jacobian over the samples (chunked): the intervals are then
     the full record's fit's, up to the estimate's shift (bins move it by a small fraction of the interval)."""
-    P, R = prob.P, prob.R
+    P = prob.P
     model, Jm = full.evaluate(z[:P])
-    idx = np.concatenate([np.full(rec.time.size, j) for j, rec in enumerate(full.records)])
+    # the same weighted residual as the fit's, over the samples: its model and Jacobian are those just evaluated at z
+    # (the only point asked for)
     y = np.concatenate([rec.nominal_stress for rec in full.records])
-    first = np.array([int(np.flatnonzero(prob.idx == j)[0]) for j in range(R)])
-    sd = (prob.sig * np.sqrt(prob.count))[first][idx]  # per-sample noise sd of each record (Pa)
-    f = np.exp(z[P:])[idx] if prob.eps > 0 else np.ones(idx.size)
-    m = model * f
-    J = Jm * (f / sd)[:, None]
-    r = (m - y) / sd
-    if prob.eps > 0:
-        Je = np.zeros((idx.size, R))
-        Je[np.arange(idx.size), idx] = m / sd
-        J = np.vstack([np.hstack([J, Je]), np.hstack([np.zeros((R, P)), np.eye(R) / prob.eps])])
-        r = np.concatenate([r, z[P:] / prob.eps])
-    return J, r, idx, idx.size, m, sd, [rec.time for rec in full.records]
+    samples = Problem(full.records, lambda th: model - y, lambda th: Jm, 1.0, P, prob.eps)
+    first = np.array([int(np.flatnonzero(prob.idx == j)[0]) for j in range(prob.R)])
+    samples.sig = samples.point_sd((prob.sig * np.sqrt(prob.count))[first])  # each record's per-sample sd (Pa)
+    model_f = samples.model(z[:P]) * samples.factor(z)
+    times = [rec.time for rec in full.records]
+    return samples.jac(z), samples.resid(z), samples.idx, samples.y.size, model_f, samples.sig, times
 
 
 def _binned_rss(prob: Problem, rdata: np.ndarray, noise: np.ndarray) -> float:
