@@ -75,6 +75,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from tissuemech.reduced.material import dW_dI1
+from tissuemech.reduced.programs import small_call
 from tissuemech.reduced.validation import (
     is_traced,
     scalar_values,
@@ -424,7 +425,8 @@ def _call(core, x, params, *static):
     n = math.prod(shape)
     if n == 1:  # one point (Python floats or size-1 arrays): 0-d inputs, parameters in one vector
         ps = np.array([float(v.reshape(())) for v in params])
-        out = core(*(() if x is None else (x.reshape(()),)), ps, *static)
+        args = (() if x is None else (x.reshape(()),)) + (ps,)
+        out = small_call(core, tuple(range(len(args), len(args) + len(static))), one_point=True)(*args, *static)
         return jax.tree_util.tree_map(lambda o: _host(o).reshape(shape + o.shape), out)
     if n > _BUCKET_MAX:
         return jax.tree_util.tree_map(_host, core(*(() if x is None else (x,)), _pack(*params), *static))
@@ -437,7 +439,8 @@ def _call(core, x, params, *static):
     params = tuple(v.reshape(()) if v.size == 1 else v for v in params)  # (the output shape is known)
     scalar_params = all(v.ndim == 0 for v in params)
     ps = _pack(*params) if scalar_params else tuple(pad(v) for v in params)
-    out = core(*(() if x is None else (pad(x),)), ps, *static)
+    args = (() if x is None else (pad(x),)) + (ps,)
+    out = small_call(core, tuple(range(len(args), len(args) + len(static))))(*args, *static)
     return jax.tree_util.tree_map(lambda o: _host(o)[:n].reshape(shape + o.shape[1:]), out)
 
 
@@ -499,7 +502,7 @@ def pressure(
     if method == "quadrature":
         fast = _one_point(inner_stretch, (inner_radius, outer_radius, C, alpha))
         if fast is not None:
-            p1 = _host(_pressure_core(fast[0], fast[1]))
+            p1 = _host(small_call(_pressure_core, one_point=True)(fast[0], fast[1]))
             if is_traced(p1) or not np.isnan(p1):
                 return p1.reshape(fast[2])
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
@@ -562,7 +565,7 @@ def pressure_derivative(
     """
     fast = _one_point(inner_stretch, (inner_radius, outer_radius, C, alpha))
     if fast is not None:
-        out = _host(_pressure_derivative_core(fast[0], fast[1])).reshape(fast[2])
+        out = _host(small_call(_pressure_derivative_core, one_point=True)(fast[0], fast[1])).reshape(fast[2])
         if is_traced(out) or np.isfinite(out).all():
             return out
     la = _concrete(_check_stretch("inner_stretch", inner_stretch), inner_stretch)
@@ -825,7 +828,7 @@ def limit_point(*, inner_radius: Array, outer_radius: Array, C: Array, alpha: Ar
     """
     fast = _one_point(_NO_X, (inner_radius, outer_radius, C, alpha))
     if fast is not None:
-        pm1, la1, redo1 = (_host(v) for v in _limit_core(fast[1]))
+        pm1, la1, redo1 = (_host(v) for v in small_call(_limit_core, one_point=True)(fast[1]))
         if is_traced(pm1):  # inside a user's jit/vmap: the traced convention (NaN where there is no maximum)
             return LimitPoint(pm1.reshape(fast[2]), la1.reshape(fast[2]))
         if not redo1:
@@ -1239,7 +1242,7 @@ def inner_stretch(pressure: Array, *, inner_radius: Array, outer_radius: Array, 
     """
     fast = _one_point(pressure, (inner_radius, outer_radius, C, alpha), stretch=False)
     if fast is not None:
-        la1, conv1, ok1 = (_host(v) for v in _inverse_core(fast[0], fast[1]))
+        la1, conv1, ok1 = (_host(v) for v in small_call(_inverse_core, one_point=True)(fast[0], fast[1]))
         if is_traced(la1):  # inside a user's jit/vmap: NaN where there is no stable state
             return jnp.where(conv1 & ok1, la1, jnp.nan).reshape(fast[2])
         if conv1 and ok1:
@@ -1379,7 +1382,7 @@ def profiles(
     """
     fast = _one_point(inner_stretch, (inner_radius, outer_radius, C, alpha)) if type(n) is int and n >= 2 else None
     if fast is not None:
-        fields, redo1 = _profiles_core(fast[0], fast[1], n)
+        fields, redo1 = small_call(_profiles_core, (2,), one_point=True)(fast[0], fast[1], n)
         if is_traced(fields):  # inside a user's jit/vmap: the one-panel fields
             return Profiles(*fields.reshape((6,) + fast[2] + (n,)))
         if not np.asarray(redo1).any():  # one transfer of the (6, n) block, then six views

@@ -193,3 +193,22 @@ def test_every_command_help_prints(name, capsys):
         cli.main([name, "--help"])
     assert e.value.code == 0
     assert f"usage: tissuemech {name}" in capsys.readouterr().out
+
+
+def test_console_script_returns_the_commands_exit_code(tmp_path):
+    """The console script (``console_main``: ``main``, then the objects frozen out of the collector for a fast
+    exit) keeps the command's exit code and its one-line error."""
+    import subprocess
+    import sys
+
+    code = "import sys; from tissuemech.compare.cli import console_main; sys.exit(console_main())"
+    run = subprocess.run(
+        [sys.executable, "-c", code, "blastula", "--step", "2000", "--max-pressure", "1000"],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+    )
+    assert run.returncode == 2
+    assert "--step 2000 Pa must not exceed --max-pressure 1000 Pa" in run.stderr
+    ok = subprocess.run([sys.executable, "-c", code, "--version"], capture_output=True, text=True, cwd=tmp_path)
+    assert ok.returncode == 0 and ok.stdout.strip()

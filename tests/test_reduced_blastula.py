@@ -704,3 +704,37 @@ def test_inverse_solve_of_non_finite_pressure_is_nan(n):
         assert np.isnan(la[:3]).all() and not ok[:3].any()
         assert ok[3:].all()
         np.testing.assert_allclose(la[3:], float(bl.inner_stretch(100.0, **{**kw, "outer_radius": 75e-6})), rtol=1e-12)
+
+
+def test_small_call_programs_equal_the_default_programs():
+    """Eager calls of up to ~1000 points run the cores compiled with XLA options that favour compile time
+    (``reduced.programs``): the same values as the cores with XLA's defaults, to rounding, at one point and at 64
+    points; inside a user's trace the core itself is staged (a nested program cannot take compiler options)."""
+    from tissuemech.reduced.programs import small_call
+
+    rng = np.random.default_rng(3)
+    one = np.array([A, 75e-6, C, 0.01])
+    n = 64
+    many = (np.full(n, A), A * rng.uniform(1.05, 1.6, n), np.full(n, C), rng.uniform(0.0, 0.3, n))
+    la = rng.uniform(1.01, 1.4, n)
+    p = np.asarray(bl.pressure(la, inner_radius=many[0], outer_radius=many[1], C=C, alpha=many[3]))
+    cases = [
+        (bl._limit_core, (one,), True),
+        (bl._inverse_core, (np.array(100.0), one), True),
+        (bl._pressure_core, (np.array(1.5), one), True),
+        (bl._limit_core, (many,), False),
+        (bl._inverse_core, (p, many), False),
+        (bl._pressure_core, (la, many), False),
+    ]
+    for core, args, one_point in cases:
+        program = small_call(core, one_point=one_point)
+        assert program is not core
+        for got, want in zip(jax.tree_util.tree_leaves(program(*args)), jax.tree_util.tree_leaves(core(*args))):
+            got, want = np.asarray(got), np.asarray(want)
+            if want.dtype == bool:
+                np.testing.assert_array_equal(got, want)
+            else:
+                np.testing.assert_allclose(got, want, rtol=4e-15, atol=0, err_msg=core.__name__)
+    staged = []
+    jax.jit(lambda q: staged.append(small_call(bl._pressure_core, one_point=True)) or q)(1.0)
+    assert staged == [bl._pressure_core]

@@ -1,6 +1,7 @@
 """Benchmark of the reduced blastula paths (``reduced.blastula``, ``reduced.viscoshell``).
 
     python -m tissuemech.compare.bench.reduced_blastula [--n 1000000] [--baseline 2000] [--api-only]
+    python -m tissuemech.compare.bench.reduced_blastula --compile   (start-up only: compile times, cold command)
 
 Part 1 (:func:`api_rows`, issue 14): every public function called eagerly with NumPy arrays, as a
 user calls it, against the same call under ``jax.jit``, interleaved in one run (median of the
@@ -373,7 +374,12 @@ def cli_rows(repeats: int = 3) -> list[dict]:
 
     import matplotlib
 
-    exe = [sys.executable, "-c", "import sys; from tissuemech.compare.cli import main; sys.exit(main())", "blastula"]
+    exe = [
+        sys.executable,
+        "-c",
+        "import sys; from tissuemech.compare.cli import console_main as m; sys.exit(m())",
+        "blastula",
+    ]
     times: dict[str, list[float]] = {"cold": [], "warm": [], "no cache": []}
     with tempfile.TemporaryDirectory() as tmp:
         for _ in range(repeats):
@@ -425,6 +431,52 @@ def import_rows(repeats: int = 3) -> list[dict]:
                 eager_points_per_s=f"{1e3 * np.median(ts):.0f} ms",
             )
         )
+    return rows
+
+
+def compile_rows(repeats: int = 3) -> list[dict]:
+    """Compile and run time of the blastula's three eager programs (limit point, inverse, pressure) at one point and
+    at 1024 points, with XLA's defaults and with the options small eager calls use (``reduced.programs``:
+    ``SMALL_CALL_COMPILER_OPTIONS`` up to 1024 points, ``ONE_POINT_COMPILER_OPTIONS`` at one point); one process,
+    after a warm-up compilation, the median of ``repeats`` compilations and of 20 runs (the Fig. 4 shell with alpha
+    0.2 and lambda_a 1.3 at one point; at 1024 points alpha uniform on 0..0.3 and lambda_a on 1.01..1.5)."""
+    import jax
+
+    from tissuemech.reduced import blastula
+    from tissuemech.reduced.programs import ONE_POINT_COMPILER_OPTIONS, SMALL_CALL_COMPILER_OPTIONS
+
+    jax.jit(lambda x: x + 1.0).lower(1.0).compile()  # XLA's one-time start-up, not any program's
+    rows = []
+    for n in (1, 1024):
+        rng = np.random.default_rng(0)
+        alpha = np.full((), 0.2) if n == 1 else rng.uniform(0.0, 0.3, n)  # one shell, n materials
+        params = tuple(np.full(n, v) for v in (A, B, C)) + (alpha,) if n > 1 else np.array([A, B, C, 0.2])
+        la = np.full((), 1.3) if n == 1 else rng.uniform(1.01, 1.5, n)
+        p = np.asarray(blastula.pressure(la, inner_radius=A, outer_radius=B, C=C, alpha=alpha))
+        cores = {
+            "limit_point": (blastula._limit_core, (params,)),
+            "inner_stretch": (blastula._inverse_core, (p, params)),
+            "pressure": (blastula._pressure_core, (la, params)),
+        }
+        small = ONE_POINT_COMPILER_OPTIONS if n == 1 else SMALL_CALL_COMPILER_OPTIONS
+        for name, (core, args) in cores.items():
+            row: dict = dict(function=f"{name} program", points=n)
+            for label, options in (("default", {}), ("small-call", small)):
+                compile_s, runs = [], []
+                for _ in range(repeats):
+                    jax.clear_caches()  # JAX keeps compiled programs in memory: compile anew each time
+                    lowered = core.lower(*args)
+                    t0 = time.perf_counter()
+                    exe = lowered.compile(dict(options))
+                    compile_s.append(time.perf_counter() - t0)
+                jax.block_until_ready(exe(*args))
+                for _ in range(20):
+                    t0 = time.perf_counter()
+                    jax.block_until_ready(exe(*args))
+                    runs.append(time.perf_counter() - t0)
+                row[f"compile_{label}"] = f"{np.median(compile_s):.3f} s"
+                row[f"run_{label}"] = f"{1e6 * np.median(runs):.0f} us"
+            rows.append(row)
     return rows
 
 
@@ -564,7 +616,21 @@ def main(argv: Sequence[str] | None = None) -> list[dict]:
         "--workload-only", action="store_true",
         help="only the workload rows (issue 40 item 6: random shells), e.g. on a GPU machine",
     )  # fmt: skip
+    ap.add_argument(
+        "--compile", action="store_true",
+        help="only the start-up rows (issue 40 item 5): program compile and run times, imports, the whole "
+        "tissuemech blastula process cold and warm",
+    )  # fmt: skip
     args = ap.parse_args(list(argv) if argv is not None else None)
+    if args.compile:
+        from tissuemech.compare.bench.common import machine_line
+
+        print(machine_line())
+        start = compile_rows()
+        print_rows(start)
+        cli = cli_rows(5)
+        print_rows(cli)
+        return start + cli
     if args.workload_only:
         import jax
 
