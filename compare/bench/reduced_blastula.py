@@ -364,8 +364,8 @@ def dispatch_rows(rounds: int = 3) -> list[dict]:
 def cli_rows(repeats: int = 3) -> list[dict]:
     """Wall time of the whole ``tissuemech blastula`` process (its defaults, the PNG into a temporary
     folder): cold (an empty compilation cache; matplotlib's font cache where the user's is), warm (the cache
-    the cold run wrote) and with the cache switched off (``TISSUEMECH_NO_JIT_CACHE=1``); median of ``repeats``
-    runs each, interleaved."""
+    the cold run wrote) and with the cache switched off (``TISSUEMECH_NO_JIT_CACHE=1``); median and range of
+    ``repeats`` runs each, interleaved. The process is the console script's (``console_main``)."""
     import os
     import shutil
     import subprocess
@@ -403,7 +403,7 @@ def cli_rows(repeats: int = 3) -> list[dict]:
         dict(
             function=f"tissuemech blastula (whole process, {kind})",
             points="",
-            eager_points_per_s=f"{np.median(v):.2f} s",
+            eager_points_per_s=f"{np.median(v):.2f} s (runs {min(v):.2f}-{max(v):.2f} s)",
         )
         for kind, v in times.items()
     ]
