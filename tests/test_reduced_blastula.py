@@ -738,3 +738,25 @@ def test_small_call_programs_equal_the_default_programs():
     staged = []
     jax.jit(lambda q: staged.append(small_call(bl._pressure_core, one_point=True)) or q)(1.0)
     assert staged == [bl._pressure_core]
+
+
+def test_large_pressure_calls_sum_the_rule_node_by_node_to_the_same_values():
+    """Calls of at least ``_NODE_LOOP_MIN`` points sum the 20-point rule one node at a time (one fused pass over the
+    points), smaller ones with the nodes as a trailing axis: the same pressures to rounding, on random shells."""
+    rng = np.random.default_rng(11)
+    n = bl._NODE_LOOP_MIN + 7
+    B = A * rng.uniform(1.03, 1.6, n)
+    alpha = rng.uniform(0.0, 0.3, n)
+    la = rng.uniform(0.8, 2.0, n)
+    large = np.asarray(bl.pressure(la, inner_radius=A, outer_radius=B, C=C, alpha=alpha))
+    small = np.concatenate(
+        [
+            np.asarray(
+                bl.pressure(
+                    la[i : i + 1000], inner_radius=A, outer_radius=B[i : i + 1000], C=C, alpha=alpha[i : i + 1000]
+                )
+            )
+            for i in range(0, n, 1000)
+        ]
+    )
+    np.testing.assert_allclose(large, small, rtol=1e-14, atol=1e-300)
