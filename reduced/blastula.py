@@ -244,7 +244,7 @@ def _p_over_C_rule(la, k, omk, alpha, x, w):
 
     At least ``_NODE_LOOP_MIN`` points: one node at a time on arrays of the points' shape, which XLA fuses into one
     pass over the points; fewer: the nodes as a trailing axis, one (N, nodes) array between two fusions, which
-    compiles ~3x faster (what a small eager call pays for most). At 1e6 random shells the exact pressure ran at
+    compiles up to ~3x faster (what a small eager call pays for most). At 1e6 random shells the exact pressure ran at
     1.0e7 points/s with the trailing axis and 1.4-1.9e7 node by node
     (``python -m tissuemech.compare.bench.reduced_blastula --workload-only``); the two sum in another order and
     agree to ~2e-15 relative."""

@@ -6,7 +6,7 @@ persistent program cache). For a call with a few points the program runs for mic
 its compilation takes hundreds of milliseconds, so :func:`small_call` compiles eager calls of up to ~1000 points
 with XLA's CPU fusion emitters off (:data:`SMALL_CALL_COMPILER_OPTIONS`: the same run time there, less compile
 time) and calls of one point also at XLA's lowest backend optimisation level (:data:`ONE_POINT_COMPILER_OPTIONS`:
-a few tens of microseconds more per call, compiled in about a third of the time).
+up to a few tens of microseconds more per call, compiled in ~40 % of the time).
 ``python -m tissuemech.compare.bench.reduced_blastula --compile`` prints the compile and run times of each.
 Large calls keep XLA's defaults (the fusion emitters make a limit-point search over 2e5 shells ~2x faster), and
 so does every core staged into a user's ``jax.jit``/``vmap``/``grad`` (a nested program cannot take compiler
