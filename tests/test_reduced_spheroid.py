@@ -93,6 +93,30 @@ def test_broadcast_grid_equals_loop():
             assert np.allclose(G[i, j], s, rtol=1e-12)
 
 
+def test_many_parameter_sets_run_in_blocks_with_the_values_and_gradients_of_one_set():
+    # 601 sets of 256 times run as 3 blocks of 201 (the last padded by 2): every block, the padded one included, gives
+    # each set's own curve (quadrature and ODE), and reverse-mode gradients pass through the blocks
+    T = np.concatenate([np.linspace(0.0, TR, 56), np.geomspace(TR, 1500.0, 201)[1:]])
+    rng = np.random.default_rng(3)
+    Cs = rng.uniform(100.0, 300.0, 601)
+    taus = rng.uniform(0.05, 500.0, 601)
+    kw = {**FIG10, "equilibrium": "fem", "branches": [(0.4, taus), (0.2, 5.0)]}
+    assert -(-601 // max(sp._BLOCK_CURVES, sp._BLOCK_POINTS // T.size)) == 3
+    F = np.asarray(sp.force(T, **{**kw, "C": Cs}))
+    assert F.shape == (601, T.size) and np.all(np.isfinite(F))
+    for i in (0, 200, 201, 402, 599, 600):
+        one = np.asarray(sp.force(T, **{**kw, "C": Cs[i], "branches": [(0.4, taus[i]), (0.2, 5.0)]}))
+        assert np.allclose(F[i], one, rtol=1e-12, atol=0)
+    hist = lambda t: D * jnp.minimum(t / TR, 1.0)
+    ode = {**kw, "displacement": hist, "ramp_time": None, "jump_times": [TR]}
+    G = np.asarray(sp.force(T, **{**ode, "C": Cs}))
+    i = 402
+    one = np.asarray(sp.force(T, **{**ode, "C": Cs[i], "branches": [(0.4, taus[i]), (0.2, 5.0)]}))
+    assert np.allclose(G[i], one, rtol=1e-9, atol=0)
+    grad = jax.grad(lambda c: jnp.sum(sp.force(T, **{**kw, "C": c})[:, -1]))(jnp.asarray(Cs))
+    assert np.allclose(np.asarray(grad), F[:, -1] / Cs, rtol=1e-10)  # F is linear in C
+
+
 def test_nominal_stress_incompressible_area():
     s = np.asarray(sp.nominal_stress([1500.0], **{**FIG10, "branches": []}))[0]
     x = D / (2 * A0)
