@@ -939,10 +939,10 @@ def _adjoint(kind: Any):
 
 
 # Parameter sets evaluated together (one vmap) at most: max(_BLOCK_CURVES, _BLOCK_POINTS / output times); more run
-# as blocks one after the other (lax.map). One vmap over all sets held ~200 bytes per (set, time) of temporaries
-# (80 MB at 2000 curves x 200 times), which the allocator maps and the kernel zeroes afresh at every call: in blocks
-# a 2000 x 200 call (one branch) took 95 instead of 110 ms, two branches 150 instead of 290 ms, and a jitted call
-# with traced times the eager call's time (0.98-1.01x, was 1.04-1.07x: `python -m tissuemech.compare.bench reduced`).
+# as blocks one after the other (lax.map). One vmap over all sets held ~200 bytes of temporaries per (set, time)
+# (80 MB at 2000 curves x 200 times, XLA's buffer assignment), which the allocator mapped and the kernel zeroed
+# afresh at every call, and which made a jitted call with traced times 1.03-1.07x the eager call: in blocks
+# 0.97-1.00x (`python -m tissuemech.compare.bench reduced`, rows "jit(traced t) vs eager").
 _BLOCK_CURVES = 256
 _BLOCK_POINTS = 51_200
 

@@ -66,6 +66,25 @@ def test_spheroid_scan_matches_direct_model():
     assert np.allclose(fast["sigma_peak [Pa]"] / fast["sigma_end [Pa]"], 1 + fast["beta [-]"], rtol=2e-2)
 
 
+def test_spheroid_curves_run_in_blocks_with_each_rows_values():
+    # 1225 curves in one call run as blocks of scan.BLOCK (512) and a remainder (201): each row its own curve
+    assert scan.BLOCK == 512
+    df = scan.spheroid(
+        C=(100.0, 300.0), tau=(10.0, 500.0), n=35, model=fake_nominal_stress, equilibrium="fake", batch_size=1225,
+        curves=True,
+    )  # fmt: skip
+    assert len(df) == 1225
+    t = df.attrs["time [s]"]
+    for i in (0, 511, 512, 1023, 1024, 1224):
+        row = df.iloc[i]
+        s = fake_nominal_stress(
+            t, radius=row["radius [m]"], C=row["C [Pa]"], alpha=row["alpha [-]"],
+            branches=[(row["beta [-]"], row["tau [s]"])], displacement=row["displacement [m]"],
+            ramp_time=row["ramp_time [s]"],
+        )  # fmt: skip
+        assert np.allclose(row["sigma [Pa]"], np.asarray(s), rtol=1e-13)
+
+
 def test_blastula_scan_exact_and_bursts():
     from tissuemech.reduced import blastula as red
 

@@ -6,7 +6,8 @@ a 0.2 s ramp and a hold to 1500 s), random parameters (C 100-400 Pa, beta 0.1-2,
 the diameter, a0 = 500 um), Hertz law, plate force:
 
 * the scan layer's kernel: ``reduced.spheroid.force`` (method ``Quadrature()``), ``jax.vmap``-ed and jitted over
-  chunks of ``compare.scan.CHUNK`` curves (what ``compare.scan.spheroid`` runs), after a warm-up;
+  chunks of ``compare.scan.CHUNK`` curves, on a CPU in blocks of ``compare.scan.BLOCK`` inside a chunk
+  (``compare.scan.vmap_in_blocks``: what ``compare.scan.spheroid`` runs), after a warm-up;
 * a hand-written vectorised NumPy evaluation of the same closed form: F_eq(t) + beta k tau^1.5 (sqrt(X) - D(sqrt(X)))
   e^{-(t - t_e)/tau} with X = t_e / tau, t_e = min(t, t_r), D Dawson's integral (``scipy.special.dawsn``), the
   same chunks.
@@ -61,7 +62,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     import jax.numpy as jnp
 
     from tissuemech.compare.bench.common import machine_line
-    from tissuemech.compare.scan import CHUNK, default_times
+    from tissuemech.compare.scan import CHUNK, default_times, vmap_in_blocks
     from tissuemech.reduced import spheroid
 
     ap = argparse.ArgumentParser(
@@ -97,7 +98,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             jnp.asarray(t), radius=A0, C=c, alpha=0.2, branches=[(b, ta)], displacement=2 * A0 * x, ramp_time=TR,
             equilibrium="hertz",
         )  # fmt: skip
-        return jax.vmap(one)(C, beta, tau, X)
+        return vmap_in_blocks(lambda a: one(*a), (C, beta, tau, X))  # as the scan layer
 
     def run(fn, m: int, size: int, device=None, to_host: bool = True) -> tuple[float, float, np.ndarray]:
         """Curves 0..m in chunks of ``size`` (the last one padded: one compiled shape), each chunk's forces
@@ -130,7 +131,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     diff = float(np.max(np.abs(F_jax[:, 1:] / F_np[:, 1:] - 1.0)))
     r_jax, r_np = n / w_jax, n_ref / w_np
     print(f"{n} curves x {t.size} times, chunks of {chunk} ({backend}), Hertz law, one branch; forces to the host")
-    print(f"scan kernel (jit(vmap(spheroid.force)), quadrature, {backend}): {w_jax:.3f} s, {r_jax:.3g} curves/s")
+    print(
+        f"scan kernel (jit(vmap(spheroid.force)) in blocks, quadrature, {backend}): {w_jax:.3f} s, {r_jax:.3g} curves/s"
+    )
     print(f"NumPy closed form (Dawson's integral), {n_ref} curves, one core: {w_np:.3f} s, {r_np:.3g} curves/s")
     print(
         f"ratio scan kernel / NumPy (time per curve): {r_np / r_jax:.3g}x (target <= 3x); "

@@ -19,6 +19,7 @@ Figures of a scan: ``compare.plots.scan``; the command ``tissuemech scan``: ``co
 from __future__ import annotations
 
 from tissuemech.compare.scan.evaluation import (
+    BLOCK,
     CHUNK,
     MAX_SCAN_BYTES,
     TINY,
@@ -30,6 +31,7 @@ from tissuemech.compare.scan.evaluation import (
     spheroid,
     spheroid_times,
     summaries,
+    vmap_in_blocks,
 )
 from tissuemech.compare.scan.fe_checks import FE_COLUMNS, design_points, select, spot_check, spread_indices
 from tissuemech.compare.scan.io import LONG_NAMES, from_xarray, to_netcdf, to_xarray
@@ -89,6 +91,8 @@ __all__ = [
     "LONG_NAMES",
     "check_normal",
     "MAX_SCAN_BYTES",
+    "BLOCK",
+    "vmap_in_blocks",
     "CHUNK",
     "TINY",
 ]

@@ -53,12 +53,27 @@ __all__ = [
     "evaluate_in_chunks",
     "check_normal",
     "MAX_SCAN_BYTES",
+    "BLOCK",
+    "vmap_in_blocks",
     "CHUNK",
     "TINY",
 ]
 
 MAX_SCAN_BYTES = 2 * 1024**3  # a design (or its curves) larger than this is refused up front
 CHUNK = 8192  # points per reduced-model call of evaluate_in_chunks (one compiled shape)
+# spheroid curves evaluated together (one vmap) inside a call on a CPU, the blocks one after the other
+# (``jax.lax.map``): the temporaries of a block of curves x 200 times stay ~100 MB where a whole chunk's were mapped
+# and zeroed afresh by every call (`python -m tissuemech.compare.bench scan-kernel` runs the same kernel; a GPU takes
+# the whole chunk in one vmap)
+BLOCK = 512
+
+
+def vmap_in_blocks(fn: Callable, args: Any) -> Any:
+    """``jax.vmap(fn)(args)`` over the leading axis of the pytree ``args``, on a CPU in blocks of :data:`BLOCK`
+    rows one after the other (``jax.lax.map(..., batch_size=BLOCK)``): the same values, flat temporaries."""
+    if jax.default_backend() == "cpu":
+        return jax.lax.map(fn, args, batch_size=BLOCK)
+    return jax.vmap(fn)(args)
 
 
 TINY = float(np.finfo(np.float64).tiny)  # the smallest normal float64 (2.2e-308)
@@ -471,7 +486,7 @@ def _spheroid_evaluator(model: Callable, equilibrium: Any, fixed: tuple, varying
 
     @jax.jit
     def evaluate(t, kw):
-        s = jax.vmap(lambda k: one(t, **k))(kw) if kw else one(t)[None, :]
+        s = vmap_in_blocks(lambda k: one(t, **k), kw) if kw else one(t)[None, :]
         out = summaries(t, s)
         if curves:
             out["sigma"] = s
