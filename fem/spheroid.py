@@ -940,6 +940,11 @@ def branch_names(n_branches: int) -> list[tuple[str, str, int]]:
 # 9.6e-9, the two-branch relaxation 8.4e-9 and the creep under force control 1.2e-7 (``tissuemech bench fem-gradient
 # --only-time``); the run with 4 gradients costs 1.98x the plain run's CPU time against 2.11x at 1e-8 (side by side)
 TIME_SENSITIVITY_TOL = 1e-7
+# a step whose sensitivities took at least this many refinement iterations has the next step's tangent factored
+# afresh (and handed to the problem's Newton as its kept factor): Fig. 10's refinements fell from 3-5 per step on
+# Newton's kept factorisations to 1-3 with four new ones, the run with 4 gradients from 2.2x to 1.9x the plain run
+# (`python -m tissuemech.compare.bench.fem_gradient --only-time`)
+REFACTOR_AFTER = 4
 
 
 class _TimeSensing:
@@ -1057,6 +1062,8 @@ class _TimeSensing:
         newton = prob.linear.kept
         if newton is not None and newton.solve is not None and newton.age == 0 and newton.n == U.size:
             approx = getattr(newton.solve, "unrefined", newton.solve)  # Newton factored during this step
+        if self.refinements and self.refinements[-1] >= REFACTOR_AFTER:  # the kept factorisation has drifted
+            approx = None
         dxU, solve, its = sens.solve_block(KUU, approx, cols, f"t = {t:.6g} s", tol=TIME_SENSITIVITY_TOL, max_iter=5)
         self.kept = {key: solve}
         self.refinements.append(its)
