@@ -942,8 +942,8 @@ def branch_names(n_branches: int) -> list[tuple[str, str, int]]:
 TIME_SENSITIVITY_TOL = 1e-7
 # a step whose sensitivities took at least this many refinement iterations has the next step's tangent factored
 # afresh (and handed to the problem's Newton as its kept factor): Fig. 10's refinements fell from 3-5 per step on
-# Newton's kept factorisations to 1-3 with four new ones, the run with 4 gradients from 2.2x to 1.9x the plain run
-# (`python -m tissuemech.compare.bench.fem_gradient --only-time`)
+# Newton's kept factorisations to 1-3 with four new ones, the run with 4 gradients from 2.15x to 1.91x the plain run
+# (`python -m tissuemech.compare.bench.fem_gradient --only-time`, 2026-12-05)
 REFACTOR_AFTER = 4
 
 

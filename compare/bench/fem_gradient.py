@@ -21,6 +21,12 @@ level; the edge's motion with the parameters included): against whole-run differ
 (alpha), 7.4e-7 (surface tension); 3 gradients cost 1.48x the plain run (loaded machine, load ~10; each state is
 sensed while Newton's factorisation of it is kept).
 
+Time runs, 2026-12-05 03:45-03:46 UTC (load 0.8-1.0, ``--only-time --repeats 3``): Fig. 10 with 4 gradients
+**1.91x** the plain run (0.46 / 0.24 s; 2.15x at 03:41 UTC before a step's sensitivities factored the tangent afresh
+after a step that took >= 4 refinement iterations, ``fem.spheroid.REFACTOR_AFTER``), within 7.9e-9 of whole-run
+differences; alpha = 1.4 with two branches 1.58x (was 1.63x), <= 8.4e-9; creep under force control 1.05x (was
+1.08x), <= 1.2e-7. Earlier:
+
 Time runs (default level, node-by-node contact; the Maxwell history's sensitivity carried through the steps;
 ``--only-time`` runs just these), the largest over the steps of |grad - FD| / max |FD|, measured 2026-12-04 on the
 shared 2-core box at load average 20-27 (wall times 4-8x the CPU times; the ratios side by side agree in both):
