@@ -25,7 +25,8 @@ Time runs, 2026-12-05 03:45-03:46 UTC (load 0.8-1.0, ``--only-time --repeats 3``
 **1.91x** the plain run (0.46 / 0.24 s; 2.15x at 03:41 UTC before a step's sensitivities factored the tangent afresh
 after a step that took >= 4 refinement iterations, ``fem.spheroid.REFACTOR_AFTER``), within 7.9e-9 of whole-run
 differences; alpha = 1.4 with two branches 1.58x (was 1.63x), <= 8.4e-9; creep under force control 1.05x (was
-1.08x), <= 1.2e-7. Earlier:
+1.08x), <= 1.2e-7. ``--cost-levels 0,1,2,3`` (03:56-03:58 UTC): Fig. 10 with the rule / without it, level 0 1.67x /
+1.98x, level 1 1.95-1.99x / 2.18-2.22x, level 2 1.36x / 1.36x, level 3 1.30x / 1.44x. Earlier:
 
 Time runs (default level, node-by-node contact; the Maxwell history's sensitivity carried through the steps;
 ``--only-time`` runs just these), the largest over the steps of |grad - FD| / max |FD|, measured 2026-12-04 on the
@@ -99,7 +100,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--only-fitted", action="store_true", help="run only the fitted-mesh measurement (the contact edge's share)"
     )
+    ap.add_argument(
+        "--cost-levels", default=None, metavar="LEVELS",
+        help="run only the Fig. 10 time run's cost ratio on these mesh levels (e.g. 1,2,3), with the sensitivities' "
+        "refactorisation rule (fem.spheroid.REFACTOR_AFTER) and without it",
+    )  # fmt: skip
     args = ap.parse_args(argv)
+    if args.cost_levels:
+        cost_levels([int(v) for v in args.cost_levels.split(",")], args.repeats)
+        return 0
     if args.only_fit:
         fe_fit(args.fit_mesh)
         return 0
@@ -283,6 +292,34 @@ def relaxation(repeats: int) -> None:
     _fd_table("creep under force control (3 uN), alpha = 1.4, two branches (default level, node by node, 6 + 12 "
               "steps)", run, _values(stiff, two), ("approach", "midplane_radius", "nominal_stress"))  # fmt: skip
     _cost(run, max(1, repeats // 2), 6)
+
+
+def cost_levels(levels: list[int], repeats: int) -> None:
+    """The Fig. 10 time run (node-by-node contact) with its 4 gradients against the plain run on each mesh level, with
+    the sensitivities' refactorisation after slow refinements (``fem.spheroid.REFACTOR_AFTER``) and without it (the
+    fastest of ``repeats`` each, CPU time, alternating)."""
+    from tissuemech.compare.cases import FIG10, FIG10_END_TIME
+    from tissuemech.fem import spheroid as fs
+
+    rule = fs.REFACTOR_AFTER
+    try:
+        for level in levels:
+            kw = dict(FIG10, end_time=FIG10_END_TIME, mesh=level, contact="nodal")
+            fs.compress(**kw, gradient=True)  # warm-up (meshes, patterns)
+            best = {}
+            for _ in range(repeats):
+                for key, after in (("plain", None), ("rule", rule), ("no rule", 10**9)):
+                    fs.REFACTOR_AFTER = rule if after is None else after
+                    c0 = time.process_time()
+                    fs.compress(**kw, gradient=after is not None)
+                    best[key] = min(best.get(key, np.inf), time.process_time() - c0)
+            print(
+                f"  level {level}: plain {best['plain']:.2f} s CPU, with 4 gradients {best['rule']:.2f} s "
+                f"(ratio {best['rule'] / best['plain']:.2f}), without refactorisations {best['no rule']:.2f} s "
+                f"(ratio {best['no rule'] / best['plain']:.2f})"
+            )
+    finally:
+        fs.REFACTOR_AFTER = rule
 
 
 def fitted_edge_share() -> dict[str, tuple[float, float]]:
