@@ -315,30 +315,20 @@ def test_time_run_refactors_after_slow_refinements_with_the_same_gradients(monke
     """Fig. 10 on level 0: a step whose block solve took >= REFACTOR_AFTER refinement iterations has the next step's
     tangent factored afresh (-1 in the solve log), which then refines in fewer iterations; the gradients equal those
     of the run that never refactors to the solves' tolerance (1e-7 relative)."""
+    from tissuemech.compare.bench.fem_gradient import refinement_log
     from tissuemech.compare.cases import FIG10, FIG10_END_TIME
-    from tissuemech.fem import sensitivity as sens
     from tissuemech.fem import spheroid as fs
 
-    log: list[int] = []
-    solve_block = sens.solve_block
-
-    def logged(*a, **k):
-        out = solve_block(*a, **k)
-        log.append(out[2])
-        return out
-
-    monkeypatch.setattr(sens, "solve_block", logged)
     kw = dict(FIG10, end_time=FIG10_END_TIME, mesh=0, contact="nodal")
     rule = fs.REFACTOR_AFTER
-    g = fs.compress(**kw, gradient=True).gradient
-    with_rule = list(log)
-    log.clear()
+    got: dict = {}
+    with_rule = refinement_log(lambda: got.update(rule=fs.compress(**kw, gradient=True).gradient))
     monkeypatch.setattr(fs, "REFACTOR_AFTER", 10**9)
-    g0 = fs.compress(**kw, gradient=True).gradient
-    without = list(log)
+    without = refinement_log(lambda: got.update(none=fs.compress(**kw, gradient=True).gradient))
     slow = [i for i, its in enumerate(with_rule[:-1]) if its >= rule]
     assert slow and all(with_rule[i + 1] == -1 for i in slow)
-    assert sum(i + 1 if i >= 0 else 1 for i in with_rule) < sum(i + 1 if i >= 0 else 1 for i in without)
+    solves = lambda log: sum(i + 1 if i >= 0 else 1 for i in log)
+    assert solves(with_rule) < solves(without)
     for name in ("C", "alpha", "beta", "tau"):
-        a, b = g[name]["force"], g0[name]["force"]
+        a, b = got["rule"][name]["force"], got["none"][name]["force"]
         assert np.max(np.abs(a - b)) <= 1e-6 * np.max(np.abs(b)), name

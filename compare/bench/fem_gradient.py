@@ -313,6 +313,13 @@ def cost_levels(levels: list[int], repeats: int) -> None:
                     c0 = time.process_time()
                     fs.compress(**kw, gradient=after is not None)
                     best[key] = min(best.get(key, np.inf), time.process_time() - c0)
+            counts = {}
+            for key, after in (("rule", rule), ("no rule", 10**9)):
+                fs.REFACTOR_AFTER = after
+                counts[key] = refinement_log(lambda: fs.compress(**kw, gradient=True))
+            fs.REFACTOR_AFTER = rule
+            for key, its in counts.items():
+                print(f"  level {level}, {key}: refinement iterations per step (-1: factored) {its}")
             print(
                 f"  level {level}: plain {best['plain']:.2f} s CPU, with 4 gradients {best['rule']:.2f} s "
                 f"(ratio {best['rule'] / best['plain']:.2f}), without refactorisations {best['no rule']:.2f} s "
@@ -320,6 +327,26 @@ def cost_levels(levels: list[int], repeats: int) -> None:
             )
     finally:
         fs.REFACTOR_AFTER = rule
+
+
+def refinement_log(run) -> list[int]:
+    """The refinement iterations of every block solve of ``run()`` (``fem.sensitivity.solve_block``; -1: factored)."""
+    from tissuemech.fem import sensitivity as sens
+
+    log: list[int] = []
+    solve_block = sens.solve_block
+
+    def logged(*a, **k):
+        out = solve_block(*a, **k)
+        log.append(int(out[2]))
+        return out
+
+    sens.solve_block = logged
+    try:
+        run()
+    finally:
+        sens.solve_block = solve_block
+    return log
 
 
 def fitted_edge_share() -> dict[str, tuple[float, float]]:
