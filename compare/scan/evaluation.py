@@ -62,9 +62,9 @@ __all__ = [
 MAX_SCAN_BYTES = 2 * 1024**3  # a design (or its curves) larger than this is refused up front
 CHUNK = 8192  # points per reduced-model call of evaluate_in_chunks (one compiled shape)
 # spheroid curves evaluated together (one vmap) inside a call on a CPU, the blocks one after the other
-# (``jax.lax.map``): the temporaries of a block of curves x 200 times stay ~100 MB where a whole chunk's were mapped
-# and zeroed afresh by every call (`python -m tissuemech.compare.bench scan-kernel` runs the same kernel; a GPU takes
-# the whole chunk in one vmap)
+# (``jax.lax.map``): the temporaries of a block of 200-time curves stay ~20 MB (~200 bytes per curve and time)
+# where a whole chunk's were mapped and zeroed afresh by every call (`python -m tissuemech.compare.bench
+# scan-kernel` runs the same kernel; a GPU takes the whole chunk in one vmap)
 BLOCK = 512
 
 
