@@ -1062,8 +1062,10 @@ class _TimeSensing:
         newton = prob.linear.kept
         if newton is not None and newton.solve is not None and newton.age == 0 and newton.n == U.size:
             approx = getattr(newton.solve, "unrefined", newton.solve)  # Newton factored during this step
-        if self.refinements and self.refinements[-1] >= REFACTOR_AFTER:  # the kept factorisation has drifted; also
-            approx = None  # Newton's of an iterate of this step (kept, Fig. 10 took more refinements: `--cost-levels 1`)
+        # the kept factorisation has drifted: a new one, also where Newton factored an iterate of this step (kept,
+        # that one took Fig. 10 more refinements: `--cost-levels 1`)
+        if self.refinements and self.refinements[-1] >= REFACTOR_AFTER:
+            approx = None
         dxU, solve, its = sens.solve_block(KUU, approx, cols, f"t = {t:.6g} s", tol=TIME_SENSITIVITY_TOL, max_iter=5)
         self.kept = {key: solve}
         self.refinements.append(its)
