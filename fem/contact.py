@@ -670,6 +670,32 @@ class PlateStep(NamedTuple, Generic[P]):
     history_mesh: AxiMesh | None = None  # where state.visco lives (its Gauss points); None: problem.m
     history_edge: float = float("nan")  # the contact edge of history_mesh
     path: tuple = ()  # history="replay": (mesh, x, S_iso, dt) of every converged step so far (dt in s, x the full vector)
+    source: HistorySource | None = None  # history="replay", a fitted contact step: where its history came from
+    before: ve.MaxwellState | None = None  # with ``source``: the history at problem.m's Gauss points before the step
+
+
+class HistorySource(NamedTuple):
+    """Where the Maxwell history before a fitted time step (history="replay") comes from, on any mesh of the level
+    (:func:`history_before`): ``kind`` "none" (no history yet: ``state`` as it is, on every mesh alike), "replay"
+    (rebuilt from ``path`` by :func:`replayed_history`) or "transfer" (the plate held: ``state``, living at the
+    Gauss points of ``mesh``, interpolated element-wise, ``fem.transfer.gauss_transfer``). The exact gradients of
+    fitted time runs linearise this map (``fem.fitted_sensitivity``)."""
+
+    kind: str
+    state: ve.MaxwellState
+    mesh: AxiMesh | None = None
+    path: tuple = ()
+
+
+def history_before(src: HistorySource, m: AxiMesh, mat: Material, beta: np.ndarray, tau: np.ndarray) -> ve.MaxwellState:
+    """The Maxwell history before a fitted step at the Gauss points of ``m`` (see :class:`HistorySource`)."""
+    if src.kind == "none" or m is src.mesh:
+        return src.state
+    if src.kind == "replay":
+        return replayed_history(src.path, m, mat, beta, tau)
+    assert src.kind == "transfer" and src.mesh is not None
+    tr = gauss_transfer(src.mesh, m)
+    return ve.MaxwellState(tr(src.state.Q), tr(src.state.S_iso))
 
 
 def replayed_history(
@@ -856,8 +882,10 @@ def timed_fitted(
     history: str = "replay",
     remesh: float = REMESH,
     hold: float = 0.0,
+    wrap: Callable[[Callable], Callable] | None = None,
 ) -> list[Step[PlateStep[P]]]:
-    """Time steps on fitted meshes (one per step).
+    """Time steps on fitted meshes (one per step); ``wrap``: applied to the one-step function (the sensitivities of
+    ``fem.fitted_sensitivity`` taken as each step is accepted).
 
     Every step is an equilibrium state whose contact edge is a node of its own fitted mesh (``EdgeSearch``,
     with the step's algorithmic viscoelastic stress). The meshes of one level share topology and numbering,
@@ -896,7 +924,7 @@ def timed_fitted(
     ) -> tuple[PlateStep[P], int]:
         return step_to(t0, old, t1, prev, d_of_t(t1))
 
-    return march(step, first_state(fit, beta.size), times, too_large=too_large)
+    return march(step if wrap is None else wrap(step), first_state(fit, beta.size), times, too_large=too_large)
 
 
 def fitted_stepper(
@@ -970,15 +998,24 @@ def fitted_stepper(
         # (replay: as "transfer")
         holding = d1 == s_old.delta or (d1 is not None and abs(d1 - s_old.delta) <= hold * s_old.delta)
         cache: dict = {}
+        src = None  # history="replay": where the step's history comes from (fem.contact.history_before)
+        if history == "replay":
+            src = (
+                HistorySource("none", s_old.visco)
+                if quiet
+                else HistorySource("transfer", s_old.visco, H)
+                if holding
+                else HistorySource("replay", s_old.visco, None, old.path)  # every trial mesh alike (H included)
+            )
 
         def on(prob: P) -> ve.MaxwellState:
             """The Maxwell history of the old step at the Gauss points of prob's mesh (interpolated)."""
             key = id(prob)
             if key not in cache:
-                if quiet:
+                if src is not None:
+                    cache[key] = history_before(src, prob.m, prob.mat, beta, tau)
+                elif quiet:
                     cache[key] = s_old.visco
-                elif history == "replay" and not holding:  # every trial mesh alike (H included: no jump there)
-                    cache[key] = replayed_history(old.path, prob.m, prob.mat, beta, tau)
                 elif prob.m is H:
                     cache[key] = s_old.visco
                 elif history == "chain":  # Q_m by the continuous interpolant, S_iso^n evaluated on prob's mesh
@@ -1076,7 +1113,11 @@ def fitted_stepper(
         prob, es_ = sol.problem, sol.state
         visco, where, where_edge = updated(prob, es_.x, sol.edge, held=d1 == s_old.delta)
         st = PlateState(es_.x, es_.active, visco, d1, es_.residual, es_.iso_scale, es_.extra_S, sol.solves)
-        return PlateStep(st, prob, sol.edge, where, where_edge, walked(prob, es_.x, visco.S_iso)), sol.iterations
+        before = on(prob) if src is not None else None
+        return (
+            PlateStep(st, prob, sol.edge, where, where_edge, walked(prob, es_.x, visco.S_iso), src, before),
+            sol.iterations,
+        )
 
     return step_to
 

@@ -45,8 +45,9 @@ from tissuemech.fem.contact import (
     timed_fitted,
     top_approach,
 )
+from tissuemech.fem.fitted_sensitivity import FittedTimeSensing, explicit_residuals, history_update_tangent
 from tissuemech.fem.forms import Material
-from tissuemech.fem.kinematics import first_from_second, invariants
+from tissuemech.fem.kinematics import invariants
 from tissuemech.fem.linalg import Reuse, Symmetric
 from tissuemech.fem.mesh import FITTED_LEVELS, FITTED_SPLIT, AxiMesh, fitted_mesh
 from tissuemech.fem.output import SpheroidField, SpheroidResult
@@ -690,12 +691,21 @@ def compress(
             "angle sit at the fitted edge node); node-by-node contact models the non-wetting plate only"
         )
     if gradient and not static and isinstance(treat, FittedEdge):
-        raise ValueError(
-            "gradient=True in a time run needs contact='nodal' (one fixed mesh): the sensitivity of the Maxwell "
-            "history across the contact-edge-fitted meshes and of their edge's motion is not carried yet (the edge "
-            "is no stationary point of the force: it carries 2.8e-2 of d force / d alpha on Fig. 10); static=True "
-            "runs take either contact"
-        )
+        unsupported = [
+            why
+            for why, bad in (
+                (f"history={treat.history!r} (only the default 'replay')", treat.history != "replay"),
+                ("a surface tension", surface_tension != 0.0),
+                ("force control", force is not None),
+            )
+            if bad
+        ]
+        if unsupported:
+            raise ValueError(
+                "gradient=True in a time run on contact-edge-fitted meshes carries the replayed history and the "
+                f"edge's motion for displacement control only, not {', '.join(unsupported)}: use contact='nodal' "
+                "(one fixed mesh) for this run"
+            )
     if isinstance(treat, FittedEdge) and level is None:
         raise ValueError(
             "contact='fitted' moves the mesh's nodes with the contact edge: give a mesh level (0..4 or a name), "
@@ -761,11 +771,18 @@ def compress(
     sensing: list[_TimeSensing] = []  # a time run's sensitivities, taken as each step is accepted (node by node)
     fc = proto is not None and proto.kind == "force"
 
+    fitted_sensing: list[FittedTimeSensing] = []  # the same on fitted meshes (fem.fitted_sensitivity)
+
     def sensed(start: PlateStep[BallProblem], step: Callable) -> Callable:
         if not gradient or static:
             return step
         sensing.append(_TimeSensing(start.problem, fc))
         return sensing[0].wrap(step)
+
+    def sensed_fitted(step: Callable) -> Callable:
+        names, which = sensing_names(beta.size, False)
+        fitted_sensing.append(FittedTimeSensing(fit, names, which, beta, tau, long_time, EDGE_STEP))
+        return fitted_sensing[0].wrap(step)
 
     if fc:  # an outer iteration on the approach per step (fem.protocols)
         assert proto is not None
@@ -782,6 +799,7 @@ def compress(
             steps = timed_fitted(
                 fit, beta, tau, dscaled, times, load_of, too_large, history=treat.history, remesh=treat.remesh,
                 **({"hold": PROTOCOL_HOLD} if proto is not None else {}),
+                wrap=sensed_fitted if gradient else None,
             )  # fmt: skip
     else:
         start = _nodal_start(mesh, a0, mat, beta, tau, rtol, gam, long_time)
@@ -855,7 +873,8 @@ def compress(
     area = np.pi * col["midplane_radius"] ** 2
     grad = None
     if gradient and not static:
-        grad = _time_gradients(sensing[0].out, col, a0, C, beta.size, fc)
+        out = fitted_sensing[0].out if fitted_sensing else sensing[0].out
+        grad = _time_gradients(out, col, a0, C, beta.size, fc)
     elif gradient:
         per_state = []
         for st in steps:
@@ -926,6 +945,17 @@ class _SensingSearch(EdgeSearch):
         return sol
 
 
+def sensing_names(n_branches: int, tension: bool) -> tuple[list[str], dict[str, tuple[str, int]]]:
+    """(the scaled parameters of a time run's sensitivities: "lnC", "alpha", ["surface_tension",] then each branch's
+    beta and tau as :func:`branch_names` spells them; {branch parameter name: ("beta" | "tau", branch index)})."""
+    names = ["lnC", "alpha"] + ["surface_tension"] * bool(tension)
+    names += [n for b, t, _ in branch_names(n_branches) for n in (b, t)]
+    which = {b: ("beta", m) for b, _, m in branch_names(n_branches)} | {
+        t: ("tau", m) for _, t, m in branch_names(n_branches)
+    }
+    return names, which
+
+
 def branch_names(n_branches: int) -> list[tuple[str, str, int]]:
     """(name of beta_m, name of tau_m, m) as ``compare.fit`` spells them: "beta", "tau" for one branch, else
     "beta_1", "tau_1", ..."""
@@ -975,12 +1005,8 @@ class _TimeSensing:
         self.beta, self.tau = beta, tau
         asm = prob.asm
         self.g = asm.surface.gamma if asm.surface is not None else 0.0
-        names = ["lnC", "alpha"] + ["surface_tension"] * bool(self.g)
-        names += [n for b, t, _ in branch_names(beta.size) for n in (b, t)]
-        self.names = names
-        self.which = {b: ("beta", m) for b, _, m in branch_names(beta.size)} | {
-            t: ("tau", m) for _, t, m in branch_names(beta.size)
-        }
+        self.names, self.which = sensing_names(beta.size, bool(self.g))
+        names = self.names
         self.tension = bool(self.g)  # d r / d gamma: asm.tension_derivative
         visco0 = prob.maxwell_initial()
         P = len(names)
@@ -1020,34 +1046,9 @@ class _TimeSensing:
         f = asm.f_at(x)
         lin = sens.IsoLinearisation(f, mat.C, mat.alpha)
         # the explicit dr/dtheta: stresses (P, n_el, n_qp, 5) assembled as one block
-        Pst = np.zeros((P,) + f.shape)
-        Pst[1] = iso * lin.d_alpha[..., None] * lin.P
         coef = sens.maxwell_coefficients(beta, tau, dt) if beta.size else None
         dQ, dS = self.dQ, self.dS
-        if coef is not None:
-            decay, b, ddecay, db_dbeta, db_dtau = coef
-            d_extra = np.einsum("m,pm...->p...", decay, dQ) - b.sum() * dS
-            d_iso = np.zeros(P)
-            for j, n in enumerate(names):
-                if n in which:
-                    kind, m = which[n]
-                    if kind == "beta":
-                        d_iso[j] = db_dbeta[m]
-                        d_extra[j] -= db_dbeta[m] * prev.S_iso
-                    else:
-                        d_iso[j] = db_dtau[m]
-                        d_extra[j] += ddecay[m] * prev.Q[m] - db_dtau[m] * prev.S_iso
-            Pst += d_iso[:, None, None, None] * lin.P[None]
-            Pst += first_from_second(f, d_extra)
-        R = sens.stress_residuals(asm, Pst)
-        # ln C: k and g scale as 1 / C; r_q = ... - M q / k, so dr_q / dln C = -M q / k (and -g dr/dg)
-        q = x[asm.qdofs]
-        q = q - np.asarray([asm.q_ref, 0.0, 0.0])  # the law q = q_ref + kappa (J - 1) (q_ref = -2 g: fem.surface)
-        R[asm.n_u :, 0] = -(np.matmul(asm.M, q[:, :, None])[..., 0] / mat.kappa).ravel()
-        if self.tension:
-            rg = prob.tension_derivative(x)
-            R[:, 2] += rg
-            R[:, 0] -= self.g * rg
+        R = explicit_residuals(prob, x, f, lin, iso, names, which, coef, dQ, dS, prev, self.g if self.tension else 0.0)
         _, K = asm.internal(x, mat, extra_S=extra, iso_scale=iso, tangent=True)
         if K.nnz == asm.pattern.nnz:
             KUU = tpl._with_data(K.data[src], copy=False)
@@ -1094,13 +1095,7 @@ class _TimeSensing:
         dS_new = lin.dS(sens.point_increments(asm, dx[:, :P]))
         dS_new[1] += lin.d_alpha[..., None] * lin.S
         if coef is not None:
-            decay, b, ddecay, db_dbeta, db_dtau = coef
-            jump = s.visco.S_iso - prev.S_iso
-            dQ = decay[None, :, None, None, None] * dQ + b[None, :, None, None, None] * (dS_new - dS)[:, None]
-            for j, n in enumerate(names):
-                if n in which:
-                    kind, m = which[n]
-                    dQ[j, m] += db_dbeta[m] * jump if kind == "beta" else ddecay[m] * prev.Q[m] + db_dtau[m] * jump
+            dQ = history_update_tangent(names, which, coef, prev.Q, prev.S_iso, s.visco.S_iso, dQ, dS, dS_new)
         self.dQ, self.dS = dQ, dS_new
         self.prev, self.t_prev = s.visco, float(t)
 

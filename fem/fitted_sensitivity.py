@@ -1,0 +1,282 @@
+r"""Exact parameter sensitivities of a time run on contact-edge-fitted meshes (issue 38).
+
+A fitted time step n is the state x_n on the mesh m(e_n) whose surface node sits at the contact edge e_n, with the
+step's algorithmic Maxwell stress from the history H_n(m(e_n)) before the step (``fem.contact.history_before``:
+the replay of every past step's stress field from its own mesh while the plate moves, the previous step's history
+interpolated while it is held). Every step satisfies
+
+    r(x_n; m(e_n), theta, H_n(m(e_n); past, theta)) = 0,        phi(x_n, e_n) = N_edge / F = 0,
+
+so the tangent-linear step is, per parameter theta (the active set held, the plate held):
+
+    K dx + r_e de = -dr/dtheta|_(x, e),     dphi/dx dx + dphi/de de = -dphi/dtheta,
+
+with dr/dtheta|_(x, e) holding the history's sensitivity to every past state and edge. The mesh's motion enters as
+central differences of the residual ASSEMBLY (and of the history's interpolation) on the meshes at e (1 -+ h),
+``fem.spheroid.EDGE_STEP``, the state held (its plate dofs re-imposed there): no nonlinear solve is differenced.
+The history's sensitivity on a fixed mesh is linear in the past steps' sensitivities:
+
+* "replay": the Maxwell recursion run on the transferred stress fields of every past step k and on their
+  sensitivities, T_{m_k -> m}(dS_k) + de_k (T_{m_k^+ -> m}(S_k^+) - T_{m_k^- -> m}(S_k^-)) / (2 h): the second
+  term is the motion of the past step's own mesh (its Gauss points and the stress of its held displacement);
+* "transfer" (the plate held): T_{H -> m}(dH) + de_H (T_{H^+ -> m}(H) - T_{H^- -> m}(H)) / (2 h), dH the total
+  sensitivity of the previous step's history values (their mesh's motion included).
+
+The motion of m itself (the target of the interpolation) is carried by r_e, whose moved meshes take their history
+from the same ``history_before``. Each step's tangent is refined from Newton's kept factorisation, all parameters
+and the edge column as one block (``fem.sensitivity.solve_block``).
+
+Scope: displacement control with history="replay" (the default), every step with fitted contact (no node-by-node
+steps beyond the fitted range, no lost contact), a non-wetting plate without surface tension; other runs raise
+ValueError naming the step. Verified against central differences of whole runs with a tight edge tolerance
+(``tests/test_fem_sensitivity.py``, ``python -m tissuemech.compare.bench.fem_gradient --only-fitted``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, NamedTuple
+
+import numpy as np
+import scipy.sparse as sp
+
+from tissuemech.fem import sensitivity as sens
+from tissuemech.fem import viscoelastic as ve
+from tissuemech.fem.contact import HistorySource, PlateStep, history_before
+from tissuemech.fem.kinematics import first_from_second
+from tissuemech.fem.mesh import AxiMesh
+from tissuemech.fem.transfer import gauss_transfers
+
+__all__ = ["FittedTimeSensing", "explicit_residuals", "SENSITIVITY_TOL"]
+
+SENSITIVITY_TOL = 1e-10  # relative residual of the block solves (the edge's share is a small difference of them)
+
+
+def explicit_residuals(
+    prob,
+    x: np.ndarray,
+    f: np.ndarray,
+    lin: sens.IsoLinearisation,
+    iso: float,
+    names: list[str],
+    which: dict[str, tuple[str, int]],
+    coef,
+    dQ: np.ndarray,
+    dS: np.ndarray,
+    prev: ve.MaxwellState,
+    gamma: float = 0.0,
+) -> np.ndarray:
+    """The explicit derivatives dr/dtheta (ndof, P) of a time step's scaled residual at its state ``x`` (deformation
+    gradients ``f``, ``lin`` their ``IsoLinearisation``, ``iso`` the step's iso_scale), the parameters ``names``
+    (ln C, alpha, [surface_tension,] beta_m / tau_m as ``which`` maps them), with the history before the step
+    ``prev`` on this mesh and its sensitivities dQ (P, n_branches, ...), dS (P, ...); ``coef`` the step's
+    ``sens.maxwell_coefficients`` (None: no branches). The step's stress is S_vol + iso_scale S_iso + extra_S with
+    iso_scale = long_time + sum_m b_m and extra_S = sum_m (decay_m Q_m - b_m S_iso^n); ln C moves k = kappa / C and
+    g = gamma / (C a0) as -k, -g."""
+    asm, mat = prob.asm, prob.mat
+    P = len(names)
+    Pst = np.zeros((P,) + f.shape)
+    Pst[1] = iso * lin.d_alpha[..., None] * lin.P
+    if coef is not None:
+        decay, b, ddecay, db_dbeta, db_dtau = coef
+        d_extra = np.einsum("m,pm...->p...", decay, dQ) - b.sum() * dS
+        d_iso = np.zeros(P)
+        for j, n in enumerate(names):
+            if n in which:
+                kind, m = which[n]
+                if kind == "beta":
+                    d_iso[j] = db_dbeta[m]
+                    d_extra[j] -= db_dbeta[m] * prev.S_iso
+                else:
+                    d_iso[j] = db_dtau[m]
+                    d_extra[j] += ddecay[m] * prev.Q[m] - db_dtau[m] * prev.S_iso
+        Pst += d_iso[:, None, None, None] * lin.P[None]
+        Pst += first_from_second(f, d_extra)
+    R = sens.stress_residuals(asm, Pst)
+    # ln C: k and g scale as 1 / C; r_q = ... - M q / k, so dr_q / dln C = -M q / k (and -g dr/dg)
+    q = x[asm.qdofs]
+    q = q - np.asarray([asm.q_ref, 0.0, 0.0])  # the law q = q_ref + kappa (J - 1) (q_ref = -2 g: fem.surface)
+    R[asm.n_u :, 0] = -(np.matmul(asm.M, q[:, :, None])[..., 0] / mat.kappa).ravel()
+    if gamma:
+        rg = prob.tension_derivative(x)
+        R[:, 2] += rg
+        R[:, 0] -= gamma * rg
+    return R
+
+
+def history_update_tangent(
+    names: list[str], which: dict, coef, Q: np.ndarray, S: np.ndarray, S_new: np.ndarray, dQ, dS, dS_new
+) -> np.ndarray:
+    """dQ^{n+1} (P, n_branches, ...) of the Maxwell update Q^{n+1} = decay Q^n + b (S^{n+1} - S^n)
+    (``fem.viscoelastic.update``) from the sensitivities of its inputs and of its coefficients."""
+    decay, b, ddecay, db_dbeta, db_dtau = coef
+    jump = S_new - S
+    out = decay[None, :, None, None, None] * dQ + b[None, :, None, None, None] * (dS_new - dS)[:, None]
+    for j, n in enumerate(names):
+        if n in which:
+            kind, m = which[n]
+            out[j, m] += db_dbeta[m] * jump if kind == "beta" else ddecay[m] * Q[m] + db_dtau[m] * jump
+    return out
+
+
+class _Entry(NamedTuple):
+    """An accepted fitted step as later steps' histories see it: its mesh and the meshes at its edge e (1 -+ h),
+    its stress S_iso on each (the held displacement), the stress's sensitivity on its fixed mesh dS (P, ...) and its
+    edge's d ln e / d theta (P,)."""
+
+    mesh: AxiMesh
+    lo: AxiMesh
+    hi: AxiMesh
+    S: np.ndarray
+    S_lo: np.ndarray
+    S_hi: np.ndarray
+    dS: np.ndarray
+    de: np.ndarray
+    h: float
+
+
+class FittedTimeSensing:
+    """Forward sensitivities through the steps of a fitted time run (see the module docstring), taken as the march
+    accepts each step (:meth:`wrap`). ``fit``: the run's ``fem.contact.EdgeSearch``; ``names`` / ``which`` as in
+    ``fem.spheroid``'s node-by-node sensing; ``edge_step`` the relative step of the moved meshes. ``out``: per
+    accepted step {name: (dF, dr_mid, dd)} (scaled; dd = 0: the plate is prescribed)."""
+
+    def __init__(
+        self,
+        fit: Any,
+        names: list[str],
+        which: dict[str, tuple[str, int]],
+        beta: np.ndarray,
+        tau: np.ndarray,
+        long_time: float,
+        edge_step: float,
+    ) -> None:
+        self.fit, self.names, self.which = fit, names, which
+        self.beta, self.tau, self.long_time, self.h = beta, tau, long_time, edge_step
+        self.entries: list[_Entry] = []
+        self.dvisco: tuple[np.ndarray, np.ndarray] | None = None  # the last step's history values' total sensitivity
+        self.out: list[dict] = []
+
+    def wrap(self, step: Callable) -> Callable:
+        """The march's step function with the sensitivities of every state it returns."""
+
+        def sensed(t0, old, t1, prev):
+            new, its = step(t0, old, t1, prev)
+            self.add(new, float(t1) - float(t0), f"t = {float(t1):.6g} s")
+            return new, its
+
+        return sensed
+
+    # ---- the history's sensitivity on a fixed mesh ----------------------------------------------------------------
+    def _history_tangent(self, src: HistorySource, m: AxiMesh, shape: tuple) -> tuple[np.ndarray, np.ndarray]:
+        """(dQ, dS) of ``history_before(src, m)`` at m's fixed Gauss points, from the past steps' sensitivities."""
+        P, nb = len(self.names), self.beta.size
+        zero = (np.zeros((P, nb) + shape), np.zeros((P,) + shape))
+        if src.kind == "none":
+            return self.dvisco if self.dvisco is not None else zero
+        if src.kind == "transfer":
+            assert self.dvisco is not None and src.mesh is not None
+            last = self.entries[-1]
+            assert last.mesh is src.mesh, "the held step's history lives on the previous step's mesh"
+            tr, t_lo, t_hi = gauss_transfers([src.mesh, last.lo, last.hi], m)
+            dQ, dS = self.dvisco
+            q, s = src.state.Q, src.state.S_iso
+            de = last.de[:, None, None, None]
+            dq = (t_hi(q) - t_lo(q)) / (2 * last.h)
+            ds = (t_hi(s) - t_lo(s)) / (2 * last.h)
+            return tr(dQ) + de[:, None] * dq[None], tr(dS) + de * ds[None]
+        path = src.path
+        if len(path) != len(self.entries):
+            raise ValueError("the replayed history holds steps without sensitivities (node-by-node or free steps)")
+        srcs: list[AxiMesh] = []
+        index: dict[int, int] = {}
+        for en in self.entries:
+            for mm in (en.mesh, en.lo, en.hi):
+                if id(mm) not in index:
+                    index[id(mm)] = len(srcs)
+                    srcs.append(mm)
+        trs = gauss_transfers(srcs, m, continuous=True)
+        Q, S = np.zeros((nb,) + shape), np.zeros(shape)
+        dQ, dS = zero
+        for k, en in enumerate(self.entries):
+            dt = float(path[k][3])
+            t, t_lo, t_hi = (trs[index[id(mm)]] for mm in (en.mesh, en.lo, en.hi))
+            Sk = t(en.S)
+            dSk = t(en.dS) + en.de[:, None, None, None] * ((t_hi(en.S_hi) - t_lo(en.S_lo)) / (2 * en.h))[None]
+            coef = sens.maxwell_coefficients(self.beta, self.tau, dt)
+            dQ = history_update_tangent(self.names, self.which, coef, Q, S, Sk, dQ, dS, dSk)
+            Q = coef[0][:, None, None, None] * Q + coef[1][:, None, None, None] * (Sk - S)[None]
+            S, dS = Sk, dSk
+        return dQ, dS
+
+    # ---- one accepted step ----------------------------------------------------------------------------------------
+    def add(self, new: PlateStep, dt: float, what: str) -> None:
+        """The sensitivities of the accepted fitted step ``new`` (a step of dt seconds)."""
+        s, prob, e, src = new.state, new.problem, float(new.edge), new.source
+        if src is None or new.before is None or not np.isfinite(e) or e <= 0.0 or not s.active.any():
+            raise ValueError(
+                f"gradient=True on fitted meshes: the step at {what} is not a fitted contact step (node-by-node "
+                "beyond the fitted range, or the contact lost): use contact='nodal' for this run"
+            )
+        names, which, beta, tau, h = self.names, self.which, self.beta, self.tau, self.h
+        P = len(names)
+        mat, asm, x = prob.mat, prob.asm, s.x
+        lo, hi = self.fit.problem(e * (1 - h)), self.fit.problem(e * (1 + h))
+        act = np.flatnonzero(s.active)
+        fixed = prob.plane.dofs[act]
+        U = np.setdiff1d(prob.free, fixed)
+        h_plate = 1.0 - s.delta
+        # the held state on the moved meshes: the same unknowns, their plate dofs on the plate
+        xl, xh = lo.plane.impose(x.copy(), h_plate, s.active), hi.plane.impose(x.copy(), h_plate, s.active)
+        xl[U], xh[U] = x[U], x[U]
+        H0 = new.before
+        H_lo = history_before(src, lo.m, mat, beta, tau)
+        H_hi = history_before(src, hi.m, mat, beta, tau)
+
+        def residual(p, xx, H) -> np.ndarray:
+            iso_m, extra_m = ve.algorithmic(H, beta, tau, dt, self.long_time)
+            return p.asm.internal(xx, mat, extra_S=extra_m, iso_scale=iso_m, tangent=False)[0]
+
+        r_e = (residual(hi, xh, H_hi) - residual(lo, xl, H_lo)) / (2 * h)  # per ln e
+        f = asm.f_at(x)
+        lin = sens.IsoLinearisation(f, mat.C, mat.alpha)
+        shape = f.shape
+        dQ, dS = self._history_tangent(src, prob.m, shape)
+        coef = sens.maxwell_coefficients(beta, tau, dt) if beta.size else None
+        R = explicit_residuals(prob, x, f, lin, float(s.iso_scale), names, which, coef, dQ, dS, H0)
+        R = np.column_stack([R, r_e])
+        _, K = asm.internal(x, mat, extra_S=s.extra_S, iso_scale=s.iso_scale, tangent=True)
+        K = sp.csr_matrix(K)
+        kept = self.fit.linear.kept
+        approx = None
+        if kept is not None and kept.solve is not None and kept.n == U.size:
+            approx = getattr(kept.solve, "unrefined", kept.solve)
+        dXU, _, _ = sens.solve_block(K[U][:, U], approx, -R[U], what, tol=SENSITIVITY_TOL, max_iter=8)
+        dX = np.zeros((asm.ndof, P + 1))
+        dX[U] = dXU
+        dN = -(R[fixed] + K[fixed] @ dX)  # every held node's multiplier
+        F = -float(np.sum(s.residual[fixed]))
+        N_edge = -float(s.residual[fixed[-1]])
+        dphi = (dN[-1] - N_edge / F * dN.sum(axis=0)) / F
+        de = -dphi[:P] / dphi[P]  # d ln e / d theta
+        dx = dX[:, :P] + dX[:, P:] * de[None, :]
+        dF = dN.sum(axis=0)
+        dF = dF[:P] + dF[P] * de
+        eq = 2 * prob.equator
+        self.out.append({n: (float(dF[j]), float(dx[eq, j]), 0.0) for j, n in enumerate(names)})
+        # the step's stress on its fixed mesh, and on the moved ones (the edge's motion of later histories)
+        dSx = lin.dS(sens.point_increments(asm, dx))
+        dSx[1] += lin.d_alpha[..., None] * lin.S
+        S_lo, S_hi = lo.asm.iso_S(xl, mat), hi.asm.iso_S(xh, mat)
+        self.entries.append(_Entry(prob.m, lo.m, hi.m, s.visco.S_iso, S_lo, S_hi, dSx, de, h))
+        # the total sensitivity of the history values after the step (their mesh's motion included)
+        dEdge = de[:, None, None, None]
+        dS_post = dSx + dEdge * ((S_hi - S_lo) / (2 * h))[None]
+        if beta.size:
+            assert coef is not None
+            dQ_pre = dQ + dEdge[:, None] * ((H_hi.Q - H_lo.Q) / (2 * h))[None]
+            dS_pre = dS + dEdge * ((H_hi.S_iso - H_lo.S_iso) / (2 * h))[None]
+            dQ_post = history_update_tangent(names, which, coef, H0.Q, H0.S_iso, s.visco.S_iso, dQ_pre, dS_pre, dS_post)
+        else:
+            dQ_post = np.zeros((P, 0) + shape)
+        self.dvisco = (dQ_post, dS_post)
