@@ -58,7 +58,7 @@ from tissuemech.fem.mesh import FITTED_EDGE_MAX, FITTED_LEVELS, FITTED_SPLIT, Ax
 from tissuemech.fem.newton import NewtonError, newton
 from tissuemech.fem.stepping import Step, TimedState
 from tissuemech.fem.timestepping import march
-from tissuemech.fem.transfer import deformation_at, gauss_transfer, gauss_transfers
+from tissuemech.fem.transfer import deformation_at, gauss_transfer, gauss_transfers, own_points
 
 log = logging.getLogger(__name__)
 
@@ -694,7 +694,8 @@ def history_before(src: HistorySource, m: AxiMesh, mat: Material, beta: np.ndarr
     if src.kind == "replay":
         return replayed_history(src.path, m, mat, beta, tau)
     assert src.kind == "transfer" and src.mesh is not None
-    tr = gauss_transfer(src.mesh, m)
+    # the plate held: m nearly coincides with the history's mesh (its points sought first in their own elements)
+    tr = gauss_transfers([src.mesh], m, near=[own_points(m)])[0]
     return ve.MaxwellState(tr(src.state.Q), tr(src.state.S_iso))
 
 

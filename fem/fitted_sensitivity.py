@@ -26,10 +26,11 @@ The motion of m itself (the target of the interpolation) is carried by r_e, whos
 from the same ``history_before``. Each step's tangent is refined from Newton's kept factorisation, all parameters
 and the edge column as one block (``fem.sensitivity.solve_block``).
 
-Scope: displacement control with history="replay" (the default), every step with fitted contact (no node-by-node
-steps beyond the fitted range, no lost contact), a non-wetting plate without surface tension; other runs raise
-ValueError naming the step. Verified against central differences of whole runs with a tight edge tolerance
-(``tests/test_fem_sensitivity.py``, ``python -m tissuemech.compare.bench.fem_gradient --only-fitted``).
+Under force control the plate's motion dd/dtheta is a third unknown of the step, with dF = df_target/dtheta.
+Scope: history="replay" (the default), every step with fitted contact (no node-by-node steps beyond the fitted
+range, no lost contact), a non-wetting plate without surface tension; other runs raise ValueError naming the step.
+Verified against central differences of whole runs with a tight edge tolerance
+(``tests/test_fem_fitted_sensitivity.py``, ``python -m tissuemech.compare.bench.fem_gradient --only-fitted``).
 """
 
 from __future__ import annotations
@@ -45,11 +46,18 @@ from tissuemech.fem import viscoelastic as ve
 from tissuemech.fem.contact import HistorySource, PlateStep, history_before
 from tissuemech.fem.kinematics import first_from_second
 from tissuemech.fem.mesh import AxiMesh
-from tissuemech.fem.transfer import gauss_transfers
+from tissuemech.fem.transfer import gauss_transfers, located, own_points
+
+
+def _transfer_at(old: AxiMesh, new: AxiMesh, where: tuple) -> Callable[[np.ndarray], np.ndarray]:
+    """The continuous transfer from ``old`` to ``new`` with new's points located in old (``where``)."""
+    return gauss_transfers([old], new, True, [where])[0]
+
 
 __all__ = ["FittedTimeSensing", "explicit_residuals", "SENSITIVITY_TOL"]
 
 SENSITIVITY_TOL = 1e-10  # relative residual of the block solves (the edge's share is a small difference of them)
+REFACTOR_AFTER = 4  # refinement iterations after which the next step's tangent is factored afresh
 
 
 def explicit_residuals(
@@ -138,8 +146,10 @@ class _Entry(NamedTuple):
 class FittedTimeSensing:
     """Forward sensitivities through the steps of a fitted time run (see the module docstring), taken as the march
     accepts each step (:meth:`wrap`). ``fit``: the run's ``fem.contact.EdgeSearch``; ``names`` / ``which`` as in
-    ``fem.spheroid``'s node-by-node sensing; ``edge_step`` the relative step of the moved meshes. ``out``: per
-    accepted step {name: (dF, dr_mid, dd)} (scaled; dd = 0: the plate is prescribed)."""
+    ``fem.spheroid``'s node-by-node sensing; ``edge_step`` the relative step of the moved meshes. ``force_control``:
+    the plate force is prescribed: one more column (the plate moved, every held node's u_z by -1) and, per parameter,
+    the edge's and the plate's motion (de, dd) from dF = df_target and dphi = 0. ``out``: per accepted step
+    {name: (dF, dr_mid, dd)} (scaled; dd = 0 under displacement control, dF = df_target under force control)."""
 
     def __init__(
         self,
@@ -150,12 +160,15 @@ class FittedTimeSensing:
         tau: np.ndarray,
         long_time: float,
         edge_step: float,
+        force_control: bool = False,
     ) -> None:
-        self.fit, self.names, self.which = fit, names, which
+        self.fit, self.names, self.which, self.force_control = fit, names, which, force_control
         self.beta, self.tau, self.long_time, self.h = beta, tau, long_time, edge_step
         self.entries: list[_Entry] = []
         self.dvisco: tuple[np.ndarray, np.ndarray] | None = None  # the last step's history values' total sensitivity
         self.out: list[dict] = []
+        self.kept: tuple[int, Callable] | None = None  # (size, a solve with a recent factorisation of the tangent)
+        self.refinements: list[int] = []  # per step: refinement iterations of the block solve (-1: factored)
 
     def wrap(self, step: Callable) -> Callable:
         """The march's step function with the sensitivities of every state it returns."""
@@ -178,36 +191,57 @@ class FittedTimeSensing:
             assert self.dvisco is not None and src.mesh is not None
             last = self.entries[-1]
             assert last.mesh is src.mesh, "the held step's history lives on the previous step's mesh"
-            tr, t_lo, t_hi = gauss_transfers([src.mesh, last.lo, last.hi], m)
+            own = own_points(m)  # the plate held: every mesh here nearly coincides with m
+            tr, t_lo, t_hi = gauss_transfers([src.mesh, last.lo, last.hi], m, near=[own, own, own])
             dQ, dS = self.dvisco
             q, s = src.state.Q, src.state.S_iso
             de = last.de[:, None, None, None]
             dq = (t_hi(q) - t_lo(q)) / (2 * last.h)
             ds = (t_hi(s) - t_lo(s)) / (2 * last.h)
             return tr(dQ) + de[:, None] * dq[None], tr(dS) + de * ds[None]
+        raise AssertionError("replayed histories: _replayed")
+
+    def _replayed(
+        self, src: HistorySource, m: AxiMesh, moved: tuple[AxiMesh, AxiMesh], shape: tuple
+    ) -> tuple[ve.MaxwellState, ve.MaxwellState, np.ndarray, np.ndarray]:
+        """A replayed history (``fem.contact.replayed_history``) on the meshes ``moved`` (m at e (1 -+ h)), and
+        (dQ, dS) of the one on m at its fixed Gauss points. One point search of m's Gauss points in every past
+        step's mesh; the moved meshes' points, and m's in the past steps' moved meshes, are sought from there."""
         path = src.path
         if len(path) != len(self.entries):
             raise ValueError("the replayed history holds steps without sensitivities (node-by-node or free steps)")
-        srcs: list[AxiMesh] = []
+        P, nb = len(self.names), self.beta.size
+        meshes: list[AxiMesh] = []
         index: dict[int, int] = {}
         for en in self.entries:
-            for mm in (en.mesh, en.lo, en.hi):
-                if id(mm) not in index:
-                    index[id(mm)] = len(srcs)
-                    srcs.append(mm)
-        trs = gauss_transfers(srcs, m, continuous=True)
+            if id(en.mesh) not in index:
+                index[id(en.mesh)] = len(meshes)
+                meshes.append(en.mesh)
+        pts = m.quadrature_points.reshape(2, -1)
+        at = located(meshes, pts)  # m's points in every past step's mesh
+        near = [at[index[id(en.mesh)]] for en in self.entries]
+        # the past steps' meshes at their e (1 -+ h), m's points in them; the past meshes, the moved m's points in them
+        from_lo = gauss_transfers([en.lo for en in self.entries], m, True, near)
+        from_hi = gauss_transfers([en.hi for en in self.entries], m, True, near)
+        to_m = [_transfer_at(mm, m, at[i]) for i, mm in enumerate(meshes)]
+        to_moved = [gauss_transfers(meshes, mv, True, at) for mv in moved]
         Q, S = np.zeros((nb,) + shape), np.zeros(shape)
-        dQ, dS = zero
+        dQ, dS = np.zeros((P, nb) + shape), np.zeros((P,) + shape)
+        states = [ve.initial_state(nb, shape) for _ in moved]
         for k, en in enumerate(self.entries):
             dt = float(path[k][3])
-            t, t_lo, t_hi = (trs[index[id(mm)]] for mm in (en.mesh, en.lo, en.hi))
-            Sk = t(en.S)
-            dSk = t(en.dS) + en.de[:, None, None, None] * ((t_hi(en.S_hi) - t_lo(en.S_lo)) / (2 * en.h))[None]
+            i = index[id(en.mesh)]
+            Sk = to_m[i](en.S)
+            dSk = (
+                to_m[i](en.dS)
+                + en.de[:, None, None, None] * ((from_hi[k](en.S_hi) - from_lo[k](en.S_lo)) / (2 * en.h))[None]
+            )
             coef = sens.maxwell_coefficients(self.beta, self.tau, dt)
             dQ = history_update_tangent(self.names, self.which, coef, Q, S, Sk, dQ, dS, dSk)
             Q = coef[0][:, None, None, None] * Q + coef[1][:, None, None, None] * (Sk - S)[None]
             S, dS = Sk, dSk
-        return dQ, dS
+            states = [ve.update(st, self.beta, self.tau, dt, tr[i](en.S)) for st, tr in zip(states, to_moved)]
+        return states[0], states[1], dQ, dS
 
     # ---- one accepted step ----------------------------------------------------------------------------------------
     def add(self, new: PlateStep, dt: float, what: str) -> None:
@@ -230,40 +264,70 @@ class FittedTimeSensing:
         xl, xh = lo.plane.impose(x.copy(), h_plate, s.active), hi.plane.impose(x.copy(), h_plate, s.active)
         xl[U], xh[U] = x[U], x[U]
         H0 = new.before
-        H_lo = history_before(src, lo.m, mat, beta, tau)
-        H_hi = history_before(src, hi.m, mat, beta, tau)
+        f = asm.f_at(x)
+        shape = f.shape
+        if src.kind == "replay":
+            H_lo, H_hi, dQ, dS = self._replayed(src, prob.m, (lo.m, hi.m), shape)
+        else:
+            H_lo = history_before(src, lo.m, mat, beta, tau)
+            H_hi = history_before(src, hi.m, mat, beta, tau)
+            dQ, dS = self._history_tangent(src, prob.m, shape)
 
         def residual(p, xx, H) -> np.ndarray:
             iso_m, extra_m = ve.algorithmic(H, beta, tau, dt, self.long_time)
             return p.asm.internal(xx, mat, extra_S=extra_m, iso_scale=iso_m, tangent=False)[0]
 
         r_e = (residual(hi, xh, H_hi) - residual(lo, xl, H_lo)) / (2 * h)  # per ln e
-        f = asm.f_at(x)
         lin = sens.IsoLinearisation(f, mat.C, mat.alpha)
-        shape = f.shape
-        dQ, dS = self._history_tangent(src, prob.m, shape)
         coef = sens.maxwell_coefficients(beta, tau, dt) if beta.size else None
         R = explicit_residuals(prob, x, f, lin, float(s.iso_scale), names, which, coef, dQ, dS, H0)
         R = np.column_stack([R, r_e])
         _, K = asm.internal(x, mat, extra_S=s.extra_S, iso_scale=s.iso_scale, tangent=True)
         K = sp.csr_matrix(K)
-        kept = self.fit.linear.kept
-        approx = None
-        if kept is not None and kept.solve is not None and kept.n == U.size:
-            approx = getattr(kept.solve, "unrefined", kept.solve)
-        dXU, _, _ = sens.solve_block(K[U][:, U], approx, -R[U], what, tol=SENSITIVITY_TOL, max_iter=8)
-        dX = np.zeros((asm.ndof, P + 1))
+        # refined from this sensing's last factorisation, or Newton's where it factored during this step; a new one
+        # after slow refinement (handed to Newton as its kept factor: in the hold Newton's is the ramp's)
+        newton = self.fit.linear.kept
+        approx = self.kept if self.kept is not None and self.kept[0] == U.size else None
+        if newton is not None and newton.solve is not None and newton.age == 0 and newton.n == U.size:
+            approx = (U.size, getattr(newton.solve, "unrefined", newton.solve))
+        if self.refinements and self.refinements[-1] >= REFACTOR_AFTER:
+            approx = None
+        cols = -R[U]
+        if (
+            self.force_control
+        ):  # the plate moved: u_z = h - Z on the held dofs, dh = -dd: the right-hand side K[U, fixed] 1
+            cols = np.column_stack([cols, np.asarray(K[fixed].sum(axis=0)).ravel()[U]])
+        dXU, solve, its = sens.solve_block(
+            K[U][:, U], None if approx is None else approx[1], cols, what, tol=SENSITIVITY_TOL, max_iter=6
+        )
+        self.kept = (U.size, solve)
+        self.refinements.append(its)
+        if its < 0 and newton is not None:
+            newton.store(solve, U.size)
+        dX = np.zeros((asm.ndof, cols.shape[1]))
         dX[U] = dXU
-        dN = -(R[fixed] + K[fixed] @ dX)  # every held node's multiplier
+        if self.force_control:
+            dX[fixed, -1] = -1.0
+            R = np.column_stack([R, np.zeros(asm.ndof)])
+        dN = -(R[fixed] + K[fixed] @ dX)  # every held node's multiplier, per column
         F = -float(np.sum(s.residual[fixed]))
         N_edge = -float(s.residual[fixed[-1]])
         dphi = (dN[-1] - N_edge / F * dN.sum(axis=0)) / F
-        de = -dphi[:P] / dphi[P]  # d ln e / d theta
-        dx = dX[:, :P] + dX[:, P:] * de[None, :]
         dF = dN.sum(axis=0)
-        dF = dF[:P] + dF[P] * de
+        dd = np.zeros(P)
+        if self.force_control:  # the force prescribed (f = F / (C a0^2): df / dln C = -f) and phi = 0: (de, dd)
+            target = np.zeros(P)
+            target[0] = -F
+            A = np.array([[dF[P], dF[P + 1]], [dphi[P], dphi[P + 1]]])
+            de, dd = np.linalg.solve(A, np.vstack([target - dF[:P], -dphi[:P]]))
+            dx = dX[:, :P] + dX[:, P : P + 1] * de[None, :] + dX[:, P + 1 :] * dd[None, :]
+            dF = target
+        else:
+            de = -dphi[:P] / dphi[P]  # d ln e / d theta
+            dx = dX[:, :P] + dX[:, P:] * de[None, :]
+            dF = dF[:P] + dF[P] * de
         eq = 2 * prob.equator
-        self.out.append({n: (float(dF[j]), float(dx[eq, j]), 0.0) for j, n in enumerate(names)})
+        self.out.append({n: (float(dF[j]), float(dx[eq, j]), float(dd[j])) for j, n in enumerate(names)})
         # the step's stress on its fixed mesh, and on the moved ones (the edge's motion of later histories)
         dSx = lin.dS(sens.point_increments(asm, dx))
         dSx[1] += lin.d_alpha[..., None] * lin.S

@@ -549,10 +549,11 @@ def compress(
             parameters one block of right-hand sides refined from a kept factorisation) and also give
             ``"approach"`` (m per unit parameter: 0 under displacement control); under force control (``force=``)
             the plate's motion with the parameters is solved for (the force stays F(t): its gradient is 0, the
-            approach, midplane radius and nominal stress move). Time runs need contact="nodal" for now (across
-            the fitted meshes of a time run neither the history's sensitivity nor the edge's motion is carried:
-            ValueError; the edge's motion alone carries 2.8e-2 of d force / d alpha on Fig. 10, ``tissuemech
-            bench fem-gradient --only-fitted``). Accuracy and cost: ``tissuemech bench fem-gradient``.
+            approach, midplane radius and nominal stress move). On the fitted meshes of a time run (the default
+            contact) the history replayed from every past step's own mesh and each step's edge motion are carried
+            (``fem.fitted_sensitivity``; the edge's motion alone carries 2.8e-2 of d force / d alpha on Fig. 10),
+            for history="replay" without surface tension (else ValueError: use contact="nodal"). Accuracy and
+            cost: ``tissuemech bench fem-gradient``.
 
     Returns:
         ``SpheroidResult`` with one entry per converged step: ``time`` (s), ``approach`` (m), plate
@@ -696,7 +697,6 @@ def compress(
             for why, bad in (
                 (f"history={treat.history!r} (only the default 'replay')", treat.history != "replay"),
                 ("a surface tension", surface_tension != 0.0),
-                ("force control", force is not None),
             )
             if bad
         ]
@@ -719,7 +719,7 @@ def compress(
         make = lambda m: BallProblem(m, mat, beta, tau, rtol, gam, long_time, theta, wet)
         fit = (
             _SensingSearch(a0, level, make, rtol, tol=treat.tol)
-            if gradient
+            if gradient and static  # (a time run's sensitivities are taken per accepted step: FittedTimeSensing)
             else EdgeSearch(a0, level, make, rtol, tol=treat.tol)
         )
     stepper: Fixed | Adaptive | None = None  # the step strategy of a displacement-controlled time run
@@ -780,15 +780,18 @@ def compress(
         return sensing[0].wrap(step)
 
     def sensed_fitted(step: Callable) -> Callable:
+        if not gradient:
+            return step
         names, which = sensing_names(beta.size, False)
-        fitted_sensing.append(FittedTimeSensing(fit, names, which, beta, tau, long_time, EDGE_STEP))
+        fitted_sensing.append(FittedTimeSensing(fit, names, which, beta, tau, long_time, EDGE_STEP, fc))
         return fitted_sensing[0].wrap(step)
 
     if fc:  # an outer iteration on the approach per step (fem.protocols)
         assert proto is not None
         steps = _force_steps(
             fit, treat, lambda: _nodal_start(mesh, a0, mat, beta, tau, rtol, gam, long_time), beta, tau,
-            lambda t: proto.target(t) / (C * a0**2), times, too_large, load_of, sensed, min(FORCE_TOL, 1e3 * rtol),
+            lambda t: proto.target(t) / (C * a0**2), times, too_large, load_of,
+            (lambda start, step: sensed_fitted(step)) if fit is not None else sensed, min(FORCE_TOL, 1e3 * rtol),
             long_time,
         )  # fmt: skip
     elif fit is not None:  # every state / step on its own fitted mesh
@@ -799,7 +802,7 @@ def compress(
             steps = timed_fitted(
                 fit, beta, tau, dscaled, times, load_of, too_large, history=treat.history, remesh=treat.remesh,
                 **({"hold": PROTOCOL_HOLD} if proto is not None else {}),
-                wrap=sensed_fitted if gradient else None,
+                wrap=sensed_fitted,
             )  # fmt: skip
     else:
         start = _nodal_start(mesh, a0, mat, beta, tau, rtol, gam, long_time)
@@ -1311,8 +1314,8 @@ def _force_steps(
 ):
     """The march under the prescribed (scaled) plate force f_of_t(t): every step an outer iteration on the approach
     around the displacement-controlled step (``fem.protocols.force_controlled``), on fitted meshes or node by node.
-    ``wrap(start, step)``: the march's step function from the start state and the force-controlled step (node by
-    node: the sensitivities taken as each step is accepted); ``tol``: the force's relative tolerance
+    ``wrap(start, step)``: the march's step function from the start state and the force-controlled step (the
+    sensitivities taken as each step is accepted); ``tol``: the force's relative tolerance
     (``fem.protocols.force_controlled``; compress gives min(FORCE_TOL, 1e3 rtol): tighter with a tighter Newton)."""
     if fit is not None:
         assert isinstance(treat, FittedEdge)
@@ -1333,7 +1336,7 @@ def _force_steps(
         stiffness=long_time + float(np.sum(beta)),
         tol=tol,
     )
-    if wrap is not None and fit is None:
+    if wrap is not None:
         step = wrap(start, step)
     return march(step, start, times, too_large=too_large)
 

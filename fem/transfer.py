@@ -28,6 +28,9 @@ __all__ = [
     "deformation_at",
     "locate",
     "locate_many",
+    "locate_near",
+    "located",
+    "own_points",
     "local_coordinates",
     "lagrange2",
 ]
@@ -191,11 +194,51 @@ def gauss_transfer(old: AxiMesh, new: AxiMesh, continuous: bool = False) -> Call
 
 
 def gauss_transfers(
-    olds: list[AxiMesh], new: AxiMesh, continuous: bool = False
+    olds: list[AxiMesh], new: AxiMesh, continuous: bool = False, near: list | None = None
 ) -> list[Callable[[np.ndarray], np.ndarray]]:
-    """:func:`gauss_transfer` from each of ``olds`` to ``new`` (one point search for all: :func:`locate_many`)."""
+    """:func:`gauss_transfer` from each of ``olds`` to ``new`` (one point search for all: :func:`locate_many`).
+    ``near``: per old mesh None or (element, reference coordinates) of ``new``'s points in a mesh close to it (the
+    same mesh with its nodes moved a little, or ``new`` moved a little: :func:`located` of the pair): the points
+    are first sought there (:func:`locate_near`)."""
     pts = new.quadrature_points.reshape(2, -1)
-    return [_transfer(old, new, elem, loc, continuous) for old, (elem, loc) in zip(olds, locate_many(olds, pts))]
+    return [_transfer(old, new, elem, loc, continuous) for old, (elem, loc) in zip(olds, located(olds, pts, near))]
+
+
+def located(olds: list[AxiMesh], pts: np.ndarray, near: list | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(element, reference coordinates) of the points ``pts`` (2, n) in each of ``olds``: :func:`locate_near` where
+    ``near`` gives a start for that mesh, :func:`locate_many` (one search) for the others."""
+    near = near if near is not None else [None] * len(olds)
+    far = [i for i, g in enumerate(near) if g is None]
+    out: list = [None] * len(olds)
+    for i, got in zip(far, locate_many([olds[i] for i in far], pts) if far else []):
+        out[i] = got
+    for i, g in enumerate(near):
+        if g is not None:
+            out[i] = locate_near(olds[i], pts, g[0], g[1])
+    return out
+
+
+def own_points(mesh: AxiMesh) -> tuple[np.ndarray, np.ndarray]:
+    """(element, reference coordinates) of ``mesh``'s own Gauss points: the ``near`` start of :func:`gauss_transfers`
+    between meshes that nearly coincide (a fitted mesh and the next step's while the plate is held, or the same
+    mesh with its contact edge moved by a small fraction)."""
+    ne, nq = mesh.quadrature_points.shape[1:]
+    return np.repeat(np.arange(ne), nq), _gauss_reference(mesh)
+
+
+def locate_near(mesh: AxiMesh, pts: np.ndarray, elem: np.ndarray, start: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`locate` of points ``pts`` (2, n) known to lie in (or next to) the elements ``elem`` near the reference
+    coordinates ``start`` (2, n) (their location in a slightly different mesh): a few Newton steps from there; the
+    points that leave [0, 1]^2 of that element are searched afresh (:func:`locate_many`), so the result is
+    :func:`locate`'s (an element that contains the point)."""
+    ref = np.asarray(mesh.basis.elem.doflocs, float).T
+    loc = local_coordinates(mesh.element_nodes()[:, :, elem], ref, pts, iters=10, start=start)
+    elem = np.asarray(elem).copy()
+    out = np.flatnonzero((_excess(loc) > 1e-10) & (_excess(np.asarray(start)) <= 1e-10))
+    if out.size:
+        e2, l2 = locate_many([mesh], pts[:, out])[0]
+        elem[out], loc[:, out] = e2, l2
+    return elem, loc
 
 
 def _transfer(

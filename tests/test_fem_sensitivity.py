@@ -174,13 +174,6 @@ def test_time_run_gradient_equals_central_differences_of_whole_runs():
         assert np.max(np.abs(g[name]["force"] - fd)) <= 1e-6 * np.max(np.abs(fd)), name
 
 
-def test_time_run_gradient_needs_node_by_node_contact():
-    from tissuemech.fem import spheroid as fs
-
-    with pytest.raises(ValueError, match="contact='nodal'"):
-        fs.compress(radius=A0, C=CP, alpha=AP, displacement=40e-6, ramp_time=1.0, end_time=2.0, gradient=True)
-
-
 def test_time_run_gradient_names_one_branch_as_the_fit_does():
     from tissuemech.fem import spheroid as fs
 
@@ -299,9 +292,10 @@ def test_force_removed_gradient_follows_the_free_top():
 
 @pytest.mark.slow
 def test_the_contact_edge_carries_alpha_s_sensitivity_on_fitted_meshes():
-    """Why a time run's gradient on fitted meshes is refused: with every step's contact edge (its mesh and the
-    history's transfer) frozen at the unperturbed run's, d force / d alpha changes at the percent level (the
-    edge is no stationary point of the force), while C (a scale of the scaled problem) moves no edge."""
+    """Why a time run's gradient on fitted meshes carries the edge's motion (``fem.fitted_sensitivity``): with every
+    step's contact edge (its mesh and the history's transfer) frozen at the unperturbed run's, d force / d alpha
+    changes at the percent level (the edge is no stationary point of the force), while C (a scale of the scaled
+    problem) moves no edge; nor is the node-by-node run's gradient a stand-in for the fitted run's."""
     from tissuemech.compare.bench.fem_gradient import edge_share
 
     fixed = dict(radius=A0, displacement=30e-6, ramp_time=0.2, end_time=20.0, mesh="coarse", n_ramp=4, n_hold=6)
