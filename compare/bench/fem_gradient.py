@@ -98,7 +98,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--only-fit", action="store_true", help="run only the FE-in-the-loop fit")
     ap.add_argument("--only-time", action="store_true", help="run only the time runs (FD tables and cost ratios)")
     ap.add_argument(
-        "--only-fitted", action="store_true", help="run only the fitted-mesh measurement (the contact edge's share)"
+        "--only-fitted",
+        action="store_true",
+        help="run only the time runs on fitted meshes (FD tables, cost ratios, the contact edge's share)",
     )
     ap.add_argument(
         "--cost-levels", default=None, metavar="LEVELS",
@@ -113,6 +115,7 @@ def main(argv: list[str] | None = None) -> int:
         fe_fit(args.fit_mesh)
         return 0
     if args.only_fitted:
+        fitted(args.repeats)
         fitted_edge_share()
         return 0
     if args.only_time:
@@ -169,6 +172,7 @@ def main(argv: list[str] | None = None) -> int:
         )
     plates(args.repeats)
     relaxation(args.repeats)
+    fitted(args.repeats)
     fitted_edge_share()
     fe_fit(args.fit_mesh)
     return 0
@@ -292,6 +296,34 @@ def relaxation(repeats: int) -> None:
     _fd_table("creep under force control (3 uN), alpha = 1.4, two branches (default level, node by node, 6 + 12 "
               "steps)", run, _values(stiff, two), ("approach", "midplane_radius", "nominal_stress"))  # fmt: skip
     _cost(run, max(1, repeats // 2), 6)
+
+
+def fitted(repeats: int) -> None:
+    """Time runs on contact-edge-fitted meshes (the default contact, default level; ``fem.fitted_sensitivity``): the
+    Fig. 10 relaxation, the relaxation at alpha = 1.4 with two branches, and a creep under force control (coarse
+    level), each gradient against whole-run central differences whose edge is found to 1e-10 (``FittedEdge(tol=
+    1e-10)``, the gradient run too), then the cost of the default run (edge to 1e-6) with and without gradients."""
+    from tissuemech.compare.cases import FIG10, FIG10_END_TIME
+    from tissuemech.fem.contact import FittedEdge
+
+    tight = FittedEdge(tol=1e-10)
+    case = {k: v for k, v in FIG10.items() if k not in ("C", "alpha", "branches")}
+    fig10 = dict(**case, end_time=FIG10_END_TIME, mesh="default")
+    base, br = {"C": FIG10["C"], "alpha": FIG10["alpha"]}, list(FIG10["branches"])
+    _fd_table("Fig. 10 relaxation (default level, fitted contact edge)", _case({**fig10, "contact": tight}, base, br),
+              _values(base, br), ("force",))  # fmt: skip
+    _cost(_case(fig10, base, br), repeats, 4)
+    stiff = {"C": 150.0, "alpha": 1.4}
+    two = [(0.8, 0.2), (0.3, 20.0)]
+    hidden = dict(radius=100e-6, displacement=40e-6, ramp_time=1.0, end_time=60.0, mesh="default", n_ramp=8, n_hold=20)
+    _fd_table("relaxation, alpha = 1.4, two branches (default level, fitted, 8 + 20 steps)",
+              _case({**hidden, "contact": tight}, stiff, two), _values(stiff, two), ("force",))  # fmt: skip
+    _cost(_case(hidden, stiff, two), repeats, 6)
+    creep = dict(radius=100e-6, force=3e-6, ramp_time=1.0, end_time=60.0, mesh="coarse", n_ramp=12, n_hold=12)
+    _fd_table("creep under force control (3 uN), alpha = 1.4, two branches (coarse level, fitted, 12 + 12 steps)",
+              _case({**creep, "contact": tight}, stiff, two), _values(stiff, two),
+              ("approach", "midplane_radius", "nominal_stress"))  # fmt: skip
+    _cost(_case(creep, stiff, two), max(1, repeats // 2), 6)
 
 
 def cost_levels(levels: list[int], repeats: int) -> None:
