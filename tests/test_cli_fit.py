@@ -172,6 +172,7 @@ def test_fe_model_recovers_fe_made_records_off_the_table(tmp_path, capsys):
     assert "model: the FE" in cap.out and "FE evaluation 1:" in cap.err
     d = json.loads((out / "fit.json").read_text())
     assert d["model"] == "fe" and d["inputs"]["mesh"] == "coarse" and d["success"]
+    assert d["inputs"]["contact"] == "nodal" and d["contact"] == "nodal"  # the default: node-by-node contact
     for k, v in truth.items():
         lo, hi = d["intervals_95"][k]
         assert lo <= v <= hi and hi / lo < 1.2, (k, lo, v, hi)
