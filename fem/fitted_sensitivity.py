@@ -27,8 +27,10 @@ from the same ``history_before``. Each step's tangent is refined from Newton's k
 and the edge column as one block (``fem.sensitivity.solve_block``).
 
 Under force control the plate's motion dd/dtheta is a third unknown of the step, with dF = df_target/dtheta.
-Scope: history="replay" (the default), every step with fitted contact (no node-by-node steps beyond the fitted
-range, no lost contact), a non-wetting plate without surface tension; other runs raise ValueError naming the step.
+With a surface tension gamma (a parameter too) the edge condition is the slope dz/dr = 0 at the edge node
+(``fem.contact.edge_slope``), linearised exactly in the state and by the moved meshes in the edge. Scope:
+history="replay" (the default), every step with fitted contact (no node-by-node steps beyond the fitted range, no
+lost contact), a non-wetting plate (contact angle pi); other runs raise ValueError naming the step.
 Verified against central differences of whole runs with a tight edge tolerance
 (``tests/test_fem_fitted_sensitivity.py``, ``python -m tissuemech.compare.bench.fem_gradient --only-fitted``).
 """
@@ -43,7 +45,7 @@ import scipy.sparse as sp
 
 from tissuemech.fem import sensitivity as sens
 from tissuemech.fem import viscoelastic as ve
-from tissuemech.fem.contact import HistorySource, PlateStep, history_before
+from tissuemech.fem.contact import HistorySource, PlateStep, edge_slope, edge_slope_change, history_before
 from tissuemech.fem.kinematics import first_from_second
 from tissuemech.fem.mesh import AxiMesh
 from tissuemech.fem.transfer import gauss_transfers, located, own_points
@@ -280,7 +282,8 @@ class FittedTimeSensing:
         r_e = (residual(hi, xh, H_hi) - residual(lo, xl, H_lo)) / (2 * h)  # per ln e
         lin = sens.IsoLinearisation(f, mat.C, mat.alpha)
         coef = sens.maxwell_coefficients(beta, tau, dt) if beta.size else None
-        R = explicit_residuals(prob, x, f, lin, float(s.iso_scale), names, which, coef, dQ, dS, H0)
+        gamma = asm.surface.gamma if asm.surface is not None else 0.0
+        R = explicit_residuals(prob, x, f, lin, float(s.iso_scale), names, which, coef, dQ, dS, H0, gamma)
         R = np.column_stack([R, r_e])
         _, K = asm.internal(x, mat, extra_S=s.extra_S, iso_scale=s.iso_scale, tangent=True)
         K = sp.csr_matrix(K)
@@ -312,7 +315,12 @@ class FittedTimeSensing:
         dN = -(R[fixed] + K[fixed] @ dX)  # every held node's multiplier, per column
         F = -float(np.sum(s.residual[fixed]))
         N_edge = -float(s.residual[fixed[-1]])
-        dphi = (dN[-1] - N_edge / F * dN.sum(axis=0)) / F
+        if gamma > 0:  # the edge condition of a tension: the surface leaves the plate tangentially, dz/dr = 0
+            n_act = act.size  # (fem.contact.edge_slope; on the moved meshes the held displacement moves with X)
+            dphi = np.array([edge_slope_change(prob.plane, x, n_act, dX[:, j]) for j in range(dX.shape[1])])
+            dphi[P] += (edge_slope(hi.plane, xh, n_act) - edge_slope(lo.plane, xl, n_act)) / (2 * h)
+        else:  # phi = N_edge / F
+            dphi = (dN[-1] - N_edge / F * dN.sum(axis=0)) / F
         dF = dN.sum(axis=0)
         dd = np.zeros(P)
         if self.force_control:  # the force prescribed (f = F / (C a0^2): df / dln C = -f) and phi = 0: (de, dd)

@@ -552,8 +552,8 @@ def compress(
             approach, midplane radius and nominal stress move). On the fitted meshes of a time run (the default
             contact) the history replayed from every past step's own mesh and each step's edge motion are carried
             (``fem.fitted_sensitivity``; the edge's motion alone carries 2.8e-2 of d force / d alpha on Fig. 10),
-            for history="replay" without surface tension (else ValueError: use contact="nodal"). Accuracy and
-            cost: ``tissuemech bench fem-gradient``.
+            for history="replay" (else ValueError: use contact="nodal"). Accuracy and cost: ``tissuemech bench
+            fem-gradient``.
 
     Returns:
         ``SpheroidResult`` with one entry per converged step: ``time`` (s), ``approach`` (m), plate
@@ -694,10 +694,7 @@ def compress(
     if gradient and not static and isinstance(treat, FittedEdge):
         unsupported = [
             why
-            for why, bad in (
-                (f"history={treat.history!r} (only the default 'replay')", treat.history != "replay"),
-                ("a surface tension", surface_tension != 0.0),
-            )
+            for why, bad in ((f"history={treat.history!r} (only the default 'replay')", treat.history != "replay"),)
             if bad
         ]
         if unsupported:
@@ -782,7 +779,7 @@ def compress(
     def sensed_fitted(step: Callable) -> Callable:
         if not gradient:
             return step
-        names, which = sensing_names(beta.size, False)
+        names, which = sensing_names(beta.size, gam > 0)
         fitted_sensing.append(FittedTimeSensing(fit, names, which, beta, tau, long_time, EDGE_STEP, fc))
         return fitted_sensing[0].wrap(step)
 
