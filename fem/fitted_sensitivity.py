@@ -48,7 +48,7 @@ from tissuemech.fem import viscoelastic as ve
 from tissuemech.fem.contact import HistorySource, PlateStep, edge_slope, edge_slope_change, history_before
 from tissuemech.fem.kinematics import first_from_second
 from tissuemech.fem.mesh import AxiMesh
-from tissuemech.fem.transfer import gauss_transfers, located, own_points
+from tissuemech.fem.transfer import ContinuousJet, gauss_transfers, located, own_points
 
 
 def _transfer_at(old: AxiMesh, new: AxiMesh, where: tuple) -> Callable[[np.ndarray], np.ndarray]:
@@ -170,6 +170,7 @@ class FittedTimeSensing:
         self.dvisco: tuple[np.ndarray, np.ndarray] | None = None  # the last step's history values' total sensitivity
         self.out: list[dict] = []
         self.kept: tuple[int, Callable] | None = None  # (size, a solve with a recent factorisation of the tangent)
+        self._transfers: dict[tuple[int, int], tuple] = {}  # (old, new, transfer) of held steps (_held_transfer)
         self.refinements: list[int] = []  # per step: refinement iterations of the block solve (-1: factored)
 
     def wrap(self, step: Callable) -> Callable:
@@ -193,8 +194,7 @@ class FittedTimeSensing:
             assert self.dvisco is not None and src.mesh is not None
             last = self.entries[-1]
             assert last.mesh is src.mesh, "the held step's history lives on the previous step's mesh"
-            own = own_points(m)  # the plate held: every mesh here nearly coincides with m
-            tr, t_lo, t_hi = gauss_transfers([src.mesh, last.lo, last.hi], m, near=[own, own, own])
+            tr, t_lo, t_hi = (self._held_transfer(mm, m) for mm in (src.mesh, last.lo, last.hi))
             dQ, dS = self.dvisco
             q, s = src.state.Q, src.state.S_iso
             de = last.de[:, None, None, None]
@@ -203,12 +203,26 @@ class FittedTimeSensing:
             return tr(dQ) + de[:, None] * dq[None], tr(dS) + de * ds[None]
         raise AssertionError("replayed histories: _replayed")
 
+    def _held_transfer(self, old: AxiMesh, new: AxiMesh) -> Callable[[np.ndarray], np.ndarray]:
+        """The element-wise transfer of a held step's history (``fem.contact.history_before``, kind "transfer") from
+        ``old`` to ``new`` (the identity where they are one mesh), kept for the next steps: while the plate is held
+        the edge mostly stays where it is, and every step transfers between the same meshes."""
+        if old is new:
+            return lambda f: f
+        key = (id(old), id(new))
+        if key not in self._transfers:
+            if len(self._transfers) > 16:
+                self._transfers.pop(next(iter(self._transfers)))
+            self._transfers[key] = (old, new, gauss_transfers([old], new, near=[own_points(new)])[0])
+        return self._transfers[key][2]
+
     def _replayed(
         self, src: HistorySource, m: AxiMesh, moved: tuple[AxiMesh, AxiMesh], shape: tuple
-    ) -> tuple[ve.MaxwellState, ve.MaxwellState, np.ndarray, np.ndarray]:
-        """A replayed history (``fem.contact.replayed_history``) on the meshes ``moved`` (m at e (1 -+ h)), and
-        (dQ, dS) of the one on m at its fixed Gauss points. One point search of m's Gauss points in every past
-        step's mesh; the moved meshes' points, and m's in the past steps' moved meshes, are sought from there."""
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(dQ, dS) of a replayed history (``fem.contact.replayed_history``) on m at its fixed Gauss points, and
+        (dQ_e, dS_e): its derivative in m's own edge (d / d ln e, the mesh's motion between ``moved``, m at e (1 -+
+        h)). One point search of m's Gauss points in every past step's mesh; every motion (of the past step's mesh,
+        of m's points) is the exact derivative of the continuous interpolation there (``fem.transfer.ContinuousJet``)."""
         path = src.path
         if len(path) != len(self.entries):
             raise ValueError("the replayed history holds steps without sensitivities (node-by-node or free steps)")
@@ -221,29 +235,31 @@ class FittedTimeSensing:
                 meshes.append(en.mesh)
         pts = m.quadrature_points.reshape(2, -1)
         at = located(meshes, pts)  # m's points in every past step's mesh
-        near = [at[index[id(en.mesh)]] for en in self.entries]
-        # the past steps' meshes at their e (1 -+ h), m's points in them; the past meshes, the moved m's points in them
-        from_lo = gauss_transfers([en.lo for en in self.entries], m, True, near)
-        from_hi = gauss_transfers([en.hi for en in self.entries], m, True, near)
-        to_m = [_transfer_at(mm, m, at[i]) for i, mm in enumerate(meshes)]
-        to_moved = [gauss_transfers(meshes, mv, True, at) for mv in moved]
+        jets = [ContinuousJet(mm, *at[i], shape[:2]) for i, mm in enumerate(meshes)]
+        lo, hi = moved
+        dp = (hi.quadrature_points - lo.quadrature_points).reshape(2, -1) / (2 * self.h)  # m's points per ln e
         Q, S = np.zeros((nb,) + shape), np.zeros(shape)
         dQ, dS = np.zeros((P, nb) + shape), np.zeros((P,) + shape)
-        states = [ve.initial_state(nb, shape) for _ in moved]
+        dQe, dSe = np.zeros((nb,) + shape), np.zeros(shape)
         for k, en in enumerate(self.entries):
             dt = float(path[k][3])
-            i = index[id(en.mesh)]
-            Sk = to_m[i](en.S)
-            dSk = (
-                to_m[i](en.dS)
-                + en.de[:, None, None, None] * ((from_hi[k](en.S_hi) - from_lo[k](en.S_lo)) / (2 * en.h))[None]
-            )
+            jet = jets[index[id(en.mesh)]]
+            # the step's stress, its motion with its own edge (the held displacement's stress on the moved meshes),
+            # its sensitivity on its fixed mesh
+            nd = jet.nodal(np.concatenate([en.S[None], ((en.S_hi - en.S_lo) / (2 * en.h))[None], en.dS]))
+            vals = jet.value(nd)
+            dX = (np.asarray(en.hi.basis.doflocs) - np.asarray(en.lo.basis.doflocs)) / (2 * en.h)
+            Sk = vals[0]
+            own = vals[1] + jet.moved(nd[:1], None, dX)[0]  # d / d ln e_k of the transferred stress
+            dSk = vals[2:] + en.de[:, None, None, None] * own[None]
+            dSek = jet.moved(nd[:1], dp, None)[0]  # d / d ln e of m's points
             coef = sens.maxwell_coefficients(self.beta, self.tau, dt)
+            decay, b = coef[0][:, None, None, None], coef[1][:, None, None, None]
             dQ = history_update_tangent(self.names, self.which, coef, Q, S, Sk, dQ, dS, dSk)
-            Q = coef[0][:, None, None, None] * Q + coef[1][:, None, None, None] * (Sk - S)[None]
-            S, dS = Sk, dSk
-            states = [ve.update(st, self.beta, self.tau, dt, tr[i](en.S)) for st, tr in zip(states, to_moved)]
-        return states[0], states[1], dQ, dS
+            dQe = decay * dQe + b * (dSek - dSe)[None]
+            Q = decay * Q + b * (Sk - S)[None]
+            S, dS, dSe = Sk, dSk, dSek
+        return dQ, dS, dQe, dSe
 
     # ---- one accepted step ----------------------------------------------------------------------------------------
     def add(self, new: PlateStep, dt: float, what: str) -> None:
@@ -268,8 +284,16 @@ class FittedTimeSensing:
         H0 = new.before
         f = asm.f_at(x)
         shape = f.shape
-        if src.kind == "replay":
-            H_lo, H_hi, dQ, dS = self._replayed(src, prob.m, (lo.m, hi.m), shape)
+        if src.kind == "replay":  # the moved meshes' histories to first order (their central difference is exact)
+            dQ, dS, dQe, dSe = self._replayed(src, prob.m, (lo.m, hi.m), shape)
+            H_lo = ve.MaxwellState(H0.Q - h * dQe, H0.S_iso - h * dSe)
+            H_hi = ve.MaxwellState(H0.Q + h * dQe, H0.S_iso + h * dSe)
+        elif src.kind == "transfer":  # history_before's interpolation, its transfers kept
+            assert src.mesh is not None
+            t_lo, t_hi = self._held_transfer(src.mesh, lo.m), self._held_transfer(src.mesh, hi.m)
+            H_lo = ve.MaxwellState(t_lo(src.state.Q), t_lo(src.state.S_iso))
+            H_hi = ve.MaxwellState(t_hi(src.state.Q), t_hi(src.state.S_iso))
+            dQ, dS = self._history_tangent(src, prob.m, shape)
         else:
             H_lo = history_before(src, lo.m, mat, beta, tau)
             H_hi = history_before(src, hi.m, mat, beta, tau)
@@ -287,6 +311,11 @@ class FittedTimeSensing:
         R = np.column_stack([R, r_e])
         _, K = asm.internal(x, mat, extra_S=s.extra_S, iso_scale=s.iso_scale, tangent=True)
         K = sp.csr_matrix(K)
+        if K.nnz == asm.pattern.nnz:  # the unknowns' block gathered from the shared pattern (as fem.spheroid's)
+            src_idx, tpl = asm.pattern.restricted(U)
+            KUU = tpl._with_data(K.data[src_idx], copy=False)
+        else:  # the surface tangent added entries: slice
+            KUU = K[U][:, U]
         # refined from this sensing's last factorisation, or Newton's where it factored during this step; a new one
         # after slow refinement (handed to Newton as its kept factor: in the hold Newton's is the ramp's)
         newton = self.fit.linear.kept
@@ -301,7 +330,7 @@ class FittedTimeSensing:
         ):  # the plate moved: u_z = h - Z on the held dofs, dh = -dd: the right-hand side K[U, fixed] 1
             cols = np.column_stack([cols, np.asarray(K[fixed].sum(axis=0)).ravel()[U]])
         dXU, solve, its = sens.solve_block(
-            K[U][:, U], None if approx is None else approx[1], cols, what, tol=SENSITIVITY_TOL, max_iter=6
+            KUU, None if approx is None else approx[1], cols, what, tol=SENSITIVITY_TOL, max_iter=6
         )
         self.kept = (U.size, solve)
         self.refinements.append(its)

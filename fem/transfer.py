@@ -31,6 +31,7 @@ __all__ = [
     "locate_near",
     "located",
     "own_points",
+    "ContinuousJet",
     "local_coordinates",
     "lagrange2",
 ]
@@ -289,6 +290,69 @@ def _transfer(
         return np.einsum("np,...npc->...nc", L, g).reshape(f.shape[:-3] + (ne, nq, f.shape[-1]))
 
     return transfer
+
+
+class ContinuousJet:
+    """The continuous transfer of :func:`gauss_transfer` (``continuous=True``) from ``old`` to the points ``pts``
+    (2, n) located at (``elem``, ``loc``) in it, with its first derivatives in the meshes' motion: :meth:`value`
+    is the transfer itself; :meth:`moved` is its derivative when the points move by dp (2, n) and the old mesh's
+    nodes by dX (2, n_nodes) (the nodal values held: the element quadratic of a Gauss-value field is fixed by the
+    values, its nodal average by the numbering; the point's reference coordinates move by J^-1 (dp - sum_b N_b(xi)
+    dX_b), J the old element's map). Exact derivatives of the interpolation in the element that holds the point
+    (the fitted time runs' sensitivities: ``fem.fitted_sensitivity``)."""
+
+    def __init__(self, old: AxiMesh, elem: np.ndarray, loc: np.ndarray, shape: tuple[int, int]) -> None:
+        b = old.basis
+        ref = np.asarray(b.elem.doflocs, float).T  # (2, 9)
+        G = np.asarray(b.X)  # (2, n_qp)
+        powers = [(i, j) for i in range(3) for j in range(3)]
+        V = np.stack([G[0] ** i * G[1] ** j for i, j in powers], axis=1)
+        Pn = np.stack([ref[0] ** i * ref[1] ** j for i, j in powers], axis=1)
+        self.to_nodes = Pn @ np.linalg.inv(V)  # (9, n_qp): the element quadratic at its nodes
+        self.ed = b.element_dofs  # (9, n_el)
+        self.N_nodes = b.N
+        self.count = np.bincount(self.ed.ravel(), minlength=b.N).astype(float)
+        ia, ib = (np.rint(2.0 * r).astype(int) for r in ref)
+        (v0, d0), (v1, d1) = lagrange2(loc[0]), lagrange2(loc[1])
+        self.N = v0[ia] * v1[ib]  # (9, n)
+        self.dN = np.stack([d0[ia] * v1[ib], v0[ia] * d1[ib]])  # (2, 9, n): d/dxi, d/deta
+        self.dofs = self.ed[:, elem]  # (9, n)
+        xe = np.asarray(b.doflocs)[:, self.dofs]  # (2, 9, n) the old element's nodes
+        J = np.einsum("ikn,dkn->idn", xe, self.dN)  # (2, 2, n): dx_i / dxi_d
+        det = J[0, 0] * J[1, 1] - J[0, 1] * J[1, 0]
+        self.Jinv = np.stack([np.stack([J[1, 1], -J[0, 1]]), np.stack([-J[1, 0], J[0, 0]])]) / det  # (2, 2, n)
+        self.shape = shape  # (n_el, n_qp) of the points
+
+    def nodal(self, f: np.ndarray) -> np.ndarray:
+        """The continuous (nodally averaged) element quadratics of the Gauss-value fields f (m, old n_el, n_qp, c) at
+        the nodes of each point's element: (m, 9, n, c), the input of :meth:`value` and :meth:`moved`."""
+        c = f.shape[-1]
+        at = np.einsum("kp,mepc->mkec", self.to_nodes, f)  # (m, 9, n_el, c)
+        idx = self.ed.ravel()
+        out = (
+            np.stack(
+                [
+                    np.stack([np.bincount(idx, at[i, ..., j].ravel(), self.N_nodes) for j in range(c)], -1)
+                    for i in range(f.shape[0])
+                ]
+            )
+            / self.count[None, :, None]
+        )  # (m, N, c)
+        return out[:, self.dofs]
+
+    def value(self, nd: np.ndarray) -> np.ndarray:
+        """The transferred fields (m, n_el, n_qp, c) from :meth:`nodal`'s (m, 9, n, c)."""
+        return np.einsum("kn,mknc->mnc", self.N, nd).reshape((nd.shape[0],) + self.shape + (nd.shape[-1],))
+
+    def moved(self, nd: np.ndarray, dp: np.ndarray | None, dX: np.ndarray | None) -> np.ndarray:
+        """The change of the transferred fields (m, n_el, n_qp, c) (:meth:`nodal`'s nd) for the points moved by dp
+        (2, n) and the old mesh's nodes by dX (2, n_nodes) (either None: fixed)."""
+        dx = np.zeros((2, self.N.shape[1])) if dp is None else np.array(dp, float)
+        if dX is not None:
+            dx -= np.einsum("ikn,kn->in", np.asarray(dX)[:, self.dofs], self.N)
+        dxi = np.einsum("din,in->dn", self.Jinv, dx)  # (2, n)
+        dNv = np.einsum("dkn,dn->kn", self.dN, dxi)  # (9, n)
+        return np.einsum("kn,mknc->mnc", dNv, nd).reshape((nd.shape[0],) + self.shape + (nd.shape[-1],))
 
 
 def deformation_at(mesh: AxiMesh, x: np.ndarray, points: AxiMesh) -> np.ndarray:

@@ -109,3 +109,28 @@ def test_locating_in_many_meshes_at_once_is_locating_in_each():
         (v0, _), (v1, _) = lagrange2(loc[0]), lagrange2(loc[1])
         x = np.einsum("ikn,kn->in", b.doflocs[:, b.element_dofs][:, :, elem], v0[ia] * v1[ib])
         assert np.max(np.abs(x - pts)[:, inside]) < 1e-12
+
+
+def test_continuous_jet_is_the_transfer_and_its_derivative_in_both_meshes_motion():
+    """``ContinuousJet``: its value is the continuous transfer; its motion terms equal central differences of the
+    transfer between fitted meshes whose contact edge moves (the source's nodes, the target's points) to the
+    differences' truncation (~1e-8 of the largest)."""
+    from tissuemech.fem.mesh import fitted_mesh
+    from tissuemech.fem.transfer import ContinuousJet, located
+
+    h, e_src, e_tgt = 1e-4, 0.3, 0.31
+    src, tgt = fitted_mesh(1.0, 1, e_src), fitted_mesh(1.0, 1, e_tgt)
+    q = src.quadrature_points
+    f = np.stack([np.sin(3 * q[0]) * np.cos(2 * q[1]), q[0] ** 2 + q[1]], -1)[None]
+    (at,) = located([src], tgt.quadrature_points.reshape(2, -1))
+    jet = ContinuousJet(src, *at, tgt.quadrature_points.shape[1:])
+    nd = jet.nodal(f)
+    np.testing.assert_allclose(jet.value(nd), gauss_transfer(src, tgt, continuous=True)(f), rtol=0, atol=1e-14)
+    sl, sh = fitted_mesh(1.0, 1, e_src * (1 - h)), fitted_mesh(1.0, 1, e_src * (1 + h))
+    fd = (gauss_transfer(sh, tgt, continuous=True)(f) - gauss_transfer(sl, tgt, continuous=True)(f)) / (2 * h)
+    dX = (np.asarray(sh.basis.doflocs) - np.asarray(sl.basis.doflocs)) / (2 * h)
+    assert np.max(np.abs(jet.moved(nd, None, dX) - fd)) <= 1e-7 * np.max(np.abs(fd))
+    tl, th = fitted_mesh(1.0, 1, e_tgt * (1 - h)), fitted_mesh(1.0, 1, e_tgt * (1 + h))
+    fd = (gauss_transfer(src, th, continuous=True)(f) - gauss_transfer(src, tl, continuous=True)(f)) / (2 * h)
+    dp = (th.quadrature_points - tl.quadrature_points).reshape(2, -1) / (2 * h)
+    assert np.max(np.abs(jet.moved(nd, dp, None) - fd)) <= 1e-7 * np.max(np.abs(fd))
