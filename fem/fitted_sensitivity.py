@@ -322,8 +322,9 @@ class FittedTimeSensing:
         approx = self.kept if self.kept is not None and self.kept[0] == U.size else None
         if newton is not None and newton.solve is not None and newton.age == 0 and newton.n == U.size:
             approx = (U.size, getattr(newton.solve, "unrefined", newton.solve))
-        if self.refinements and self.refinements[-1] >= REFACTOR_AFTER:
-            approx = None
+        if src.kind == "replay" or (self.refinements and self.refinements[-1] >= REFACTOR_AFTER):
+            approx = None  # the plate moves (the last factorisations, of other meshes and states, refined in 6+
+            # iterations or not at all on Fig. 10's ramp), or the kept factorisation has drifted
         cols = -R[U]
         if (
             self.force_control
