@@ -79,12 +79,13 @@ force, moves with it; on a coarse 0.2 s ramp case beta and tau move it too (3.7e
 gradient on fitted meshes therefore needs the edge's motion (as the static runs carry it) and the replayed
 history's sensitivity across the meshes: both are carried since 2026-12-05 (``fem.fitted_sensitivity``).
 
-Time runs on fitted meshes (``--only-fitted``, :func:`fitted`, 2026-12-05 06:19-06:21 UTC, load 1.1-1.4, 2.6 min):
-against whole-run differences with the edge found to 1e-10, Fig. 10 <= 6.6e-8 (alpha; C 6.6e-11), 4 gradients 2.36x
-the plain default run (0.63 / 1.49 s); alpha = 1.4 with two branches <= 3.5e-7, 6 gradients 2.59x; a creep under
-force control on the coarse level (approach) <= 9.5e-7, 1.34x. The FE-in-the-loop fit on fitted meshes
-(``--only-fit --fit-contact fitted``, 06:23 UTC): 10 FE evaluations, 37.9 s on the default mesh, every interval
-holding the truth (node-by-node: 13.8 s).
+Time runs on fitted meshes (``--only-fitted``, :func:`fitted`, 2026-12-05 06:55-06:58 UTC, load 0.6-1.0, 2.7 min):
+against whole-run differences with the edge found to 1e-10, Fig. 10 <= 6.6e-8 (alpha; C 6.6e-11; the default run,
+edge to 1e-6, <= 1.1e-7), 4 gradients 1.74x the plain default run (0.65 / 1.13 s); alpha = 1.4 with two branches
+<= 9.9e-8, 6 gradients 2.14x; a creep under force control on the coarse level <= 1.5e-7 (nominal stress; approach
+4.0e-8), 1.14x; surface tension 1 mN/m (coarse) <= 4.1e-8; a measured history with an unload (coarse) <= 9.8e-9. The FE-in-the-loop fit on
+fitted meshes (``--only-fit --fit-contact fitted``, 06:23 UTC): 10 FE evaluations, 37.9 s on the default mesh, every
+interval holding the truth (node-by-node: 13.8 s).
 """
 
 from __future__ import annotations
@@ -215,10 +216,11 @@ def fe_fit(mesh: str, contact: str = "nodal") -> None:
         print(f"  {n:6s} truth {v:8.4g}  fit {res.params[n]:8.4g}  95 % [{lo:.4g}, {hi:.4g}]  holds {lo <= v <= hi}")
 
 
-def _fd_table(title: str, run, values: dict, observables: tuple[str, ...]) -> dict:
+def _fd_table(title: str, run, values: dict, observables: tuple[str, ...], also=None) -> dict:
     """Print max over the steps of |gradient - FD| / max |FD| per parameter and observable, FD the central difference
     of two whole runs at rtol 1e-13 (step 1e-4 of the parameter); ``run(name=None, value=None, **kw)`` runs the case
-    with one parameter changed. Returns the gradient run's result."""
+    with one parameter changed; ``also``: (label, another run's result with gradients) compared with the same FD.
+    Returns the gradient run's result."""
     print(title)
     res = run(gradient=True)
     worst = 0.0
@@ -231,6 +233,9 @@ def _fd_table(title: str, run, values: dict, observables: tuple[str, ...]) -> di
             err = float(np.max(np.abs(res.gradient[name][o] - fd)) / np.max(np.abs(fd)))
             worst = max(worst, err)
             cells.append(f"{o} {err:.1e}")
+            if also is not None:
+                other = float(np.max(np.abs(also[1].gradient[name][o] - fd)) / np.max(np.abs(fd)))
+                cells.append(f"({also[0]} {other:.1e})")
         print(f"  {name:7s} " + "  ".join(cells))
     print(f"  largest {worst:.1e} (max over the steps of |grad - FD| / max |FD|)")
     return res
@@ -324,8 +329,9 @@ def fitted(repeats: int) -> None:
     case = {k: v for k, v in FIG10.items() if k not in ("C", "alpha", "branches")}
     fig10 = dict(**case, end_time=FIG10_END_TIME, mesh="default")
     base, br = {"C": FIG10["C"], "alpha": FIG10["alpha"]}, list(FIG10["branches"])
+    default_run = _case(fig10, base, br)(gradient=True)  # the edge to 1e-6, rtol 1e-10
     _fd_table("Fig. 10 relaxation (default level, fitted contact edge)", _case({**fig10, "contact": tight}, base, br),
-              _values(base, br), ("force",))  # fmt: skip
+              _values(base, br), ("force",), also=("default run", default_run))  # fmt: skip
     _cost(_case(fig10, base, br), repeats, 4)
     stiff = {"C": 150.0, "alpha": 1.4}
     two = [(0.8, 0.2), (0.3, 20.0)]
@@ -338,6 +344,17 @@ def fitted(repeats: int) -> None:
               _case({**creep, "contact": tight}, stiff, two), _values(stiff, two),
               ("approach", "midplane_radius", "nominal_stress"))  # fmt: skip
     _cost(_case(creep, stiff, two), max(1, repeats // 2), 6)
+    # a surface tension (the slope edge condition) and a measured history with an unload (coarse level)
+    capillary = dict(radius=100e-6, displacement=30e-6, ramp_time=0.2, end_time=20.0, mesh="coarse", n_ramp=4,
+                     n_hold=6, contact=tight)  # fmt: skip
+    tension = {"C": 150.0, "alpha": 1.2, "surface_tension": 1e-3}
+    _fd_table("relaxation with surface tension 1 mN/m, alpha = 1.2, two branches (coarse level, fitted)",
+              _case(capillary, tension, [(0.8, 0.05), (0.3, 20.0)]), _values(tension, [(0.8, 0.05), (0.3, 20.0)]),
+              ("force",))  # fmt: skip
+    record = (np.array([0.0, 1.0, 5.0, 6.0, 20.0]), np.array([0.0, 30e-6, 30e-6, 24e-6, 24e-6]))
+    history = dict(radius=100e-6, displacement=record, mesh="coarse", n_ramp=6, contact=tight)
+    _fd_table("measured history: ramp 1 s, hold, unload by 20 %, hold (coarse level, fitted)",
+              _case(history, stiff, [(0.5, 2.0)]), _values(stiff, [(0.5, 2.0)]), ("force",))  # fmt: skip
 
 
 def cost_levels(levels: list[int], repeats: int) -> None:
