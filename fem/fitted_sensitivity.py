@@ -46,7 +46,6 @@ import scipy.sparse as sp
 from tissuemech.fem import sensitivity as sens
 from tissuemech.fem import viscoelastic as ve
 from tissuemech.fem.contact import HistorySource, PlateStep, edge_slope, edge_slope_change, history_before
-from tissuemech.fem.kinematics import first_from_second
 from tissuemech.fem.mesh import AxiMesh
 from tissuemech.fem.transfer import ContinuousJet, gauss_transfers, located, own_points
 
@@ -56,77 +55,10 @@ def _transfer_at(old: AxiMesh, new: AxiMesh, where: tuple) -> Callable[[np.ndarr
     return gauss_transfers([old], new, True, [where])[0]
 
 
-__all__ = ["FittedTimeSensing", "explicit_residuals", "SENSITIVITY_TOL"]
+__all__ = ["FittedTimeSensing", "SENSITIVITY_TOL"]
 
 SENSITIVITY_TOL = 1e-10  # relative residual of the block solves (the edge's share is a small difference of them)
 REFACTOR_AFTER = 4  # refinement iterations after which the next step's tangent is factored afresh
-
-
-def explicit_residuals(
-    prob,
-    x: np.ndarray,
-    f: np.ndarray,
-    lin: sens.IsoLinearisation,
-    iso: float,
-    names: list[str],
-    which: dict[str, tuple[str, int]],
-    coef,
-    dQ: np.ndarray,
-    dS: np.ndarray,
-    prev: ve.MaxwellState,
-    gamma: float = 0.0,
-) -> np.ndarray:
-    """The explicit derivatives dr/dtheta (ndof, P) of a time step's scaled residual at its state ``x`` (deformation
-    gradients ``f``, ``lin`` their ``IsoLinearisation``, ``iso`` the step's iso_scale), the parameters ``names``
-    (ln C, alpha, [surface_tension,] beta_m / tau_m as ``which`` maps them), with the history before the step
-    ``prev`` on this mesh and its sensitivities dQ (P, n_branches, ...), dS (P, ...); ``coef`` the step's
-    ``sens.maxwell_coefficients`` (None: no branches). The step's stress is S_vol + iso_scale S_iso + extra_S with
-    iso_scale = long_time + sum_m b_m and extra_S = sum_m (decay_m Q_m - b_m S_iso^n); ln C moves k = kappa / C and
-    g = gamma / (C a0) as -k, -g."""
-    asm, mat = prob.asm, prob.mat
-    P = len(names)
-    Pst = np.zeros((P,) + f.shape)
-    Pst[1] = iso * lin.d_alpha[..., None] * lin.P
-    if coef is not None:
-        decay, b, ddecay, db_dbeta, db_dtau = coef
-        d_extra = np.einsum("m,pm...->p...", decay, dQ) - b.sum() * dS
-        d_iso = np.zeros(P)
-        for j, n in enumerate(names):
-            if n in which:
-                kind, m = which[n]
-                if kind == "beta":
-                    d_iso[j] = db_dbeta[m]
-                    d_extra[j] -= db_dbeta[m] * prev.S_iso
-                else:
-                    d_iso[j] = db_dtau[m]
-                    d_extra[j] += ddecay[m] * prev.Q[m] - db_dtau[m] * prev.S_iso
-        Pst += d_iso[:, None, None, None] * lin.P[None]
-        Pst += first_from_second(f, d_extra)
-    R = sens.stress_residuals(asm, Pst)
-    # ln C: k and g scale as 1 / C; r_q = ... - M q / k, so dr_q / dln C = -M q / k (and -g dr/dg)
-    q = x[asm.qdofs]
-    q = q - np.asarray([asm.q_ref, 0.0, 0.0])  # the law q = q_ref + kappa (J - 1) (q_ref = -2 g: fem.surface)
-    R[asm.n_u :, 0] = -(np.matmul(asm.M, q[:, :, None])[..., 0] / mat.kappa).ravel()
-    if gamma:
-        rg = prob.tension_derivative(x)
-        R[:, 2] += rg
-        R[:, 0] -= gamma * rg
-    return R
-
-
-def history_update_tangent(
-    names: list[str], which: dict, coef, Q: np.ndarray, S: np.ndarray, S_new: np.ndarray, dQ, dS, dS_new
-) -> np.ndarray:
-    """dQ^{n+1} (P, n_branches, ...) of the Maxwell update Q^{n+1} = decay Q^n + b (S^{n+1} - S^n)
-    (``fem.viscoelastic.update``) from the sensitivities of its inputs and of its coefficients."""
-    decay, b, ddecay, db_dbeta, db_dtau = coef
-    jump = S_new - S
-    out = decay[None, :, None, None, None] * dQ + b[None, :, None, None, None] * (dS_new - dS)[:, None]
-    for j, n in enumerate(names):
-        if n in which:
-            kind, m = which[n]
-            out[j, m] += db_dbeta[m] * jump if kind == "beta" else ddecay[m] * Q[m] + db_dtau[m] * jump
-    return out
 
 
 class _Entry(NamedTuple):
@@ -255,7 +187,7 @@ class FittedTimeSensing:
             dSek = jet.moved(nd[:1], dp, None)[0]  # d / d ln e of m's points
             coef = sens.maxwell_coefficients(self.beta, self.tau, dt)
             decay, b = coef[0][:, None, None, None], coef[1][:, None, None, None]
-            dQ = history_update_tangent(self.names, self.which, coef, Q, S, Sk, dQ, dS, dSk)
+            dQ = sens.history_update_tangent(self.names, self.which, coef, Q, S, Sk, dQ, dS, dSk)
             dQe = decay * dQe + b * (dSek - dSe)[None]
             Q = decay * Q + b * (Sk - S)[None]
             S, dS, dSe = Sk, dSk, dSek
@@ -307,7 +239,7 @@ class FittedTimeSensing:
         lin = sens.IsoLinearisation(f, mat.C, mat.alpha)
         coef = sens.maxwell_coefficients(beta, tau, dt) if beta.size else None
         gamma = asm.surface.gamma if asm.surface is not None else 0.0
-        R = explicit_residuals(prob, x, f, lin, float(s.iso_scale), names, which, coef, dQ, dS, H0, gamma)
+        R = sens.explicit_residuals(prob, x, f, lin, float(s.iso_scale), names, which, coef, dQ, dS, H0, gamma)
         R = np.column_stack([R, r_e])
         _, K = asm.internal(x, mat, extra_S=s.extra_S, iso_scale=s.iso_scale, tangent=True)
         K = sp.csr_matrix(K)
@@ -378,7 +310,9 @@ class FittedTimeSensing:
             assert coef is not None
             dQ_pre = dQ + dEdge[:, None] * ((H_hi.Q - H_lo.Q) / (2 * h))[None]
             dS_pre = dS + dEdge * ((H_hi.S_iso - H_lo.S_iso) / (2 * h))[None]
-            dQ_post = history_update_tangent(names, which, coef, H0.Q, H0.S_iso, s.visco.S_iso, dQ_pre, dS_pre, dS_post)
+            dQ_post = sens.history_update_tangent(
+                names, which, coef, H0.Q, H0.S_iso, s.visco.S_iso, dQ_pre, dS_pre, dS_post
+            )
         else:
             dQ_post = np.zeros((P, 0) + shape)
         self.dvisco = (dQ_post, dS_post)

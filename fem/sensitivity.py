@@ -30,6 +30,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from tissuemech.fem import viscoelastic as ve
+from tissuemech.fem.kinematics import first_from_second
 from tissuemech.fem.linalg import symmetric_factor
 
 
@@ -51,6 +53,10 @@ __all__ = [
     "point_increments",
     "stress_residuals",
     "solve_block",
+    "branch_names",
+    "sensing_names",
+    "explicit_residuals",
+    "history_update_tangent",
 ]
 
 REL_STEP = 1e-4  # relative step of the residual's central difference in a parameter (truncation ~1e-8)
@@ -363,3 +369,92 @@ def _columns(solve: Callable[[np.ndarray], np.ndarray], B: np.ndarray) -> np.nda
     except (ValueError, TypeError):
         pass
     return np.column_stack([solve(B[:, j]) for j in range(B.shape[1])])
+
+
+# ---- a time step's explicit parameter derivatives and the Maxwell history's (every scene's time runs) ----------
+
+
+def branch_names(n_branches: int) -> list[tuple[str, str, int]]:
+    """(name of beta_m, name of tau_m, m) as ``compare.fit`` spells them: "beta", "tau" for one branch, else
+    "beta_1", "tau_1", ..."""
+    if n_branches == 1:
+        return [("beta", "tau", 0)]
+    return [(f"beta_{m + 1}", f"tau_{m + 1}", m) for m in range(n_branches)]
+
+
+def sensing_names(n_branches: int, tension: bool) -> tuple[list[str], dict[str, tuple[str, int]]]:
+    """(the scaled parameters of a time run's sensitivities: "lnC", "alpha", ["surface_tension",] then each branch's
+    beta and tau as :func:`branch_names` spells them; {branch parameter name: ("beta" | "tau", branch index)})."""
+    names = ["lnC", "alpha"] + ["surface_tension"] * bool(tension)
+    names += [n for b, t, _ in branch_names(n_branches) for n in (b, t)]
+    which = {b: ("beta", m) for b, _, m in branch_names(n_branches)} | {
+        t: ("tau", m) for _, t, m in branch_names(n_branches)
+    }
+    return names, which
+
+
+def explicit_residuals(
+    prob,
+    x: np.ndarray,
+    f: np.ndarray,
+    lin: IsoLinearisation,
+    iso: float,
+    names: list[str],
+    which: dict[str, tuple[str, int]],
+    coef,
+    dQ: np.ndarray,
+    dS: np.ndarray,
+    prev: ve.MaxwellState,
+    gamma: float = 0.0,
+) -> np.ndarray:
+    """The explicit derivatives dr/dtheta (ndof, P) of a time step's scaled residual at its state ``x`` (deformation
+    gradients ``f``, ``lin`` their ``IsoLinearisation``, ``iso`` the step's iso_scale), the parameters ``names``
+    (ln C, alpha, [surface_tension,] beta_m / tau_m as ``which`` maps them), with the history before the step
+    ``prev`` on this mesh and its sensitivities dQ (P, n_branches, ...), dS (P, ...); ``coef`` the step's
+    ``sens.maxwell_coefficients`` (None: no branches). The step's stress is S_vol + iso_scale S_iso + extra_S with
+    iso_scale = long_time + sum_m b_m and extra_S = sum_m (decay_m Q_m - b_m S_iso^n); ln C moves k = kappa / C and
+    g = gamma / (C a0) as -k, -g."""
+    asm, mat = prob.asm, prob.mat
+    P = len(names)
+    Pst = np.zeros((P,) + f.shape)
+    Pst[1] = iso * lin.d_alpha[..., None] * lin.P
+    if coef is not None:
+        decay, b, ddecay, db_dbeta, db_dtau = coef
+        d_extra = np.einsum("m,pm...->p...", decay, dQ) - b.sum() * dS
+        d_iso = np.zeros(P)
+        for j, n in enumerate(names):
+            if n in which:
+                kind, m = which[n]
+                if kind == "beta":
+                    d_iso[j] = db_dbeta[m]
+                    d_extra[j] -= db_dbeta[m] * prev.S_iso
+                else:
+                    d_iso[j] = db_dtau[m]
+                    d_extra[j] += ddecay[m] * prev.Q[m] - db_dtau[m] * prev.S_iso
+        Pst += d_iso[:, None, None, None] * lin.P[None]
+        Pst += first_from_second(f, d_extra)
+    R = stress_residuals(asm, Pst)
+    # ln C: k and g scale as 1 / C; r_q = ... - M q / k, so dr_q / dln C = -M q / k (and -g dr/dg)
+    q = x[asm.qdofs]
+    q = q - np.asarray([asm.q_ref, 0.0, 0.0])  # the law q = q_ref + kappa (J - 1) (q_ref = -2 g: fem.surface)
+    R[asm.n_u :, 0] = -(np.matmul(asm.M, q[:, :, None])[..., 0] / mat.kappa).ravel()
+    if gamma:
+        rg = prob.tension_derivative(x)
+        R[:, 2] += rg
+        R[:, 0] -= gamma * rg
+    return R
+
+
+def history_update_tangent(
+    names: list[str], which: dict, coef, Q: np.ndarray, S: np.ndarray, S_new: np.ndarray, dQ, dS, dS_new
+) -> np.ndarray:
+    """dQ^{n+1} (P, n_branches, ...) of the Maxwell update Q^{n+1} = decay Q^n + b (S^{n+1} - S^n)
+    (``fem.viscoelastic.update``) from the sensitivities of its inputs and of its coefficients."""
+    decay, b, ddecay, db_dbeta, db_dtau = coef
+    jump = S_new - S
+    out = decay[None, :, None, None, None] * dQ + b[None, :, None, None, None] * (dS_new - dS)[:, None]
+    for j, n in enumerate(names):
+        if n in which:
+            kind, m = which[n]
+            out[j, m] += db_dbeta[m] * jump if kind == "beta" else ddecay[m] * Q[m] + db_dtau[m] * jump
+    return out

@@ -45,7 +45,7 @@ from tissuemech.fem.contact import (
     timed_fitted,
     top_approach,
 )
-from tissuemech.fem.fitted_sensitivity import FittedTimeSensing, explicit_residuals, history_update_tangent
+from tissuemech.fem.fitted_sensitivity import FittedTimeSensing
 from tissuemech.fem.forms import Material
 from tissuemech.fem.kinematics import invariants
 from tissuemech.fem.linalg import Reuse, Symmetric
@@ -53,6 +53,7 @@ from tissuemech.fem.mesh import FITTED_LEVELS, FITTED_SPLIT, AxiMesh, fitted_mes
 from tissuemech.fem.output import SpheroidField, SpheroidResult
 from tissuemech.fem.problem import SPHEROID_MARGIN, SceneProblem, check_mesh, mesh_spec, roundoff_floor, secant
 from tissuemech.fem.protocols import FORCE_TOL, Record, force_controlled, record_schedule
+from tissuemech.fem.sensitivity import branch_names, explicit_residuals, history_update_tangent, sensing_names
 from tissuemech.fem.stepping import Adaptive, Fixed, Step, TimedState
 from tissuemech.fem.surface import SurfaceTension
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
@@ -943,25 +944,6 @@ class _SensingSearch(EdgeSearch):
         st = PlateState(sol.state.x, sol.state.active, visco, d, sol.state.residual, 1.0, None, 0)
         self.sensed[(float(d), float(sol.edge))] = sol.problem.sensitivities(st, _moved(self, sol.edge), factored)
         return sol
-
-
-def sensing_names(n_branches: int, tension: bool) -> tuple[list[str], dict[str, tuple[str, int]]]:
-    """(the scaled parameters of a time run's sensitivities: "lnC", "alpha", ["surface_tension",] then each branch's
-    beta and tau as :func:`branch_names` spells them; {branch parameter name: ("beta" | "tau", branch index)})."""
-    names = ["lnC", "alpha"] + ["surface_tension"] * bool(tension)
-    names += [n for b, t, _ in branch_names(n_branches) for n in (b, t)]
-    which = {b: ("beta", m) for b, _, m in branch_names(n_branches)} | {
-        t: ("tau", m) for _, t, m in branch_names(n_branches)
-    }
-    return names, which
-
-
-def branch_names(n_branches: int) -> list[tuple[str, str, int]]:
-    """(name of beta_m, name of tau_m, m) as ``compare.fit`` spells them: "beta", "tau" for one branch, else
-    "beta_1", "tau_1", ..."""
-    if n_branches == 1:
-        return [("beta", "tau", 0)]
-    return [(f"beta_{m + 1}", f"tau_{m + 1}", m) for m in range(n_branches)]
 
 
 # the relative residual of a time run's sensitivity solves: on Fig. 10 (default level) the force gradients then differ
