@@ -46,10 +46,12 @@ from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 import numpy as np
+import scipy.sparse as sp
 
+from tissuemech.fem import sensitivity as sens
 from tissuemech.fem import viscoelastic as ve
 from tissuemech.fem.constitutive import TRACE5, small_strain_stress
-from tissuemech.fem.contact import ContactError, ObstacleSolution, RigidSphere, solve_obstacles
+from tissuemech.fem.contact import ContactError, ObstacleSolution, RigidSphere, congruence, solve_obstacles
 from tissuemech.fem.forms import Assembler, Material
 from tissuemech.fem.linalg import Symmetric
 from tissuemech.fem.mesh import AxiMesh, full_ball_section, surface_layers, zone_points
@@ -312,6 +314,101 @@ class IndentProblem(SceneProblem):
             centre_drop=-float(s.x[2 * self.centre + 1]),
             min_gap=float(min(self.probe.gap(s.x, hp).min(), self.plate.gap(s.x, hb).min())),
         )
+
+
+class _IndentSensing:
+    """Forward sensitivities of a node-by-node indentation run (displacement control; scaled: probe force, centre
+    drop) to ln C (at fixed SI kappa), alpha and each branch's beta_m and tau_m, taken as the march accepts each
+    state, with the active sets and the probe held.
+
+    The active nodes lie on their obstacles, u_z = z_s(R + u_r) - Z (``fem.contact.solve_obstacles``): with x =
+    Phi(y) and T = dPhi/dy the equations are T^T r(Phi(y); theta) = 0, so (T^T K T + D) dy = -T^T dr/dtheta, D =
+    diag(r_z z_s'') on the active nodes' u_r (Newton's exact reduced tangent), and dx = T dy. The probe force is
+    -sum of the active probe nodes' r_z: dF = -sum (K dx + dr/dtheta)_z there. The explicit dr/dtheta and the Maxwell
+    history's sensitivity are those of the plates' node-by-node runs (``fem.sensitivity.explicit_residuals``,
+    ``history_update_tangent``). ``out``: per accepted state {name: (dF, d centre_drop)} (scaled)."""
+
+    def __init__(self, prob: IndentProblem) -> None:
+        self.prob = prob
+        self.names, self.which = sens.sensing_names(prob.beta.size, False)
+        P = len(self.names)
+        visco0 = prob.maxwell_initial()
+        self.dQ = np.zeros((P,) + visco0.Q.shape)
+        self.dS = np.zeros((P,) + visco0.S_iso.shape)
+        self.prev = visco0
+        self.kept: tuple[bytes, Callable] | None = None  # (the unknowns, a solve with a recent factorisation)
+        self.out: list[dict] = []
+
+    def wrap(self, step: Callable, static: bool) -> Callable:
+        def sensed(t0, old, t1, prev):
+            new, its = step(t0, old, t1, prev)
+            self.add(new, None if static else float(t1) - float(t0), f"t = {float(t1):.6g}")
+            return new, its
+
+        return sensed
+
+    def add(self, s: IndentState, dt: float | None, what: str) -> None:
+        prob, names, which = self.prob, self.names, self.which
+        asm, mat, x, prev = prob.asm, prob.mat, s.x, self.prev
+        n, P = asm.ndof, len(names)
+        iso, extra = prob.maxwell_factors(prev, dt)
+        hp, hb = prob.heights(s.delta)
+        rows, cols, vals, curv = [], [], [], []
+        for ob, h, a in ((prob.probe, hp, s.active[0]), (prob.plate, hb, s.active[1])):
+            r, _ = ob.positions(x)
+            _, slope, c = ob.surface(r[a], h)
+            rows.append(ob.dofs[a])
+            cols.append(2 * ob.nodes[a])
+            vals.append(slope)
+            curv.append(c)
+        rr, cc, vv, dc = (np.concatenate(v) for v in (rows, cols, vals, curv))
+        f = asm.f_at(x)
+        lin = sens.IsoLinearisation(f, mat.C, mat.alpha)
+        coef = sens.maxwell_coefficients(prob.beta, prob.tau, dt) if (prob.beta.size and dt is not None) else None
+        R = sens.explicit_residuals(prob, x, f, lin, float(iso), names, which, coef, self.dQ, self.dS, prev)
+        _, K = asm.internal(x, mat, extra_S=extra, iso_scale=iso, tangent=True)
+        K = sp.csr_matrix(K)
+        M = congruence(K, rr, cc, vv)
+        D = sp.csr_matrix((dc * s.residual[cc + 1], (cc, cc)), shape=(n, n))
+        if M is None:
+            T = sp.identity(n, format="csr") + sp.csr_matrix((vv, (rr, cc)), shape=(n, n))
+            M = (T.T @ K @ T).tocsr()
+        M = (M + D).tocsr()
+        RT = R.copy()
+        RT[cc] += vv[:, None] * R[rr]  # T^T dr/dtheta
+        fr = np.setdiff1d(prob.free, rr)
+        key = fr.tobytes()  # the last factorisation is kept for the same unknowns (active sets) only
+        approx = self.kept[1] if self.kept is not None and self.kept[0] == key else None
+        dY, solve, _ = sens.solve_block(M[fr][:, fr], approx, -RT[fr], what, tol=1e-10, max_iter=6)
+        self.kept = (key, solve)
+        dx = np.zeros((n, P))
+        dx[fr] = dY
+        dx[rr] += vv[:, None] * dx[cc]  # T dy: the active u_z follow their u_r on the obstacle
+        dr = K @ dx + R
+        dF = -np.sum(dr[prob.probe.dofs[s.active[0]]], axis=0)
+        dc_drop = -dx[2 * prob.centre + 1]
+        self.out.append({nm: (float(dF[j]), float(dc_drop[j])) for j, nm in enumerate(names)})
+        dS_new = lin.dS(sens.point_increments(asm, dx))
+        dS_new[1] += lin.d_alpha[..., None] * lin.S
+        if coef is not None:
+            self.dQ = sens.history_update_tangent(
+                names, which, coef, prev.Q, prev.S_iso, s.visco.S_iso, self.dQ, self.dS, dS_new
+            )
+        self.dS, self.prev = dS_new, s.visco
+
+
+def _indent_gradients(out: list[dict], F: np.ndarray, a0: float, C: float, names: list[str]) -> dict:
+    """SI gradients of the probe force (N per unit parameter) and the centre drop (m per unit parameter) from the
+    scaled ones: F = C a0^2 F~ (dF/dC = F / C + a0^2 dF~/dln C), centre drop = a0 c~."""
+    g = {}
+    for nm in ["C"] + names[1:]:
+        key = "lnC" if nm == "C" else nm
+        dF = np.array([o[key][0] for o in out]) * C * a0**2
+        dc = np.array([o[key][1] for o in out]) * a0
+        if nm == "C":
+            dF, dc = dF / C + F / C, dc / C
+        g[nm] = {"force": dF, "centre_drop": dc}
+    return g
 
 
 EDGE_TOL = 1e-6  # |N_edge| / F at a fitted contact edge (as the plates, fem.contact.EDGE_TOL)
@@ -600,7 +697,8 @@ class IndentationResult:
     outermost active node and the next from the gaps of the next free nodes), ``..._node`` (the outermost active
     node, m), ``centre_drop`` (downward displacement of the ball's centre, m: the ball-plate share of the
     approach in the Hertz picture), ``min_gap`` (m), ``newton_iterations``, ``contact_passes``, ``wall_time``
-    (s); ``mesh``, ``static``, ``parameters``."""
+    (s); ``mesh``, ``static``, ``parameters``; ``gradient`` (``indent(gradient=True)``): {"C" | "alpha" | "beta" |
+    "tau" | "beta_1" ...: {"force": N per unit parameter, "centre_drop": m per unit parameter}} per step, else None."""
 
     time: np.ndarray
     approach: np.ndarray
@@ -618,6 +716,7 @@ class IndentationResult:
     mesh: AxiMesh
     static: bool
     parameters: dict = field(default_factory=dict)
+    gradient: dict | None = None
 
 
 def indent(
@@ -641,6 +740,7 @@ def indent(
     rtol: float = 1e-10,
     sizing_approach: float | None = None,
     kinematics: str = "finite",
+    gradient: bool = False,
 ) -> IndentationResult:
     """Press a rigid frictionless sphere on the top of the Fung ball resting on a rigid frictionless plate.
 
@@ -691,6 +791,12 @@ def indent(
             tr(eps) for J - 1, and the Hertz contact gap, vertical at the reference radius: ``SmallStrainAssembler``,
             ``ReferenceSphere``): the FE counterpart of the small-strain two-contact Hertz law, which separates
             the finite-strain part of F / F_Hertz - 1 from the ball's finite size.
+        gradient: also return the exact sensitivities of the probe force and the centre drop at every step,
+            ``result.gradient = {"C": {"force": N/Pa, "centre_drop": m/Pa}, "alpha": ..., "beta" / "tau" (or
+            "beta_1", "tau_1", ...)}`` (node-by-node contact, displacement control, finite kinematics: static or
+            time runs; the Maxwell history's sensitivity carried through the steps; the active nodes held on their
+            obstacles, ``_IndentSensing``). Accuracy and cost: ``python -m tissuemech.compare.bench.fem_gradient
+            --only-indent``.
 
     Returns:
         ``IndentationResult``.
@@ -775,6 +881,11 @@ def indent(
         raise ValueError(f"contact must be 'nodal' or 'fitted', got {contact!r}")
     if contact == "fitted" and not static:
         raise ValueError("contact='fitted' (a mesh per state, its edges on nodes) needs static=True")
+    if gradient and (contact != "nodal" or force is not None or kinematics != "finite"):
+        raise ValueError(
+            "gradient=True is carried for node-by-node contact (contact='nodal') under displacement control with "
+            "finite kinematics: not for contact='fitted', force= or kinematics='small'"
+        )
     m = make_mesh(mesh, a0, rp, d_max if sizing_approach is None else float(sizing_approach))
     mat = Material(1.0, float(alpha), float(kappa) / C)
     prob = IndentProblem(m, mat, rp / a0, beta, tau, rtol, kinematics)
@@ -810,6 +921,7 @@ def indent(
         return prob.step(old, dscaled(t1), None if static else t1 - t0, p, load_of(t1))
 
     runs: list[tuple[float, IndentProblem, IndentState, int, float]] = []  # (time, problem, state, its, wall)
+    sensing: _IndentSensing | None = None
     if contact == "fitted":
         fit = FittedEdges(a0, rp, int(mesh_spec(mesh, MESHES, "or a level 0..4")), lambda mm: IndentProblem(
             mm, mat, rp / a0, beta, tau, rtol, kinematics))  # fmt: skip
@@ -846,6 +958,10 @@ def indent(
                 load_of,
                 stiffness=1.0 + float(np.sum(beta)),
             )
+        if gradient:
+            sensing = _IndentSensing(prob)
+        if sensing is not None:
+            stepper = sensing.wrap(stepper, static)
         for st in march(stepper, prob.initial(), times, too_large=too_large):
             runs.append((st.time, prob, st.state, st.newton_iterations, st.wall_time))
     L2 = C * a0**2
@@ -870,8 +986,13 @@ def indent(
         for k, v in row.items():
             cols.setdefault(k, []).append(v)
     arrays = {k: np.array(v) for k, v in cols.items()}
+    grad = None
+    if gradient:
+        assert sensing is not None
+        grad = _indent_gradients(sensing.out, arrays["force"], a0, C, sensing.names)
     return IndentationResult(
         **arrays,
+        gradient=grad,
         mesh=m,
         static=bool(static),
         parameters=dict(
