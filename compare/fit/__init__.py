@@ -6,7 +6,8 @@ Where things are: :mod:`.records` (Record, the CSV reader, the checks a record m
 :mod:`.diagnostics` (residual diagnostics, the error model of the intervals), :mod:`.result` (FitResult),
 :mod:`.estimation` (:func:`relaxation`), :mod:`.protocols` (:func:`records_fit`: creep, measured-history and mixed
 records), :mod:`.design` (experiment design: predicted interval widths),
-:mod:`.fe` (:func:`fe_relaxation`: the FE in the loop, exact FE Jacobians, beyond the reduced model's table).
+:mod:`.fe` (:func:`fe_relaxation`, :func:`fe_indentation`: the FE in the loop, exact FE Jacobians, beyond the
+reduced model's tables).
 The names below are re-exported here: ``from tissuemech.compare.fit import relaxation, read_csv, FitResult,
 Record``.
 
@@ -65,7 +66,7 @@ depends on alpha; the small-strain Hertz law does not).
 from __future__ import annotations
 
 from tissuemech.compare.fit.estimation import NOISE_FREE_REL, relaxation
-from tissuemech.compare.fit.fe import FEFitResult, fe_relaxation, step_times
+from tissuemech.compare.fit.fe import FEFitResult, fe_indentation, fe_relaxation, step_times
 from tissuemech.compare.fit.intervals import LOG_SPAN, POOR_SD, WALD_TOL, Z95, Identifiability
 from tissuemech.compare.fit.model import (
     ALPHA_BOUNDS,
@@ -94,6 +95,7 @@ from tissuemech.compare.fit.result import FitResult
 
 __all__ = [
     "fe_relaxation",
+    "fe_indentation",
     "FEFitResult",
     "step_times",
     "Record",

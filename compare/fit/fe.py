@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import logging
 import time as _time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -51,19 +51,22 @@ class FEFitResult(FitResult):
     params, intervals (95 % Wald, (lo, hi)), covariance (of the log-parameters, white noise), residual (RMS of the
     residuals, Pa), noise (per record, Pa), diagnostics (per record: lag-1 and runs test), identifiability (the
     Gauss-Newton Fisher matrix in log-parameters), nfev (FE evaluations, each one FE run with gradients per record),
-    wall_time (s), mesh (the FE mesh level), model (per record: the FE's nominal stress at the record's times, Pa),
+    wall_time (s), mesh (the FE mesh level), contact ("nodal" / "fitted"), scene ("plates": :func:`fe_relaxation`,
+    "probe": :func:`fe_indentation`), model (per record: the FE's nominal stress at the record's times, Pa),
     curves (per record: the FE's step times (s) and nominal stress (Pa) at the estimate), success, message."""
 
     wall_time: float = 0.0
     mesh: str = "default"
     contact: str = "nodal"
+    scene: str = "plates"
     model: tuple[np.ndarray, ...] = field(default=())
     curves: tuple[tuple[np.ndarray, np.ndarray], ...] = field(default=())
 
     def summary(self) -> str:
         """:meth:`FitResult.summary` and a line on the FE model (mesh, FE evaluations, wall time)."""
         return (
-            f"model: the FE (fem.spheroid.compress, mesh {self.mesh!r}, "
+            f"model: the FE ({'fem.indentation.indent' if self.scene == 'probe' else 'fem.spheroid.compress'}, "
+            f"mesh {self.mesh!r}, "
             f"{'node-by-node contact' if self.contact == 'nodal' else 'contact-edge-fitted meshes'}, exact Jacobians), "
             f"{self.nfev} FE evaluations, {self.wall_time:.1f} s\n" + super().summary()
         )
@@ -75,6 +78,7 @@ class FEFitResult(FitResult):
             "model": "fe",
             "mesh": self.mesh,
             "contact": self.contact,
+            "scene": self.scene,
             "wall_time_s": float(self.wall_time),
         }
 
@@ -123,6 +127,85 @@ def fe_relaxation(
         raise ValueError(f"contact must be 'nodal' or 'fitted', got {contact!r}")
     validate_positive("radius (of the spheroid)", radius, "m")
     validate_positive("ramp_time (duration of the loading ramp)", ramp_time, "s")
+    names = _checked_initial(initial, n_branches)
+    betas = [n for n in names if n.startswith("beta")]
+    taus = [n for n in names if n.startswith("tau")]
+
+    def run_record(p: dict[str, float], r: Record) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        res = fem_spheroid.compress(radius=radius, C=p["C"], alpha=p["alpha"],
+                                    branches=[(p[b], p[t]) for b, t in zip(betas, taus)],
+                                    displacement=r.displacement, ramp_time=ramp_time,
+                                    end_time=float(np.max(r.time)), mesh=mesh, contact=contact,
+                                    n_ramp=n_ramp, n_hold=n_hold, gradient=True)  # fmt: skip
+        grad = res.gradient or {}
+        return res.time, res.nominal_stress, {n: grad[n]["nominal_stress"] for n in names}
+
+    data = [(r.time, r.nominal_stress) for r in recs]
+    return _fit_fe(data, names, initial, run_record, recs, max_nfev=max_nfev, progress=progress, t_start=t_start,
+                   mesh=str(mesh), contact=str(contact), scene="plates")  # fmt: skip
+
+
+def fe_indentation(
+    records: Sequence[Any],
+    *,
+    radius: float,
+    probe_radius: float,
+    ramp_time: float,
+    initial: dict[str, float],
+    n_branches: int = 1,
+    mesh: Any = "default",
+    n_ramp: int = 6,
+    n_hold: int = 20,
+    max_nfev: int = 40,
+    progress: bool = False,
+) -> FEFitResult:
+    """Fit (C, alpha, beta_m, tau_m) to AFM-style indentation relaxation records with the FE indentation as the model
+    (``fem.indentation.indent``: a rigid sphere of radius ``probe_radius`` (m) on the ball of radius ``radius`` (m)
+    resting on a plate, node-by-node contact, its exact Jacobian ``indent(gradient=True)``), the statistics of the
+    module doc: for probe geometries, depths or alphas the reduced indentation table does not cover.
+
+    records   ``(time [s], probe force [N], approach [m])`` per indentation depth (the probe travels to the approach
+              over ``ramp_time``, then holds); sampled at the FE's steps (:func:`step_times`) for no interpolation.
+    initial, n_branches, mesh, n_ramp, n_hold, max_nfev, progress: as :func:`fe_relaxation`.
+
+    Raises ValueError for malformed records or a missing or non-positive initial value."""
+    from tissuemech.fem import indentation as fem_indentation
+
+    t_start = _time.perf_counter()
+    validate_positive("radius (of the spheroid)", radius, "m")
+    validate_positive("probe_radius (of the spherical probe)", probe_radius, "m")
+    validate_positive("ramp_time (duration of the loading ramp)", ramp_time, "s")
+    recs = []
+    for k, r in enumerate(records):
+        try:
+            t, y, d = r
+        except (TypeError, ValueError):
+            raise ValueError(f"record {k}: expected (time [s], probe force [N], approach [m])") from None
+        t, y = np.asarray(t, float).ravel(), np.asarray(y, float).ravel()
+        if t.shape != y.shape or t.size < 2 or not (np.all(np.isfinite(t)) and np.all(np.isfinite(y))):
+            raise ValueError(f"record {k}: time and force must be finite arrays of one length >= 2 (s, N)")
+        if np.any(np.diff(t) <= 0) or t[0] <= 0:
+            raise ValueError(f"record {k}: times must increase from > 0 s (the probe touches at t = 0)")
+        validate_positive(f"record {k}: approach (the probe's travel)", d, "m")
+        recs.append((t, y, float(d)))
+    names = _checked_initial(initial, n_branches)
+    betas = [n for n in names if n.startswith("beta")]
+    taus = [n for n in names if n.startswith("tau")]
+
+    def run_record(p: dict[str, float], r: tuple) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        res = fem_indentation.indent(radius=radius, probe_radius=probe_radius, C=p["C"], alpha=p["alpha"],
+                                     branches=[(p[b], p[t]) for b, t in zip(betas, taus)], displacement=r[2],
+                                     ramp_time=ramp_time, end_time=float(np.max(r[0])), mesh=mesh, n_ramp=n_ramp,
+                                     n_hold=n_hold, gradient=True)  # fmt: skip
+        grad = res.gradient or {}
+        return res.time, res.force, {n: grad[n]["force"] for n in names}
+
+    return _fit_fe([(t, y) for t, y, _ in recs], names, initial, run_record, recs, max_nfev=max_nfev,
+                   progress=progress, t_start=t_start, mesh=str(mesh), contact="nodal", scene="probe")  # fmt: skip
+
+
+def _checked_initial(initial: dict[str, float], n_branches: int) -> list[str]:
+    """The parameter names of ``n_branches`` branches, with ``initial`` checked to give each, finite and > 0."""
     names = parameter_names(n_branches)
     missing = [n for n in names if n not in initial]
     if missing or set(initial) - set(names):
@@ -131,35 +214,45 @@ def fe_relaxation(
     for n in names:
         if not (np.isfinite(initial[n]) and initial[n] > 0):
             raise ValueError(f"initial[{n!r}] must be finite and > 0; got {initial[n]!r}")
+    return names
+
+
+def _fit_fe(
+    data_records: list[tuple[np.ndarray, np.ndarray]],
+    names: list[str],
+    initial: dict[str, float],
+    run_record: Callable,
+    recs: Sequence[Any],
+    *,
+    max_nfev: int,
+    progress: bool,
+    t_start: float,
+    mesh: str,
+    contact: str,
+    scene: str,
+) -> FEFitResult:
+    """The weighted least squares of the module doc on ``data_records`` ((time [s], observed values) per record),
+    the FE's values and gradients at the records' own settings from ``run_record(parameters, record)`` ->
+    (step times, values, {name: d values / d parameter}) (``recs[k]`` is handed back as the record)."""
     P = len(names)
-    betas = [n for n in names if n.startswith("beta")]
-    taus = [n for n in names if n.startswith("tau")]
     cache: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
-    curves: dict[bytes, list[tuple[np.ndarray, np.ndarray]]] = {}  # per point: the FE's (step times, stress)
+    curves: dict[bytes, list[tuple[np.ndarray, np.ndarray]]] = {}  # per point: the FE's (step times, values)
     calls = [0]
 
     def model(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Stacked model (Pa) and its Jacobian in log-parameters (Pa) over all records."""
+        """Stacked model and its Jacobian in log-parameters over all records."""
         key = np.asarray(z).tobytes()
         if key in cache:  # least_squares asks for the Jacobian after the residual, and the passes share points
             return cache[key]
         p = dict(zip(names, np.exp(z)))
         ys, Js = [], []
         curves[key] = []
-        for r in recs:
-            res = fem_spheroid.compress(radius=radius, C=p["C"], alpha=p["alpha"],
-                                        branches=[(p[b], p[t]) for b, t in zip(betas, taus)],
-                                        displacement=r.displacement, ramp_time=ramp_time,
-                                        end_time=float(np.max(r.time)), mesh=mesh, contact=contact,
-                                        n_ramp=n_ramp, n_hold=n_hold, gradient=True)  # fmt: skip
-            tt = np.concatenate([[0.0], res.time])
-            curves[key].append((tt, np.concatenate([[0.0], res.nominal_stress])))
-            ys.append(np.interp(r.time, tt, np.concatenate([[0.0], res.nominal_stress])))
-            grad = res.gradient or {}
-            cols = [
-                np.interp(r.time, tt, np.concatenate([[0.0], grad[n]["nominal_stress"]])) * p[n]  # d/d log p
-                for n in names
-            ]
+        for (t_obs, _), r in zip(data_records, recs):
+            t_fe, y_fe, g_fe = run_record(p, r)
+            tt = np.concatenate([[0.0], t_fe])
+            curves[key].append((tt, np.concatenate([[0.0], y_fe])))
+            ys.append(np.interp(t_obs, tt, np.concatenate([[0.0], y_fe])))
+            cols = [np.interp(t_obs, tt, np.concatenate([[0.0], g_fe[n]])) * p[n] for n in names]  # d/d log p
             Js.append(np.stack(cols, axis=1))
         calls[0] += 1
         out = (np.concatenate(ys), np.concatenate(Js))
@@ -168,10 +261,10 @@ def fe_relaxation(
             log.info("FE evaluation %d: %s", calls[0], ", ".join(f"{n} = {v:.5g}" for n, v in p.items()))
         return out
 
-    data = np.concatenate([r.nominal_stress for r in recs])
-    sizes = [r.time.size for r in recs]
+    data = np.concatenate([y for _, y in data_records])
+    sizes = [t.size for t, _ in data_records]
     split = np.cumsum(sizes)[:-1]
-    scale = np.concatenate([np.full(n, np.max(np.abs(r.nominal_stress))) for n, r in zip(sizes, recs)])
+    scale = np.concatenate([np.full(n, np.max(np.abs(y))) for n, (_, y) in zip(sizes, data_records)])
 
     def fit(z0: np.ndarray, w: np.ndarray, tol: float) -> so.OptimizeResult:
         return so.least_squares(
@@ -225,8 +318,9 @@ def fe_relaxation(
         diagnostics=tuple(diags),
         errors="white",
         wall_time=_time.perf_counter() - t_start,
-        mesh=str(mesh),
-        contact=str(contact),
+        mesh=mesh,
+        contact=contact,
+        scene=scene,
         model=tuple(np.split(y, split)),
         curves=tuple(curves[second.x.tobytes()]),
     )
