@@ -206,7 +206,7 @@ def fe_indentation(
 
 def _checked_initial(initial: dict[str, float], n_branches: int) -> list[str]:
     """The parameter names of ``n_branches`` branches, with ``initial`` checked to give each, finite and > 0."""
-    names = parameter_names(n_branches)
+    names = list(parameter_names(n_branches))
     missing = [n for n in names if n not in initial]
     if missing or set(initial) - set(names):
         raise ValueError(f"initial must give exactly {', '.join(names)}; missing {missing}, unknown "
