@@ -17,14 +17,11 @@ BASE = {"C": 150.0, "alpha": 1.4}
 TWO = [(0.8, 0.05), (0.3, 20.0)]  # one branch as fast as a quarter of the ramp
 
 
-def perturbed(name: str, value: float) -> tuple[dict, list]:
-    p, b = dict(BASE), [list(x) for x in TWO]
-    if name in p:
-        p[name] = value
-    else:
-        kind, m = name.split("_")
-        b[int(m) - 1][0 if kind == "beta" else 1] = value
-    return p, [tuple(x) for x in b]
+def two_branch_run(p: dict, **kw):
+    """``fem.spheroid.compress`` of RELAX with C, alpha, [surface_tension,] beta_m and tau_m from ``p``."""
+    br = [(p["beta_1"], p["tau_1"]), (p["beta_2"], p["tau_2"])]
+    extra = {"surface_tension": p["surface_tension"]} if "surface_tension" in p else {}
+    return fs.compress(C=p["C"], alpha=p["alpha"], branches=br, **extra, **RELAX, **kw)
 
 
 VALUES = {**BASE, "beta_1": 0.8, "tau_1": 0.05, "beta_2": 0.3, "tau_2": 20.0}
@@ -56,8 +53,7 @@ def test_fitted_time_run_gradient_equals_central_differences_of_whole_runs(relax
     h = 1e-4 * v
 
     def run(x):
-        p, b = perturbed(name, x)
-        return fs.compress(branches=b, contact=TIGHT, rtol=1e-13, **p, **RELAX).force
+        return two_branch_run({**VALUES, name: x}, contact=TIGHT, rtol=1e-13).force
 
     fd = (run(v + h) - run(v - h)) / (2 * h)
     err = np.max(np.abs(relaxation.gradient[name]["force"] - fd)) / np.max(np.abs(fd))
@@ -87,9 +83,7 @@ def test_fitted_gradient_with_surface_tension_equals_central_differences():
     values = {**VALUES, "alpha": 1.2, "surface_tension": 1e-3}
 
     def run(p, **k):
-        br = [(p["beta_1"], p["tau_1"]), (p["beta_2"], p["tau_2"])]
-        return fs.compress(C=p["C"], alpha=p["alpha"], surface_tension=p["surface_tension"], branches=br,
-                           contact=TIGHT, rtol=1e-13, **RELAX, **k)  # fmt: skip
+        return two_branch_run(p, contact=TIGHT, rtol=1e-13, **k)
 
     g = run(values, gradient=True)
     assert set(g.gradient) == set(values)
