@@ -175,32 +175,20 @@ def fe_indentation(
     validate_positive("radius (of the spheroid)", radius, "m")
     validate_positive("probe_radius (of the spherical probe)", probe_radius, "m")
     validate_positive("ramp_time (duration of the loading ramp)", ramp_time, "s")
-    recs = []
-    for k, r in enumerate(records):
-        try:
-            t, y, d = r
-        except (TypeError, ValueError):
-            raise ValueError(f"record {k}: expected (time [s], probe force [N], approach [m])") from None
-        t, y = np.asarray(t, float).ravel(), np.asarray(y, float).ravel()
-        if t.shape != y.shape or t.size < 2 or not (np.all(np.isfinite(t)) and np.all(np.isfinite(y))):
-            raise ValueError(f"record {k}: time and force must be finite arrays of one length >= 2 (s, N)")
-        if np.any(np.diff(t) <= 0) or t[0] <= 0:
-            raise ValueError(f"record {k}: times must increase from > 0 s (the probe touches at t = 0)")
-        validate_positive(f"record {k}: approach (the probe's travel)", d, "m")
-        recs.append((t, y, float(d)))
+    recs = as_records(records, quantity=("probe force", "N"), approach="approach (the probe's travel)")
     names = _checked_initial(initial, n_branches)
     betas = [n for n in names if n.startswith("beta")]
     taus = [n for n in names if n.startswith("tau")]
 
-    def run_record(p: dict[str, float], r: tuple) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    def run_record(p: dict[str, float], r: Record) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
         res = fem_indentation.indent(radius=radius, probe_radius=probe_radius, C=p["C"], alpha=p["alpha"],
-                                     branches=[(p[b], p[t]) for b, t in zip(betas, taus)], displacement=r[2],
-                                     ramp_time=ramp_time, end_time=float(np.max(r[0])), mesh=mesh, n_ramp=n_ramp,
+                                     branches=[(p[b], p[t]) for b, t in zip(betas, taus)], displacement=r.displacement,
+                                     ramp_time=ramp_time, end_time=float(np.max(r.time)), mesh=mesh, n_ramp=n_ramp,
                                      n_hold=n_hold, gradient=True)  # fmt: skip
         grad = res.gradient or {}
         return res.time, res.force, {n: grad[n]["force"] for n in names}
 
-    return _fit_fe([(t, y) for t, y, _ in recs], names, initial, run_record, recs, max_nfev=max_nfev,
+    return _fit_fe([(r.time, r.nominal_stress) for r in recs], names, initial, run_record, recs, max_nfev=max_nfev,
                    progress=progress, t_start=t_start, mesh=str(mesh), contact="nodal", scene="probe")  # fmt: skip
 
 

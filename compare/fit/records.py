@@ -71,9 +71,17 @@ class Record(NamedTuple):
     displacement: float
 
 
-def as_records(records: Sequence[Any]) -> list[Record]:
+def as_records(
+    records: Sequence[Any],
+    quantity: tuple[str, str] = ("nominal_stress", "Pa"),
+    approach: str = "displacement (the total approach of the plates)",
+) -> list[Record]:
     """Checked :class:`Record` objects from records or ``(time [s], nominal_stress [Pa], displacement [m])``
-    tuples (one Record alone is taken as a list of one); ValueError naming the record for malformed ones."""
+    tuples (one Record alone is taken as a list of one); ValueError naming the record for malformed ones.
+    ``quantity`` (name, unit) and ``approach`` name the measured values and the approach in the messages (another
+    scene's records, e.g. ("probe force", "N") and the probe's travel: ``compare.fit.fe_indentation``; the values
+    then sit in the records' ``nominal_stress`` field)."""
+    q, unit_q = quantity
     if isinstance(records, Record):
         records = [records]
     out = []
@@ -81,8 +89,10 @@ def as_records(records: Sequence[Any]) -> list[Record]:
         try:
             t, s, d = r
         except (TypeError, ValueError):
-            raise ValueError(f"record {k}: expected (time [s], nominal_stress [Pa], displacement [m])") from None
-        for name, unit, v in (("time", "s", t), ("nominal_stress", "Pa", s)):
+            raise ValueError(
+                f"record {k}: expected (time [s], {q} [{unit_q}], {approach.split(' (')[0]} [m])"
+            ) from None
+        for name, unit, v in (("time", "s", t), (q, unit_q, s)):
             if np.asarray(v).dtype.kind == "b":  # True/False would be read as 1/0 s or Pa
                 raise ValueError(
                     f"record {k}: {name} must be numbers ({unit}); got booleans (True/False): a mask or flags given in "
@@ -91,11 +101,11 @@ def as_records(records: Sequence[Any]) -> list[Record]:
         t = np.asarray(t, dtype=float).ravel()
         s = np.asarray(s, dtype=float).ravel()
         if t.shape != s.shape:
-            raise ValueError(f"record {k}: time and nominal_stress need the same length; got {t.size} and {s.size}")
+            raise ValueError(f"record {k}: time and {q} need the same length; got {t.size} and {s.size}")
         if t.size < 2:
-            raise ValueError(f"record {k}: {t.size} sample; a record needs at least 2 (time, stress) samples")
+            raise ValueError(f"record {k}: {t.size} sample; a record needs at least 2 (time, {q}) samples")
         if not (np.all(np.isfinite(t)) and np.all(np.isfinite(s))):
-            raise ValueError(f"record {k}: time and stress must be finite numbers (found NaN or inf)")
+            raise ValueError(f"record {k}: time and {q} must be finite numbers (found NaN or inf)")
         if np.any(t < 0):
             raise ValueError(f"record {k}: time must not be negative (s); got {t.min():g}")
         back = np.nonzero(np.diff(t) < 0)[0]
@@ -103,12 +113,12 @@ def as_records(records: Sequence[Any]) -> list[Record]:
             i = int(back[0]) + 1
             raise ValueError(
                 f"record {k}: time runs backwards at sample {i} ({t[i - 1]:g} s, then {t[i]:g} s): give each record's "
-                "samples in time order (and check that time and stress are not swapped)"
+                f"samples in time order (and check that time and {q} are not swapped)"
             )
-        validate_positive(f"record {k}: displacement (the total approach of the plates)", d, "m")
+        validate_positive(f"record {k}: {approach}", d, "m")
         out.append(Record(t, s, float(d)))
     if not out:
-        raise ValueError("at least one record (time, nominal_stress, displacement) is needed")
+        raise ValueError(f"at least one record (time, {q}, {approach.split(' (')[0]}) is needed")
     return out
 
 
