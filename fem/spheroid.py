@@ -701,7 +701,7 @@ def compress(
         if unsupported:
             raise ValueError(
                 "gradient=True in a time run on contact-edge-fitted meshes carries the replayed history and the "
-                f"edge's motion for displacement control only, not {', '.join(unsupported)}: use contact='nodal' "
+                f"edge's motion for the default history='replay' only, not {', '.join(unsupported)}: use contact='nodal' "
                 "(one fixed mesh) for this run"
             )
     if isinstance(treat, FittedEdge) and level is None:
