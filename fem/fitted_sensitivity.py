@@ -47,13 +47,7 @@ from tissuemech.fem import sensitivity as sens
 from tissuemech.fem import viscoelastic as ve
 from tissuemech.fem.contact import HistorySource, PlateStep, edge_slope, edge_slope_change, history_before
 from tissuemech.fem.mesh import AxiMesh
-from tissuemech.fem.transfer import ContinuousJet, gauss_transfers, located, own_points
-
-
-def _transfer_at(old: AxiMesh, new: AxiMesh, where: tuple) -> Callable[[np.ndarray], np.ndarray]:
-    """The continuous transfer from ``old`` to ``new`` with new's points located in old (``where``)."""
-    return gauss_transfers([old], new, True, [where])[0]
-
+from tissuemech.fem.transfer import ContinuousJet, gauss_transfers, own_points, points_in
 
 __all__ = ["FittedTimeSensing", "SENSITIVITY_TOL"]
 
@@ -165,8 +159,7 @@ class FittedTimeSensing:
             if id(en.mesh) not in index:
                 index[id(en.mesh)] = len(meshes)
                 meshes.append(en.mesh)
-        pts = m.quadrature_points.reshape(2, -1)
-        at = located(meshes, pts)  # m's points in every past step's mesh
+        at = points_in(meshes, m)  # m's points in every past step's mesh (the search of the plain run's replay)
         jets = [ContinuousJet(mm, *at[i], shape[:2]) for i, mm in enumerate(meshes)]
         lo, hi = moved
         dp = (hi.quadrature_points - lo.quadrature_points).reshape(2, -1) / (2 * self.h)  # m's points per ln e

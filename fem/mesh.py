@@ -27,7 +27,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 import skfem
@@ -70,6 +70,13 @@ class AxiMesh:
                 cKDTree(self.element_nodes().mean(axis=1).T),
             )
         return self._cache["search_trees"]
+
+    def derived(self, key: str, build: Callable[[], Any]) -> Any:
+        """Data derived from this mesh alone (or kept with it, e.g. other meshes' point locations), built once by
+        ``build()`` and kept as long as the mesh lives (``fem.transfer``'s operators and searches)."""
+        if key not in self._cache:
+            self._cache[key] = build()
+        return self._cache[key]
 
     def element_nodes(self) -> np.ndarray:
         """Reference coordinates of every element's nodes (2, nodes per element, n_elements), dimensionless

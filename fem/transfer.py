@@ -19,6 +19,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+import scipy.sparse as sp
 
 from tissuemech.fem.mesh import AxiMesh
 
@@ -30,6 +31,8 @@ __all__ = [
     "locate_many",
     "locate_near",
     "located",
+    "points_in",
+    "nodal_average",
     "own_points",
     "ContinuousJet",
     "local_coordinates",
@@ -201,8 +204,23 @@ def gauss_transfers(
     ``near``: per old mesh None or (element, reference coordinates) of ``new``'s points in a mesh close to it (the
     same mesh with its nodes moved a little, or ``new`` moved a little: :func:`located` of the pair): the points
     are first sought there (:func:`locate_near`)."""
-    pts = new.quadrature_points.reshape(2, -1)
-    return [_transfer(old, new, elem, loc, continuous) for old, (elem, loc) in zip(olds, located(olds, pts, near))]
+    if near is None or all(g is None for g in near):
+        at = points_in(olds, new)
+    else:
+        at = located(olds, new.quadrature_points.reshape(2, -1), near)
+    return [_transfer(old, new, elem, loc, continuous) for old, (elem, loc) in zip(olds, at)]
+
+
+def points_in(olds: list[AxiMesh], new: AxiMesh) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(element, reference coordinates) of ``new``'s Gauss points in each of ``olds`` (:func:`locate_many`, one
+    search for the meshes not sought before), kept with ``new`` per old mesh: a fitted step's replayed history and
+    its sensitivities (``fem.fitted_sensitivity``) seek the same points in the same past meshes."""
+    kept: dict = new.derived("points_in", dict)
+    missing = list({id(o): o for o in olds if kept.get(id(o), (None,))[0] is not o}.values())
+    if missing:
+        for o, got in zip(missing, locate_many(missing, new.quadrature_points.reshape(2, -1))):
+            kept[id(o)] = (o, got)
+    return [kept[id(o)][1] for o in olds]
 
 
 def located(olds: list[AxiMesh], pts: np.ndarray, near: list | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -258,29 +276,14 @@ def _transfer(
     if continuous:
         b = old.basis
         ref = np.asarray(b.elem.doflocs, float).T  # (2, 9)
-        Pn = np.stack([ref[0] ** i * ref[1] ** j for i, j in powers], axis=1)  # (9, 9)
-        to_nodes = Pn @ np.linalg.inv(V)  # (9, n_qp): the element quadratic at its nodes
-        ed = b.element_dofs  # (9, n_el)
-        count = np.bincount(ed.ravel(), minlength=b.N).astype(float)
         ia, ib = (np.rint(2.0 * r).astype(int) for r in ref)
         (v0, _), (v1, _) = lagrange2(loc[0]), lagrange2(loc[1])
-        N = v0[ia] * v1[ib]  # (9, n): Q2 shape functions at the new points
-        dofs = ed[:, elem]  # (9, n)
+        W = _at_points(old, elem, v0[ia] * v1[ib])  # the Q2 shape functions at the new points
 
         def smooth(f: np.ndarray) -> np.ndarray:
             lead, c = f.shape[:-3], f.shape[-1]
             g = f.reshape((-1,) + f.shape[-3:])  # (m, n_el, n_qp, c)
-            at = np.einsum("kp,mepc->mkec", to_nodes, g)  # (m, 9, n_el, c)
-            nodal = (
-                np.stack(
-                    [
-                        np.stack([np.bincount(ed.ravel(), at[i, ..., j].ravel(), b.N) for j in range(c)], -1)
-                        for i in range(g.shape[0])
-                    ]
-                )
-                / count[None, :, None]
-            )  # (m, N, c)
-            out = np.einsum("kn,mknc->mnc", N, nodal[:, dofs])
+            out = _apply(W, nodal_average(old, g))  # (m, n, c)
             return out.reshape(lead + (ne, nq, c))
 
         return smooth
@@ -290,6 +293,49 @@ def _transfer(
         return np.einsum("np,...npc->...nc", L, g).reshape(f.shape[:-3] + (ne, nq, f.shape[-1]))
 
     return transfer
+
+
+def nodal_average(mesh: AxiMesh, f: np.ndarray) -> np.ndarray:
+    """The continuous Q2 field of Gauss-value fields f (m, n_el, n_qp, c) of ``mesh``: each element's
+    tensor-product quadratic through its Gauss values evaluated at its nodes, averaged over the elements that share
+    a node: (m, n_nodes, c). One sparse product with an operator built once per mesh."""
+    A = mesh.derived("nodal_average", lambda: _nodal_average_operator(mesh))
+    m, ne, nq, c = f.shape
+    g = np.ascontiguousarray(f.transpose(1, 2, 0, 3)).reshape(ne * nq, m * c)
+    return np.ascontiguousarray((A @ g).reshape(-1, m, c).transpose(1, 0, 2))
+
+
+def _nodal_average_operator(mesh: AxiMesh) -> sp.csr_matrix:
+    """(n_nodes, n_el n_qp): Gauss values -> the element quadratics' values at the nodes, averaged per node."""
+    b = mesh.basis
+    ref = np.asarray(b.elem.doflocs, float).T  # (2, 9)
+    G = np.asarray(b.X)  # (2, n_qp)
+    powers = [(i, j) for i in range(3) for j in range(3)]
+    V = np.stack([G[0] ** i * G[1] ** j for i, j in powers], axis=1)
+    Pn = np.stack([ref[0] ** i * ref[1] ** j for i, j in powers], axis=1)
+    to_nodes = Pn @ np.linalg.inv(V)  # (9, n_qp): the element quadratic at its nodes
+    ed = b.element_dofs  # (9, n_el)
+    ne, nq = ed.shape[1], G.shape[1]
+    count = np.bincount(ed.ravel(), minlength=b.N).astype(float)
+    rows = np.broadcast_to(ed[:, :, None], (9, ne, nq))
+    cols = np.broadcast_to(np.arange(ne)[None, :, None] * nq + np.arange(nq)[None, None, :], (9, ne, nq))
+    vals = to_nodes[:, None, :] / count[ed][:, :, None]
+    return sp.csr_matrix((vals.ravel(), (rows.ravel(), cols.ravel())), shape=(b.N, ne * nq))
+
+
+def _at_points(mesh: AxiMesh, elem: np.ndarray, weights: np.ndarray) -> sp.csr_matrix:
+    """(n, n_nodes): the combination ``weights`` (9, n) of the nodes of each point's element ``elem`` (n,)."""
+    dofs = mesh.basis.element_dofs[:, elem]  # (9, n)
+    n = dofs.shape[1]
+    rows = np.broadcast_to(np.arange(n)[None, :], dofs.shape)
+    return sp.csr_matrix((weights.ravel(), (rows.ravel(), dofs.ravel())), shape=(n, mesh.basis.N))
+
+
+def _apply(W: sp.csr_matrix, nodal: np.ndarray) -> np.ndarray:
+    """W (n, n_nodes) applied to nodal fields (m, n_nodes, c): (m, n, c)."""
+    m, N, c = nodal.shape
+    out = W @ np.ascontiguousarray(nodal.transpose(1, 0, 2)).reshape(N, m * c)
+    return out.reshape(-1, m, c).transpose(1, 0, 2)
 
 
 class ContinuousJet:
@@ -303,20 +349,15 @@ class ContinuousJet:
 
     def __init__(self, old: AxiMesh, elem: np.ndarray, loc: np.ndarray, shape: tuple[int, int]) -> None:
         b = old.basis
+        self.old = old
         ref = np.asarray(b.elem.doflocs, float).T  # (2, 9)
-        G = np.asarray(b.X)  # (2, n_qp)
-        powers = [(i, j) for i in range(3) for j in range(3)]
-        V = np.stack([G[0] ** i * G[1] ** j for i, j in powers], axis=1)
-        Pn = np.stack([ref[0] ** i * ref[1] ** j for i, j in powers], axis=1)
-        self.to_nodes = Pn @ np.linalg.inv(V)  # (9, n_qp): the element quadratic at its nodes
-        self.ed = b.element_dofs  # (9, n_el)
-        self.N_nodes = b.N
-        self.count = np.bincount(self.ed.ravel(), minlength=b.N).astype(float)
         ia, ib = (np.rint(2.0 * r).astype(int) for r in ref)
         (v0, d0), (v1, d1) = lagrange2(loc[0]), lagrange2(loc[1])
+        self.elem = np.asarray(elem)
         self.N = v0[ia] * v1[ib]  # (9, n)
+        self.W = _at_points(old, self.elem, self.N)  # (n, n_nodes): the transfer of nodal values
         self.dN = np.stack([d0[ia] * v1[ib], v0[ia] * d1[ib]])  # (2, 9, n): d/dxi, d/deta
-        self.dofs = self.ed[:, elem]  # (9, n)
+        self.dofs = b.element_dofs[:, self.elem]  # (9, n)
         xe = np.asarray(b.doflocs)[:, self.dofs]  # (2, 9, n) the old element's nodes
         J = np.einsum("ikn,dkn->idn", xe, self.dN)  # (2, 2, n): dx_i / dxi_d
         det = J[0, 0] * J[1, 1] - J[0, 1] * J[1, 0]
@@ -325,24 +366,12 @@ class ContinuousJet:
 
     def nodal(self, f: np.ndarray) -> np.ndarray:
         """The continuous (nodally averaged) element quadratics of the Gauss-value fields f (m, old n_el, n_qp, c) at
-        the nodes of each point's element: (m, 9, n, c), the input of :meth:`value` and :meth:`moved`."""
-        c = f.shape[-1]
-        at = np.einsum("kp,mepc->mkec", self.to_nodes, f)  # (m, 9, n_el, c)
-        idx = self.ed.ravel()
-        out = (
-            np.stack(
-                [
-                    np.stack([np.bincount(idx, at[i, ..., j].ravel(), self.N_nodes) for j in range(c)], -1)
-                    for i in range(f.shape[0])
-                ]
-            )
-            / self.count[None, :, None]
-        )  # (m, N, c)
-        return out[:, self.dofs]
+        the old mesh's nodes: (m, n_nodes, c), the input of :meth:`value` and :meth:`moved` (:func:`nodal_average`)."""
+        return nodal_average(self.old, f)
 
     def value(self, nd: np.ndarray) -> np.ndarray:
-        """The transferred fields (m, n_el, n_qp, c) from :meth:`nodal`'s (m, 9, n, c)."""
-        return np.einsum("kn,mknc->mnc", self.N, nd).reshape((nd.shape[0],) + self.shape + (nd.shape[-1],))
+        """The transferred fields (m, n_el, n_qp, c) from :meth:`nodal`'s (m, n_nodes, c)."""
+        return _apply(self.W, nd).reshape((nd.shape[0],) + self.shape + (nd.shape[-1],))
 
     def moved(self, nd: np.ndarray, dp: np.ndarray | None, dX: np.ndarray | None) -> np.ndarray:
         """The change of the transferred fields (m, n_el, n_qp, c) (:meth:`nodal`'s nd) for the points moved by dp
@@ -352,7 +381,7 @@ class ContinuousJet:
             dx -= np.einsum("ikn,kn->in", np.asarray(dX)[:, self.dofs], self.N)
         dxi = np.einsum("din,in->dn", self.Jinv, dx)  # (2, n)
         dNv = np.einsum("dkn,dn->kn", self.dN, dxi)  # (9, n)
-        return np.einsum("kn,mknc->mnc", dNv, nd).reshape((nd.shape[0],) + self.shape + (nd.shape[-1],))
+        return _apply(_at_points(self.old, self.elem, dNv), nd).reshape((nd.shape[0],) + self.shape + (nd.shape[-1],))
 
 
 def deformation_at(mesh: AxiMesh, x: np.ndarray, points: AxiMesh) -> np.ndarray:
