@@ -57,15 +57,14 @@ REFACTOR_AFTER = 4  # refinement iterations after which the next step's tangent 
 
 class _Entry(NamedTuple):
     """An accepted fitted step as later steps' histories see it: its mesh and the meshes at its edge e (1 -+ h),
-    its stress S_iso on each (the held displacement), the stress's sensitivity on its fixed mesh dS (P, ...) and its
-    edge's d ln e / d theta (P,)."""
+    its stress S_iso, the stress's derivative in its own edge S_e (d / d ln e, the held displacement on the moving
+    mesh), its sensitivity on its fixed mesh dS (P, ...) and its edge's d ln e / d theta (P,)."""
 
     mesh: AxiMesh
     lo: AxiMesh
     hi: AxiMesh
     S: np.ndarray
-    S_lo: np.ndarray
-    S_hi: np.ndarray
+    S_e: np.ndarray
     dS: np.ndarray
     de: np.ndarray
     h: float
@@ -171,7 +170,7 @@ class FittedTimeSensing:
             jet = jets[index[id(en.mesh)]]
             # the step's stress, its motion with its own edge (the held displacement's stress on the moved meshes),
             # its sensitivity on its fixed mesh
-            nd = jet.nodal(np.concatenate([en.S[None], ((en.S_hi - en.S_lo) / (2 * en.h))[None], en.dS]))
+            nd = jet.nodal(np.concatenate([en.S[None], en.S_e[None], en.dS]))
             vals = jet.value(nd)
             dX = (np.asarray(en.hi.basis.doflocs) - np.asarray(en.lo.basis.doflocs)) / (2 * en.h)
             Sk = vals[0]
@@ -201,7 +200,10 @@ class FittedTimeSensing:
         lo, hi = self.fit.problem(e * (1 - h)), self.fit.problem(e * (1 + h))
         act = np.flatnonzero(s.active)
         fixed = prob.plane.dofs[act]
-        U = np.setdiff1d(prob.free, fixed)
+        keep = np.zeros(asm.ndof, bool)
+        keep[prob.free] = True
+        keep[fixed] = False
+        U = np.flatnonzero(keep)  # the free dofs less the held ones (sorted, as numpy.setdiff1d's)
         h_plate = 1.0 - s.delta
         # the held state on the moved meshes: the same unknowns, their plate dofs on the plate
         xl, xh = lo.plane.impose(x.copy(), h_plate, s.active), hi.plane.impose(x.copy(), h_plate, s.active)
@@ -292,13 +294,16 @@ class FittedTimeSensing:
         eq = 2 * prob.equator
         self.out.append({n: (float(dF[j]), float(dx[eq, j]), float(dd[j])) for j, n in enumerate(names)})
         # the step's stress on its fixed mesh, and on the moved ones (the edge's motion of later histories)
-        dSx = lin.dS(sens.point_increments(asm, dx))
+        # (the held displacement's stress on the moved meshes to first order: S_e = dS(df_e), df_e the central
+        # difference of its deformation gradient there, f being affine in the mesh's motion to O(h^2))
+        df_e = (hi.asm.f_at(xh) - lo.asm.f_at(xl)) / (2 * h)
+        dSall = lin.dS(np.concatenate([sens.point_increments(asm, dx), df_e[None]]))
+        dSx, S_e = dSall[:P], dSall[P]
         dSx[1] += lin.d_alpha[..., None] * lin.S
-        S_lo, S_hi = lo.asm.iso_S(xl, mat), hi.asm.iso_S(xh, mat)
-        self.entries.append(_Entry(prob.m, lo.m, hi.m, s.visco.S_iso, S_lo, S_hi, dSx, de, h))
+        self.entries.append(_Entry(prob.m, lo.m, hi.m, s.visco.S_iso, S_e, dSx, de, h))
         # the total sensitivity of the history values after the step (their mesh's motion included)
         dEdge = de[:, None, None, None]
-        dS_post = dSx + dEdge * ((S_hi - S_lo) / (2 * h))[None]
+        dS_post = dSx + dEdge * S_e[None]
         if beta.size:
             assert coef is not None
             dQ_pre = dQ + dEdge[:, None] * ((H_hi.Q - H_lo.Q) / (2 * h))[None]
