@@ -51,6 +51,13 @@ from tissuemech.fem.transfer import ContinuousJet, gauss_transfers, own_points, 
 
 __all__ = ["FittedTimeSensing", "SENSITIVITY_TOL"]
 
+
+def _both(t: Callable[[np.ndarray], np.ndarray], Q: np.ndarray, S: np.ndarray, axis: int = 0):
+    """(t(Q), t(S)) by one call of the Gauss-point map t: Q has the branches' axis at ``axis``, S has none."""
+    QS = t(np.concatenate([Q, np.expand_dims(S, axis)], axis=axis))
+    n = Q.shape[axis]
+    return QS[(slice(None),) * axis + (slice(0, n),)], QS[(slice(None),) * axis + (n,)]
+
 SENSITIVITY_TOL = 1e-10  # relative residual of the block solves (the edge's share is a small difference of them)
 REFACTOR_AFTER = 4  # refinement iterations after which the next step's tangent is factored afresh
 
@@ -120,12 +127,13 @@ class FittedTimeSensing:
             last = self.entries[-1]
             assert last.mesh is src.mesh, "the held step's history lives on the previous step's mesh"
             tr, t_lo, t_hi = (self._held_transfer(mm, m) for mm in (src.mesh, last.lo, last.hi))
-            dQ, dS = self.dvisco
-            q, s = src.state.Q, src.state.S_iso
+            dQ, dS = _both(tr, *self.dvisco, axis=1)
+            q_hi, s_hi = _both(t_hi, src.state.Q, src.state.S_iso)
+            q_lo, s_lo = _both(t_lo, src.state.Q, src.state.S_iso)
             de = last.de[:, None, None, None]
-            dq = (t_hi(q) - t_lo(q)) / (2 * last.h)
-            ds = (t_hi(s) - t_lo(s)) / (2 * last.h)
-            return tr(dQ) + de[:, None] * dq[None], tr(dS) + de * ds[None]
+            dq = (q_hi - q_lo) / (2 * last.h)
+            ds = (s_hi - s_lo) / (2 * last.h)
+            return dQ + de[:, None] * dq[None], dS + de * ds[None]
         raise AssertionError("replayed histories: _replayed")
 
     def _held_transfer(self, old: AxiMesh, new: AxiMesh) -> Callable[[np.ndarray], np.ndarray]:
@@ -218,8 +226,8 @@ class FittedTimeSensing:
         elif src.kind == "transfer":  # history_before's interpolation, its transfers kept
             assert src.mesh is not None
             t_lo, t_hi = self._held_transfer(src.mesh, lo.m), self._held_transfer(src.mesh, hi.m)
-            H_lo = ve.MaxwellState(t_lo(src.state.Q), t_lo(src.state.S_iso))
-            H_hi = ve.MaxwellState(t_hi(src.state.Q), t_hi(src.state.S_iso))
+            H_lo = ve.MaxwellState(*_both(t_lo, src.state.Q, src.state.S_iso))
+            H_hi = ve.MaxwellState(*_both(t_hi, src.state.Q, src.state.S_iso))
             dQ, dS = self._history_tangent(src, prob.m, shape)
         else:
             H_lo = history_before(src, lo.m, mat, beta, tau)

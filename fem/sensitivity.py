@@ -246,30 +246,38 @@ class IsoLinearisation:
         self.Idev = np.array([1.0, 0.0, 0.0, 1.0, 1.0]) - (self.I1 / 3.0)[..., None] * cinv
         s = 2.0 * self.w1 * self.Jm23
         self.S = s[..., None] * self.Idev
+        self._planes: tuple | None = None  # (f, F^-1, dJ/dF) component first, and scalars: dS builds them once
+        self._scalars: tuple = ()
         self.P = (self.w1 * 2.0 * self.Jm23)[..., None] * f - ((2.0 / 3.0) * self.w1 * self.Jm23 / self.J * self.I1)[
             ..., None
         ] * self.gJ
 
     def dS(self, df: np.ndarray) -> np.ndarray:
-        """dS along df (k, ..., 5) (or (..., 5)): the exact derivative of ``S`` (same shape as df)."""
-        f, fi, gJ = self.f, self.Fi, self.gJ
-        d0, d1, d2, d3, d4 = (df[..., k] for k in range(5))
-        dI1 = 2.0 * (d0 * f[..., 0] + d1 * f[..., 1] + d2 * f[..., 2] + d3 * f[..., 3] + d4 * f[..., 4])
-        dJ = d0 * gJ[..., 0] + d1 * gJ[..., 1] + d2 * gJ[..., 2] + d3 * gJ[..., 3] + d4 * gJ[..., 4]
-        c = (2.0 / 3.0) * dJ / self.J
+        """dS along df (k, ..., 5) (or (..., 5)): the exact derivative of ``S`` (same shape as df). Computed on
+        contiguous component planes (the points are few thousand: numpy's per-operation cost dominates)."""
+        if self._planes is None:  # the state's component planes, once
+            self._planes = tuple(np.ascontiguousarray(np.moveaxis(a, -1, 0)) for a in (self.f, self.Fi, self.gJ))
+            s = 2.0 * self.w1 * self.Jm23
+            self._scalars = (s, (2.0 / 3.0) / self.J, s * self.I1 / 3.0, 2.0 / self.f[..., 4] ** 3)
+        (f0, f1, f2, f3, f4), (i0, i1, i2, i3), (g0, g1, g2, g3, g4) = self._planes
+        s, c23J, sI13, two_e3 = self._scalars
+        d0, d1, d2, d3, d4 = np.ascontiguousarray(np.moveaxis(df, -1, 0))
+        dI1 = 2.0 * (d0 * f0 + d1 * f1 + d2 * f2 + d3 * f3 + d4 * f4)
+        c = (d0 * g0 + d1 * g1 + d2 * g2 + d3 * g3 + d4 * g4) * c23J  # 2/3 dJ / J
         # S = s Idev, s = 2 W' J^(-2/3): ds = s (alpha dIbar - 2/3 dJ / J), dIbar = J^(-2/3) dI1 - 2/3 Ibar dJ / J
-        ds = (2.0 * self.w1 * self.Jm23) * (self.alpha * (self.Jm23 * dI1 - self.Ib * c) - c)
+        ds = s * (self.alpha * (self.Jm23 * dI1 - self.Ib * c) - c)
         # dF^-1 = -F^-1 dF F^-1 (2 x 2 in plane: rows / columns (r, z), entries (0, 1, 2, 3) row-major)
-        i0, i1, i2, i3 = (fi[..., k] for k in range(4))
         m0, m1, m2, m3 = d0 * i0 + d1 * i2, d0 * i1 + d1 * i3, d2 * i0 + d3 * i2, d2 * i1 + d3 * i3  # dF F^-1
-        g0, g1, g2, g3 = -(i0 * m0 + i1 * m2), -(i0 * m1 + i1 * m3), -(i2 * m0 + i3 * m2), -(i2 * m1 + i3 * m3)
-        c01 = g0 * i2 + g1 * i3 + i0 * g2 + i1 * g3  # (dF^-1 F^-T + F^-1 dF^-T)_rz
-        e = f[..., 4]
-        dC = np.stack([2 * (g0 * i0 + g1 * i1), c01, c01, 2 * (g2 * i2 + g3 * i3), -2.0 * d4 / (e * e * e)], -1)
-        s = 2.0 * self.w1 * self.Jm23
-        out = ds[..., None] * self.Idev
-        out -= (s * dI1 / 3.0)[..., None] * self.Cinv
-        out -= (s * self.I1 / 3.0)[..., None] * dC
+        h0, h1, h2, h3 = -(i0 * m0 + i1 * m2), -(i0 * m1 + i1 * m3), -(i2 * m0 + i3 * m2), -(i2 * m1 + i3 * m3)
+        # dS = ds Idev - s dI1 / 3 C^-1 - s I1 / 3 dC^-1, dC^-1 = dF^-1 F^-T + F^-1 dF^-T (hoop -2 dF_tt / F_tt^3)
+        a = s * dI1 / 3.0
+        Id, Ci = self.Idev, self.Cinv
+        out = np.empty(ds.shape + (5,))
+        out[..., 0] = ds * Id[..., 0] - a * Ci[..., 0] - sI13 * 2.0 * (h0 * i0 + h1 * i1)
+        out[..., 1] = ds * Id[..., 1] - a * Ci[..., 1] - sI13 * (h0 * i2 + h1 * i3 + i0 * h2 + i1 * h3)
+        out[..., 2] = out[..., 1]
+        out[..., 3] = ds * Id[..., 3] - a * Ci[..., 3] - sI13 * 2.0 * (h2 * i2 + h3 * i3)
+        out[..., 4] = ds * Id[..., 4] - a * Ci[..., 4] + sI13 * two_e3 * d4
         return out
 
 
