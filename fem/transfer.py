@@ -325,10 +325,10 @@ def _nodal_average_operator(mesh: AxiMesh) -> sp.csr_matrix:
 
 def _at_points(mesh: AxiMesh, elem: np.ndarray, weights: np.ndarray) -> sp.csr_matrix:
     """(n, n_nodes): the combination ``weights`` (9, n) of the nodes of each point's element ``elem`` (n,)."""
-    dofs = mesh.basis.element_dofs[:, elem]  # (9, n)
-    n = dofs.shape[1]
-    rows = np.broadcast_to(np.arange(n)[None, :], dofs.shape)
-    return sp.csr_matrix((weights.ravel(), (rows.ravel(), dofs.ravel())), shape=(n, mesh.basis.N))
+    dofs = mesh.basis.element_dofs[:, elem]  # (9, n): distinct within a row, so CSR directly (no COO sort)
+    k, n = dofs.shape
+    indptr = np.arange(0, k * n + 1, k)
+    return sp.csr_matrix((weights.T.ravel(), dofs.T.ravel(), indptr), shape=(n, mesh.basis.N))
 
 
 def _apply(W: sp.csr_matrix, nodal: np.ndarray) -> np.ndarray:
