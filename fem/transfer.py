@@ -288,9 +288,19 @@ def _transfer(
 
         return smooth
 
+    # one sparse row per new point: its old element's Gauss values, weighted (CSR directly: distinct columns)
+    T = sp.csr_matrix(
+        (L.ravel(), (np.asarray(elem)[:, None] * nq + np.arange(nq)).ravel(), np.arange(0, L.size + 1, nq)),
+        shape=(L.shape[0], old.quadrature_points.shape[1] * nq),
+    )
+
     def transfer(f: np.ndarray) -> np.ndarray:
-        g = f[..., elem, :, :]  # (..., n, n_qp, c)
-        return np.einsum("np,...npc->...nc", L, g).reshape(f.shape[:-3] + (ne, nq, f.shape[-1]))
+        lead, c = f.shape[:-3], f.shape[-1]
+        g = f.reshape((-1,) + f.shape[-3:])  # (m, old n_el, n_qp, c)
+        out = T @ np.ascontiguousarray(g.transpose(1, 2, 0, 3)).reshape(-1, g.shape[0] * c)
+        return np.ascontiguousarray(out.reshape(ne, nq, g.shape[0], c).transpose(2, 0, 1, 3)).reshape(
+            lead + (ne, nq, c)
+        )
 
     return transfer
 
