@@ -42,6 +42,7 @@ pattern). The plane code above is unchanged.
 
 from __future__ import annotations
 
+import copy
 import logging
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -124,6 +125,12 @@ class RigidPlane:
     def gap(self, x: np.ndarray, h: float) -> np.ndarray:
         """g_i = h - z_i for every candidate (scaled length)."""
         return h - (self.Z + x[self.dofs])
+
+    def moved(self, dX: np.ndarray) -> RigidPlane:
+        """This plane's candidates on the section whose nodes moved by dX (2, n_nodes) (same nodes, same order)."""
+        out = copy.copy(self)
+        out.R, out.Z = self.R + dX[0, self.nodes], self.Z + dX[1, self.nodes]
+        return out
 
     def impose(self, x: np.ndarray, h: float, active: np.ndarray) -> np.ndarray:
         """Copy of x with u_z = h - Z on the active nodes (they touch the plane exactly)."""

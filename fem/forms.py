@@ -33,6 +33,7 @@ node: 2 i, 2 i + 1), ``ndof`` (= n_u + 3 n_elements for "mixed"). All methods ta
 
 from __future__ import annotations
 
+import copy
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
@@ -141,36 +142,75 @@ class Assembler:
         self.mesh, self.formulation = mesh, formulation
         b = mesh.basis
         nb = b.Nbfun
-        N = np.array([np.asarray(b.basis[i][0]) for i in range(nb)])  # (nb, ne, nq)
+        self._N = np.array([np.asarray(b.basis[i][0]) for i in range(nb)])  # (nb, ne, nq)
         dN = np.array([b.basis[i][0].grad for i in range(nb)])  # (nb, 2, ne, nq)
-        xq = mesh.quadrature_points  # (2, ne, nq)
-        self.R = xq[0]
-        self.w = 2 * np.pi * self.R * b.dx  # (ne, nq)
-        self.B = b_matrix(N, dN, self.R)  # (ne, nq, 5, 2nb)
-        self.Bt = np.ascontiguousarray(self.B.reshape(self.B.shape[0], -1, self.B.shape[-1]).transpose(0, 2, 1))
         ed = b.element_dofs  # (nb, ne)
+        self._ed = ed
         self.edofs = np.stack([2 * ed, 2 * ed + 1], axis=-1).reshape(nb, -1, 2).transpose(1, 0, 2).reshape(-1, 2 * nb)
         self.n_u = 2 * b.N
         ne = self.edofs.shape[0]
         self.n_el = ne
         alld = self.edofs
         if formulation == "mixed":
-            xc = np.sum(xq * self.w, axis=2) / self.w.sum(axis=1)
-            self.psi = np.stack([np.ones_like(self.R), xq[0] - xc[0][:, None], xq[1] - xc[1][:, None]], -1)
-            self.M = np.einsum("eqa,eqb,eq->eab", self.psi, self.psi, self.w)
             self.qdofs = self.n_u + np.arange(3 * ne).reshape(ne, 3)
             alld = np.concatenate([self.edofs, self.qdofs], axis=1)
         self.ndof = self.n_u + (3 * ne if formulation == "mixed" else 0)
         self.alldofs = alld
         self._pattern = _element_pattern(alld, self.ndof)
         self._edofs_flat = np.ascontiguousarray(self.edofs.ravel())
-        self._B2 = np.ascontiguousarray(self.B.reshape(ne, -1, self.B.shape[-1]))  # (ne, nq * 5, nd)
-        if formulation == "mixed":
-            self._psiT = np.ascontiguousarray(self.psi.transpose(0, 2, 1))
+        self._geometry(dN, mesh.quadrature_points, np.asarray(b.dx))
         self._edge_cache: dict = {}
         # an extra boundary energy (``fem.surface.SurfaceTension``) that ``internal`` adds to r and K; None: none
         self.surface: SurfaceTension | None = None
         self._f_last: tuple[np.ndarray, np.ndarray] | None = None  # (u, F(u)): see f_at
+
+    def _geometry(self, dN: np.ndarray, xq: np.ndarray, dx: np.ndarray) -> None:
+        """The arrays that depend on the node positions: shape-function gradients dN (nb, 2, ne, nq), quadrature
+        points xq (2, ne, nq) and their weights dx (ne, nq) (the Gauss weights times the map's determinant)."""
+        self._dN, self.xq = dN, xq
+        self.R = xq[0]
+        self.w = 2 * np.pi * self.R * dx  # (ne, nq)
+        self.B = b_matrix(self._N, dN, self.R)  # (ne, nq, 5, 2nb)
+        self._Bt: np.ndarray | None = None  # B^T per element (the tangent's), made on first use
+        self._B2 = self.B.reshape(self.n_el, -1, self.B.shape[-1])  # (ne, nq * 5, nd), a view
+        if self.formulation == "mixed":
+            xc = np.sum(xq * self.w, axis=2) / self.w.sum(axis=1)
+            self.psi = np.stack([np.ones_like(self.R), xq[0] - xc[0][:, None], xq[1] - xc[1][:, None]], -1)
+            self.M = np.einsum("eqa,eqb,eq->eab", self.psi, self.psi, self.w)
+            self._psiT = np.ascontiguousarray(self.psi.transpose(0, 2, 1))
+
+    @property
+    def Bt(self) -> np.ndarray:
+        """B^T per element (ne, nd, nq * 5), contiguous (the tangent's element products)."""
+        if self._Bt is None:
+            self._Bt = np.ascontiguousarray(self._B2.transpose(0, 2, 1))
+        return self._Bt
+
+    def motion(self, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(V at the quadrature points (2, ne, nq), its gradient dV_i / dX_j there (2, 2, ne, nq)) of a nodal
+        field V (2, n_nodes) of the mesh's Q2 space (e.g. the motion of its nodes)."""
+        Ve = np.asarray(V, float)[:, self._ed]  # (2, nb, ne)
+        return np.einsum("ike,keq->ieq", Ve, self._N), np.einsum("ike,kjeq->ijeq", Ve, self._dN)
+
+    def moved(self, V: np.ndarray, eps: float) -> Assembler:
+        """This assembler on the mesh whose nodes are X + eps V (V (2, n_nodes) in the mesh's Q2 space; same
+        connectivity, dofs and pattern): the isoparametric map moves by eps V(xi), so its Jacobian is (I + eps
+        grad V) dX/dxi, the shape-function gradients dN (I + eps grad V)^-1, the weights dx det(I + eps grad V)
+        and the points xq + eps V(xi), all exact. Its ``surface`` is None (a caller with a surface tension moves
+        it: ``fem.surface.SurfaceTension``). Used for the residual's derivative in a fitted mesh's motion
+        (``fem.fitted_sensitivity``) without building the moved mesh's basis."""
+        Vq, G = self.motion(V)
+        a, b_, c, d = (eps * G[0, 0] + 1.0, eps * G[0, 1], eps * G[1, 0], eps * G[1, 1] + 1.0)
+        det_ = a * d - b_ * c
+        inv = np.stack([np.stack([d, -b_]), np.stack([-c, a])]) / det_  # (2, 2, ne, nq)
+        dN = np.einsum("kieq,ijeq->kjeq", self._dN, inv)
+        dx = self.w / (2 * np.pi * self.R) * det_
+        out = copy.copy(self)
+        out.surface = None
+        out._f_last = None
+        out._edge_cache = {}
+        out._geometry(dN, self.xq + eps * Vq, dx)
+        return out
 
     # ---- kinematics at quadrature points ------------------------------------------------
     @property

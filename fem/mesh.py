@@ -40,6 +40,7 @@ __all__ = [
     "ball_section",
     "graded_points",
     "fitted_mesh",
+    "fitted_nodes",
     "FITTED_LEVELS",
     "FITTED_SPLIT",
     "FITTED_EDGE_MAX",
@@ -242,6 +243,30 @@ def ball_section(
     block's begins; the core is the rectangle [0, c sqrt2 sin(split)] x [0, c sqrt2 cos(split)].
     ``intorder``: polynomial degree the basis's Gauss rule integrates exactly (default 2 order + 2).
     """
+    out = _ball_section(radius, n_core, n_radial, grading=grading, pole_grading=pole_grading, order=order,
+                        pole_points=pole_points, radial_points=radial_points, n_equator=n_equator,
+                        split_angle=split_angle, intorder=intorder, nodes_only=False)  # fmt: skip
+    assert isinstance(out, AxiMesh)
+    return out
+
+
+def _ball_section(
+    radius: float,
+    n_core: int,
+    n_radial: int,
+    *,
+    grading: float,
+    pole_grading: float,
+    order: int,
+    pole_points: np.ndarray | None,
+    radial_points: np.ndarray | None,
+    n_equator: int | None,
+    split_angle: float,
+    intorder: int | None,
+    nodes_only: bool,
+) -> AxiMesh | np.ndarray:
+    """:func:`ball_section`; ``nodes_only``: only the node (dof) coordinates (2, n_nodes) of that mesh, without
+    building its basis where the divisions' topology is known (:func:`fitted_nodes`)."""
     if not (radius > 0 and np.isfinite(radius)):
         raise ValueError(f"ball radius must be positive, got {radius}")
     c = 0.55
@@ -286,6 +311,8 @@ def ball_section(
     P = np.concatenate(pts)
     key = (n_core, n_radial, n_eq, order, intorder, float(split_angle))
     if key in _BALL_TOPOLOGY:  # the same divisions: only the node positions change (fitted meshes, issue 14)
+        if nodes_only:
+            return _moved_nodes(_BALL_TOPOLOGY[key], P)
         return _moved_ball(_BALL_TOPOLOGY[key], P, radius)
     Q = np.concatenate(quads)
     m1, first = _merged(P, Q)  # the blocks' shared points merged (one numbering per divisions), counterclockwise
@@ -446,10 +473,9 @@ class _BallTopology(NamedTuple):
 _BALL_TOPOLOGY: dict[tuple, _BallTopology] = {}  # (divisions, order, intorder, split) -> topology, last 8
 
 
-def _moved_ball(topo: _BallTopology, P: np.ndarray, radius: float) -> AxiMesh:
-    """The quadratic ball_section mesh of the block points P (before merging) on a known topology: the node
-    positions of ``ball_section``'s construction (facet midpoints, surface midpoints on the arc, blended
-    element centres) without rebuilding the connectivity and tags (issue 14: fitted meshes)."""
+def _moved_nodes(topo: _BallTopology, P: np.ndarray) -> np.ndarray:
+    """The node positions (2, n_nodes) of the quadratic ball_section mesh of the block points P on a known
+    topology (facet midpoints, surface midpoints on the arc, blended element centres)."""
     p = P[topo.first].T  # (2, n_vertices)
     nv, nf, ne = p.shape[1], topo.facets.shape[1], topo.t.shape[1]
     dl = np.empty((2, nv + nf + ne))
@@ -458,6 +484,14 @@ def _moved_ball(topo: _BallTopology, P: np.ndarray, radius: float) -> AxiMesh:
     mids = topo.arc_mids
     dl[:, mids] /= np.hypot(dl[0, mids], dl[1, mids])
     dl[:, nv + nf :] = 0.5 * dl[:, nv + topo.t2f].sum(axis=1) - 0.25 * p[:, topo.t].sum(axis=1)
+    return dl
+
+
+def _moved_ball(topo: _BallTopology, P: np.ndarray, radius: float) -> AxiMesh:
+    """The quadratic ball_section mesh of the block points P (before merging) on a known topology: the node
+    positions of ``ball_section``'s construction (facet midpoints, surface midpoints on the arc, blended
+    element centres) without rebuilding the connectivity and tags (issue 14: fitted meshes)."""
+    dl = _moved_nodes(topo, P)
     t = topo.mesh
     m = skfem.MeshQuad2(dl, t.mesh.t)
     basis = skfem.CellBasis(m, skfem.ElementQuad2(), intorder=topo.intorder)
@@ -503,6 +537,20 @@ def fitted_mesh(radius: float, level: int, edge: float) -> AxiMesh:
     from the pole is FITTED_SPLIT * edge, FITTED_SPLIT = 55 deg), in (0, FITTED_EDGE_MAX]. Every edge gives the
     same topology and node numbering.
     """
+    out = _fitted_section(radius, level, edge, False)
+    assert isinstance(out, AxiMesh)
+    return out
+
+
+def fitted_nodes(radius: float, level: int, edge: float) -> np.ndarray:
+    """The node coordinates (2, n_nodes) of ``fitted_mesh(radius, level, edge)`` (its ``X``), without building its
+    basis: the motion of the fitted mesh with its edge (``fem.fitted_sensitivity``) is their difference."""
+    out = _fitted_section(radius, level, edge, True)
+    return out.X if isinstance(out, AxiMesh) else out
+
+
+def _fitted_section(radius: float, level: int, edge: float, nodes_only: bool) -> AxiMesh | np.ndarray:
+    """:func:`fitted_mesh` (or only its nodes)."""
     if level not in FITTED_LEVELS:
         raise ValueError(f"mesh level must be an integer 0..4 (0 coarse, 1 default, 2 fine), got {level!r}")
     if not (0 < edge <= FITTED_EDGE_MAX):
@@ -520,7 +568,7 @@ def fitted_mesh(radius: float, level: int, edge: float) -> AxiMesh:
     hc = _DEPTH * edge * FITTED_SPLIT / k
     if hc < c_thick * (v[-1] - v[-2]):
         v = 1.0 - _geometric(nr, 1.0, hc / c_thick)[::-1]
-    return ball_section(
-        radius, nc, nr, pole_points=np.r_[inner, outer[1:]], radial_points=v, n_equator=neq, split_angle=FITTED_SPLIT,
-        intorder=4,
+    return _ball_section(
+        radius, nc, nr, grading=1.0, pole_grading=1.0, order=2, pole_points=np.r_[inner, outer[1:]], radial_points=v,
+        n_equator=neq, split_angle=FITTED_SPLIT, intorder=4, nodes_only=nodes_only,
     )  # fmt: skip

@@ -41,6 +41,8 @@ assembler as ``Assembler.surface`` (``fem.forms``): ``internal`` then includes i
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -73,6 +75,7 @@ class SurfaceTension:
         # per-edge factors on gamma (None: 1): a wetted edge of a plate with contact angle theta stores
         # gamma_SL - gamma_SV = -gamma cos(theta) per area (Young), see :meth:`wet`
         self.weights: np.ndarray | None = None
+        self._radius = 1.0  # of the balanced reference (:meth:`balance_reference`)
 
     def wet(self, edges_mask: np.ndarray, contact_angle: float) -> None:
         """Give the edges ``edges_mask`` (bool, n_edges) the energy of a surface wetting a plate with contact angle
@@ -105,6 +108,19 @@ class SurfaceTension:
         finally:
             asm.surface, self.weights = saved, weights
         self.q_per_gamma = -2.0 / radius
+        self._radius = float(radius)
+
+    def moved(self, dX: np.ndarray, asm) -> SurfaceTension:
+        """This surface on the section whose nodes moved by dX (2, n_nodes), attached to ``asm`` (that section's
+        assembler: ``fem.forms.Assembler.moved``) and balanced there as this one is (the same ball, its nodes
+        placed differently: a fitted mesh at another contact edge). Returns the copy; ``asm.surface`` is set."""
+        out = copy.copy(self)
+        out.X = self.X + np.asarray(dX, float)
+        out._pos = {}
+        asm.surface = out
+        if self.balance is not None:
+            out.balance_reference(asm, self._radius)
+        return out
 
     def _geometry(self, u: np.ndarray):
         x = self.X[:, self.edges] + u[self.dofs].transpose(2, 0, 1)  # (2, ned, nn)

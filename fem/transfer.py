@@ -35,6 +35,7 @@ __all__ = [
     "nodal_average",
     "own_points",
     "ContinuousJet",
+    "ElementJet",
     "local_coordinates",
     "lagrange2",
 ]
@@ -267,12 +268,6 @@ def _transfer(
     xq = new.quadrature_points  # (2, n_el, n_qp)
     ne, nq = xq.shape[1:]
     pts = xq.reshape(2, -1)
-    G = np.asarray(old.basis.X)  # (2, n_qp) in [0, 1]^2
-    powers = [(i, j) for i in range(3) for j in range(3)]
-    V = np.stack([G[0] ** i * G[1] ** j for i, j in powers], axis=1)  # (n_qp, 9)
-    P = np.stack([loc[0] ** i * loc[1] ** j for i, j in powers], axis=1)  # (n, 9)
-    L = P @ np.linalg.inv(V)  # (n, n_qp): weights of the old element's Gauss values
-    assert L.shape == (pts.shape[1], nq)
     if continuous:
         b = old.basis
         ref = np.asarray(b.elem.doflocs, float).T  # (2, 9)
@@ -288,21 +283,82 @@ def _transfer(
 
         return smooth
 
-    # one sparse row per new point: its old element's Gauss values, weighted (CSR directly: distinct columns)
-    T = sp.csr_matrix(
-        (L.ravel(), (np.asarray(elem)[:, None] * nq + np.arange(nq)).ravel(), np.arange(0, L.size + 1, nq)),
-        shape=(L.shape[0], old.quadrature_points.shape[1] * nq),
+    G = np.asarray(old.basis.X)  # (2, n_qp) in [0, 1]^2
+    powers = [(i, j) for i in range(3) for j in range(3)]
+    V = np.stack([G[0] ** i * G[1] ** j for i, j in powers], axis=1)  # (n_qp, 9)
+    P = np.stack([loc[0] ** i * loc[1] ** j for i, j in powers], axis=1)  # (n, 9)
+    L = P @ np.linalg.inv(V)  # (n, n_qp): weights of the old element's Gauss values
+    assert L.shape == (pts.shape[1], nq)
+    T = _gauss_rows(old, elem, L)
+    return lambda f: _apply_gauss(T, f, (ne, nq))
+
+
+def _gauss_rows(old: AxiMesh, elem: np.ndarray, L: np.ndarray) -> sp.csr_matrix:
+    """(n, old n_el n_qp): one row per point, the weights L (n, n_qp) of its old element ``elem`` (n,)'s Gauss
+    values (CSR directly: a row's columns are distinct)."""
+    nq = L.shape[1]
+    cols = (np.asarray(elem)[:, None] * nq + np.arange(nq)).ravel()
+    return sp.csr_matrix(
+        (L.ravel(), cols, np.arange(0, L.size + 1, nq)), shape=(L.shape[0], old.quadrature_points.shape[1] * nq)
     )
 
-    def transfer(f: np.ndarray) -> np.ndarray:
-        lead, c = f.shape[:-3], f.shape[-1]
-        g = f.reshape((-1,) + f.shape[-3:])  # (m, old n_el, n_qp, c)
-        out = T @ np.ascontiguousarray(g.transpose(1, 2, 0, 3)).reshape(-1, g.shape[0] * c)
-        return np.ascontiguousarray(out.reshape(ne, nq, g.shape[0], c).transpose(2, 0, 1, 3)).reshape(
-            lead + (ne, nq, c)
-        )
 
-    return transfer
+def _apply_gauss(T: sp.csr_matrix, f: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """T (n, old n_el n_qp) applied to Gauss-point fields f (..., old n_el, n_qp, c): (..., n_el, n_qp, c) with
+    n = n_el n_qp (``shape``)."""
+    lead, c = f.shape[:-3], f.shape[-1]
+    g = f.reshape((-1,) + f.shape[-3:])  # (m, old n_el, n_qp, c)
+    out = T @ np.ascontiguousarray(g.transpose(1, 2, 0, 3)).reshape(-1, g.shape[0] * c)
+    return np.ascontiguousarray(out.reshape(shape + (g.shape[0], c)).transpose(2, 0, 1, 3)).reshape(
+        lead + shape + (c,)
+    )
+
+
+class ElementJet:
+    """The element-wise transfer of :func:`gauss_transfer` (``continuous=False``) from ``old`` to the points (2, n)
+    located at (``elem``, ``loc``) in it, with its first derivatives in the meshes' motion: :meth:`value` is the
+    transfer; :meth:`moved` its derivative when the points move by dp (2, n) and the old mesh's nodes by dX (2,
+    n_nodes): the point's reference coordinates move by J^-1 (dp - sum_b N_b(xi) dX_b) (J the old element's map,
+    N_b its Q2 shape functions) and the element's tensor-product quadratic through its Gauss values is
+    differentiated there (the values held). Exact derivatives of the interpolation in the element that holds the
+    point (``fem.fitted_sensitivity``: a held step's history on its mesh and on its moving neighbours)."""
+
+    def __init__(self, old: AxiMesh, elem: np.ndarray, loc: np.ndarray, shape: tuple[int, int]) -> None:
+        b = old.basis
+        G = np.asarray(b.X)  # (2, n_qp)
+        powers = [(i, j) for i in range(3) for j in range(3)]
+        Vinv = np.linalg.inv(np.stack([G[0] ** i * G[1] ** j for i, j in powers], axis=1))
+        u, v = loc
+        P = np.stack([u**i * v**j for i, j in powers], axis=1)  # (n, 9)
+        dPu = np.stack([i * u ** max(i - 1, 0) * v**j for i, j in powers], axis=1)
+        dPv = np.stack([j * u**i * v ** max(j - 1, 0) for i, j in powers], axis=1)
+        self.old, self.elem, self.shape = old, np.asarray(elem), shape
+        self.T = _gauss_rows(old, self.elem, P @ Vinv)
+        self.dL = (dPu @ Vinv, dPv @ Vinv)  # (n, n_qp) each: d weights / d xi, d eta
+        ref = np.asarray(b.elem.doflocs, float).T  # (2, 9)
+        ia, ib = (np.rint(2.0 * r).astype(int) for r in ref)
+        (v0, d0), (v1, d1) = lagrange2(u), lagrange2(v)
+        self.N = v0[ia] * v1[ib]  # (9, n): the Q2 shape functions of the old element's map
+        dN = np.stack([d0[ia] * v1[ib], v0[ia] * d1[ib]])  # (2, 9, n)
+        self.dofs = b.element_dofs[:, self.elem]  # (9, n)
+        xe = np.asarray(b.doflocs)[:, self.dofs]  # (2, 9, n)
+        J = np.einsum("ikn,dkn->idn", xe, dN)  # (2, 2, n): dx_i / dxi_d
+        det = J[0, 0] * J[1, 1] - J[0, 1] * J[1, 0]
+        self.Jinv = np.stack([np.stack([J[1, 1], -J[0, 1]]), np.stack([-J[1, 0], J[0, 0]])]) / det
+
+    def value(self, f: np.ndarray) -> np.ndarray:
+        """The transferred fields (..., n_el, n_qp, c) of Gauss-value fields f (..., old n_el, n_qp, c)."""
+        return _apply_gauss(self.T, f, self.shape)
+
+    def moved(self, f: np.ndarray, dp: np.ndarray | None, dX: np.ndarray | None) -> np.ndarray:
+        """The change of the transferred fields f (..., old n_el, n_qp, c) for the points moved by dp (2, n) and the
+        old mesh's nodes by dX (2, n_nodes) (either None: fixed)."""
+        dx = np.zeros((2, self.N.shape[1])) if dp is None else np.array(dp, float)
+        if dX is not None:
+            dx -= np.einsum("ikn,kn->in", np.asarray(dX)[:, self.dofs], self.N)
+        dxi = np.einsum("din,in->dn", self.Jinv, dx)  # (2, n)
+        W = self.dL[0] * dxi[0][:, None] + self.dL[1] * dxi[1][:, None]
+        return _apply_gauss(_gauss_rows(self.old, self.elem, W), f, self.shape)
 
 
 def nodal_average(mesh: AxiMesh, f: np.ndarray) -> np.ndarray:

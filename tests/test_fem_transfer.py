@@ -134,3 +134,29 @@ def test_continuous_jet_is_the_transfer_and_its_derivative_in_both_meshes_motion
     fd = (gauss_transfer(src, th, continuous=True)(f) - gauss_transfer(src, tl, continuous=True)(f)) / (2 * h)
     dp = (th.quadrature_points - tl.quadrature_points).reshape(2, -1) / (2 * h)
     assert np.max(np.abs(jet.moved(nd, dp, None) - fd)) <= 1e-7 * np.max(np.abs(fd))
+
+
+def test_element_jet_is_the_element_wise_transfer_and_its_derivative_in_both_meshes_motion():
+    """``ElementJet``: its value is the element-wise transfer; its motion terms equal central differences of the
+    transfer between fitted meshes whose contact edge moves (the source's nodes, the target's points) to the
+    differences' truncation (~1e-8 of the largest); the held step's case (a mesh onto itself moving) included."""
+    from tissuemech.fem.mesh import fitted_mesh
+    from tissuemech.fem.transfer import ElementJet, located
+
+    h = 1e-4
+    for e_src, e_tgt in ((0.3, 0.31), (0.3, 0.3)):
+        src, tgt = fitted_mesh(1.0, 1, e_src), fitted_mesh(1.0, 1, e_tgt)
+        q = src.quadrature_points
+        f = np.stack([np.sin(3 * q[0]) * np.cos(2 * q[1]), q[0] ** 2 + q[1]], -1)[None]
+        (at,) = located([src], tgt.quadrature_points.reshape(2, -1))
+        jet = ElementJet(src, *at, tgt.quadrature_points.shape[1:])
+        np.testing.assert_allclose(jet.value(f), gauss_transfer(src, tgt)(f), rtol=0, atol=1e-14)
+        sl, sh = fitted_mesh(1.0, 1, e_src * (1 - h)), fitted_mesh(1.0, 1, e_src * (1 + h))
+        fd = (gauss_transfer(sh, tgt)(f) - gauss_transfer(sl, tgt)(f)) / (2 * h)
+        dX = (np.asarray(sh.basis.doflocs) - np.asarray(sl.basis.doflocs)) / (2 * h)
+        assert np.max(np.abs(fd)) > 1e-3
+        assert np.max(np.abs(jet.moved(f, None, dX) - fd)) <= 1e-7 * np.max(np.abs(fd))
+        tl, th = fitted_mesh(1.0, 1, e_tgt * (1 - h)), fitted_mesh(1.0, 1, e_tgt * (1 + h))
+        fd = (gauss_transfer(src, th)(f) - gauss_transfer(src, tl)(f)) / (2 * h)
+        dp = (th.quadrature_points - tl.quadrature_points).reshape(2, -1) / (2 * h)
+        assert np.max(np.abs(jet.moved(f, dp, None) - fd)) <= 1e-7 * np.max(np.abs(fd))
