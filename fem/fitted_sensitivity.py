@@ -45,9 +45,9 @@ import scipy.sparse as sp
 
 from tissuemech.fem import sensitivity as sens
 from tissuemech.fem import viscoelastic as ve
-from tissuemech.fem.contact import HistorySource, PlateStep, edge_slope, edge_slope_change, history_before
-from tissuemech.fem.mesh import AxiMesh
-from tissuemech.fem.transfer import ContinuousJet, gauss_transfers, own_points, points_in
+from tissuemech.fem.contact import HistorySource, PlateStep, edge_slope, edge_slope_change
+from tissuemech.fem.mesh import AxiMesh, fitted_nodes
+from tissuemech.fem.transfer import ContinuousJet, ElementJet, located, own_points, points_in
 
 __all__ = ["FittedTimeSensing", "SENSITIVITY_TOL"]
 
@@ -63,18 +63,27 @@ REFACTOR_AFTER = 4  # refinement iterations after which the next step's tangent 
 
 
 class _Entry(NamedTuple):
-    """An accepted fitted step as later steps' histories see it: its mesh and the meshes at its edge e (1 -+ h),
-    its stress S_iso, the stress's derivative in its own edge S_e (d / d ln e, the held displacement on the moving
-    mesh), its sensitivity on its fixed mesh dS (P, ...) and its edge's d ln e / d theta (P,)."""
+    """An accepted fitted step as later steps' histories see it: its mesh and that mesh's nodal motion with its edge
+    V (d X / d ln e, (2, n_nodes)), its stress S_iso, the stress's derivative in its own edge S_e (d / d ln e, the
+    held displacement on the moving mesh), its sensitivity on its fixed mesh dS (P, ...) and its edge's d ln e /
+    d theta (P,)."""
 
     mesh: AxiMesh
-    lo: AxiMesh
-    hi: AxiMesh
+    V: np.ndarray
     S: np.ndarray
     S_e: np.ndarray
     dS: np.ndarray
     de: np.ndarray
-    h: float
+
+
+class _Motion(NamedTuple):
+    """A fitted mesh's motion with its edge e: V = d X / d ln e at the nodes (2, n_nodes) and Vq at the Gauss points
+    (2, n), and the problem's assembler and plate on the meshes X -+ h V (``fem.forms.Assembler.moved``)."""
+
+    V: np.ndarray
+    Vq: np.ndarray
+    lo: tuple[Any, Any]
+    hi: tuple[Any, Any]
 
 
 class FittedTimeSensing:
@@ -102,7 +111,8 @@ class FittedTimeSensing:
         self.dvisco: tuple[np.ndarray, np.ndarray] | None = None  # the last step's history values' total sensitivity
         self.out: list[dict] = []
         self.kept: tuple[int, Callable] | None = None  # (size, a solve with a recent factorisation of the tangent)
-        self._transfers: dict[tuple[int, int], tuple] = {}  # (old, new, transfer) of held steps (_held_transfer)
+        self._jets: dict[tuple[int, int], tuple] = {}  # (old, new, ElementJet) of held steps (_held_jet)
+        self._motions: dict[int, tuple] = {}  # (problem, _Motion) of the recent steps' problems (_motion)
         self.refinements: list[int] = []  # per step: refinement iterations of the block solve (-1: factored)
 
     def wrap(self, step: Callable) -> Callable:
@@ -115,6 +125,32 @@ class FittedTimeSensing:
 
         return sensed
 
+    # ---- the mesh's motion with its edge ---------------------------------------------------------------------------
+    def _motion(self, prob: Any, e: float) -> _Motion:
+        """The motion of ``prob``'s fitted mesh (edge e) with its edge, kept for the next steps (while the plate is
+        held the edge mostly stays where it is): V from the fitted meshes' nodes at e (1 -+ h)
+        (``fem.mesh.fitted_nodes``: no basis built), the assembler (and its surface tension) and the plate moved by
+        -+ h V, exact for the isoparametric map (the central differences of the residual are then those of the
+        fitted meshes at e (1 -+ h) to O(h^2))."""
+        key = id(prob)
+        if key in self._motions and self._motions[key][0] is prob:
+            return self._motions[key][1]
+        h, fit = self.h, self.fit
+        V = (fitted_nodes(fit.a0, fit.level, e * (1 + h)) - fitted_nodes(fit.a0, fit.level, e * (1 - h))) / (2 * h)
+        asm = prob.asm
+        Vq = asm.motion(V)[0].reshape(2, -1)
+        moved = []
+        for sign in (-1.0, 1.0):
+            a = asm.moved(V, sign * h)
+            if asm.surface is not None:
+                asm.surface.moved(sign * h * V, a)
+            moved.append((a, prob.plane.moved(sign * h * V)))
+        if len(self._motions) > 8:
+            self._motions.pop(next(iter(self._motions)))
+        out = _Motion(V, Vq, moved[0], moved[1])
+        self._motions[key] = (prob, out)
+        return out
+
     # ---- the history's sensitivity on a fixed mesh ----------------------------------------------------------------
     def _history_tangent(self, src: HistorySource, m: AxiMesh, shape: tuple) -> tuple[np.ndarray, np.ndarray]:
         """(dQ, dS) of ``history_before(src, m)`` at m's fixed Gauss points, from the past steps' sensitivities."""
@@ -126,36 +162,34 @@ class FittedTimeSensing:
             assert self.dvisco is not None and src.mesh is not None
             last = self.entries[-1]
             assert last.mesh is src.mesh, "the held step's history lives on the previous step's mesh"
-            tr, t_lo, t_hi = (self._held_transfer(mm, m) for mm in (src.mesh, last.lo, last.hi))
-            dQ, dS = _both(tr, *self.dvisco, axis=1)
-            q_hi, s_hi = _both(t_hi, src.state.Q, src.state.S_iso)
-            q_lo, s_lo = _both(t_lo, src.state.Q, src.state.S_iso)
+            jet = self._held_jet(src.mesh, m)
+            dQ, dS = self.dvisco if src.mesh is m else _both(jet.value, *self.dvisco, axis=1)
+            # the history's own mesh moving with its edge (its nodes by V per ln e)
+            dq, ds = _both(lambda g: jet.moved(g, None, last.V), src.state.Q, src.state.S_iso)
             de = last.de[:, None, None, None]
-            dq = (q_hi - q_lo) / (2 * last.h)
-            ds = (s_hi - s_lo) / (2 * last.h)
             return dQ + de[:, None] * dq[None], dS + de * ds[None]
         raise AssertionError("replayed histories: _replayed")
 
-    def _held_transfer(self, old: AxiMesh, new: AxiMesh) -> Callable[[np.ndarray], np.ndarray]:
+    def _held_jet(self, old: AxiMesh, new: AxiMesh) -> ElementJet:
         """The element-wise transfer of a held step's history (``fem.contact.history_before``, kind "transfer") from
-        ``old`` to ``new`` (the identity where they are one mesh), kept for the next steps: while the plate is held
-        the edge mostly stays where it is, and every step transfers between the same meshes."""
-        if old is new:
-            return lambda f: f
+        ``old`` to ``new``'s Gauss points (located as history_before locates them) with its derivatives in both
+        meshes' motion, kept for the next steps (while the plate is held every step transfers between the same
+        meshes)."""
         key = (id(old), id(new))
-        if key not in self._transfers:
-            if len(self._transfers) > 16:
-                self._transfers.pop(next(iter(self._transfers)))
-            self._transfers[key] = (old, new, gauss_transfers([old], new, near=[own_points(new)])[0])
-        return self._transfers[key][2]
+        if key not in self._jets:
+            if len(self._jets) > 16:
+                self._jets.pop(next(iter(self._jets)))
+            (where,) = located([old], new.quadrature_points.reshape(2, -1), [own_points(new)])
+            self._jets[key] = (old, new, ElementJet(old, *where, new.quadrature_points.shape[1:]))
+        return self._jets[key][2]
 
     def _replayed(
-        self, src: HistorySource, m: AxiMesh, moved: tuple[AxiMesh, AxiMesh], shape: tuple
+        self, src: HistorySource, m: AxiMesh, dp: np.ndarray, shape: tuple
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(dQ, dS) of a replayed history (``fem.contact.replayed_history``) on m at its fixed Gauss points, and
-        (dQ_e, dS_e): its derivative in m's own edge (d / d ln e, the mesh's motion between ``moved``, m at e (1 -+
-        h)). One point search of m's Gauss points in every past step's mesh; every motion (of the past step's mesh,
-        of m's points) is the exact derivative of the continuous interpolation there (``fem.transfer.ContinuousJet``)."""
+        (dQ_e, dS_e): its derivative in m's own edge (d / d ln e; its Gauss points move by ``dp`` (2, n) per ln e).
+        One point search of m's Gauss points in every past step's mesh; every motion (of the past step's mesh, of m's
+        points) is the exact derivative of the continuous interpolation there (``fem.transfer.ContinuousJet``)."""
         path = src.path
         if len(path) != len(self.entries):
             raise ValueError("the replayed history holds steps without sensitivities (node-by-node or free steps)")
@@ -168,8 +202,6 @@ class FittedTimeSensing:
                 meshes.append(en.mesh)
         at = points_in(meshes, m)  # m's points in every past step's mesh (the search of the plain run's replay)
         jets = [ContinuousJet(mm, *at[i], shape[:2]) for i, mm in enumerate(meshes)]
-        lo, hi = moved
-        dp = (hi.quadrature_points - lo.quadrature_points).reshape(2, -1) / (2 * self.h)  # m's points per ln e
         Q, S = np.zeros((nb,) + shape), np.zeros(shape)
         dQ, dS = np.zeros((P, nb) + shape), np.zeros((P,) + shape)
         dQe, dSe = np.zeros((nb,) + shape), np.zeros(shape)
@@ -180,9 +212,8 @@ class FittedTimeSensing:
             # its sensitivity on its fixed mesh
             nd = jet.nodal(np.concatenate([en.S[None], en.S_e[None], en.dS]))
             vals = jet.value(nd)
-            dX = (np.asarray(en.hi.basis.doflocs) - np.asarray(en.lo.basis.doflocs)) / (2 * en.h)
             Sk = vals[0]
-            own = vals[1] + jet.moved(nd[:1], None, dX)[0]  # d / d ln e_k of the transferred stress
+            own = vals[1] + jet.moved(nd[:1], None, en.V)[0]  # d / d ln e_k of the transferred stress
             dSk = vals[2:] + en.de[:, None, None, None] * own[None]
             dSek = jet.moved(nd[:1], dp, None)[0]  # d / d ln e of m's points
             coef = sens.maxwell_coefficients(self.beta, self.tau, dt)
@@ -205,7 +236,8 @@ class FittedTimeSensing:
         names, which, beta, tau, h = self.names, self.which, self.beta, self.tau, self.h
         P = len(names)
         mat, asm, x = prob.mat, prob.asm, s.x
-        lo, hi = self.fit.problem(e * (1 - h)), self.fit.problem(e * (1 + h))
+        mo = self._motion(prob, e)
+        (asm_lo, plane_lo), (asm_hi, plane_hi) = mo.lo, mo.hi
         act = np.flatnonzero(s.active)
         fixed = prob.plane.dofs[act]
         keep = np.zeros(asm.ndof, bool)
@@ -214,31 +246,29 @@ class FittedTimeSensing:
         U = np.flatnonzero(keep)  # the free dofs less the held ones (sorted, as numpy.setdiff1d's)
         h_plate = 1.0 - s.delta
         # the held state on the moved meshes: the same unknowns, their plate dofs on the plate
-        xl, xh = lo.plane.impose(x.copy(), h_plate, s.active), hi.plane.impose(x.copy(), h_plate, s.active)
+        xl, xh = plane_lo.impose(x, h_plate, s.active), plane_hi.impose(x, h_plate, s.active)
         xl[U], xh[U] = x[U], x[U]
         H0 = new.before
         f = asm.f_at(x)
         shape = f.shape
         if src.kind == "replay":  # the moved meshes' histories to first order (their central difference is exact)
-            dQ, dS, dQe, dSe = self._replayed(src, prob.m, (lo.m, hi.m), shape)
-            H_lo = ve.MaxwellState(H0.Q - h * dQe, H0.S_iso - h * dSe)
-            H_hi = ve.MaxwellState(H0.Q + h * dQe, H0.S_iso + h * dSe)
-        elif src.kind == "transfer":  # history_before's interpolation, its transfers kept
+            dQ, dS, dQe, dSe = self._replayed(src, prob.m, mo.Vq, shape)
+        elif src.kind == "transfer":  # history_before's interpolation moving with the mesh's points
             assert src.mesh is not None
-            t_lo, t_hi = self._held_transfer(src.mesh, lo.m), self._held_transfer(src.mesh, hi.m)
-            H_lo = ve.MaxwellState(*_both(t_lo, src.state.Q, src.state.S_iso))
-            H_hi = ve.MaxwellState(*_both(t_hi, src.state.Q, src.state.S_iso))
+            jet = self._held_jet(src.mesh, prob.m)
+            dQe, dSe = _both(lambda g: jet.moved(g, mo.Vq, None), src.state.Q, src.state.S_iso)
             dQ, dS = self._history_tangent(src, prob.m, shape)
-        else:
-            H_lo = history_before(src, lo.m, mat, beta, tau)
-            H_hi = history_before(src, hi.m, mat, beta, tau)
+        else:  # no history yet: the same on every mesh
+            dQe, dSe = np.zeros_like(H0.Q), np.zeros_like(H0.S_iso)
             dQ, dS = self._history_tangent(src, prob.m, shape)
+        H_lo = ve.MaxwellState(H0.Q - h * dQe, H0.S_iso - h * dSe)
+        H_hi = ve.MaxwellState(H0.Q + h * dQe, H0.S_iso + h * dSe)
 
-        def residual(p, xx, H) -> np.ndarray:
+        def residual(a, xx, H) -> np.ndarray:
             iso_m, extra_m = ve.algorithmic(H, beta, tau, dt, self.long_time)
-            return p.asm.internal(xx, mat, extra_S=extra_m, iso_scale=iso_m, tangent=False)[0]
+            return a.internal(xx, mat, extra_S=extra_m, iso_scale=iso_m, tangent=False)[0]
 
-        r_e = (residual(hi, xh, H_hi) - residual(lo, xl, H_lo)) / (2 * h)  # per ln e
+        r_e = (residual(asm_hi, xh, H_hi) - residual(asm_lo, xl, H_lo)) / (2 * h)  # per ln e
         lin = sens.IsoLinearisation(f, mat.C, mat.alpha)
         coef = sens.maxwell_coefficients(beta, tau, dt) if beta.size else None
         gamma = asm.surface.gamma if asm.surface is not None else 0.0
@@ -283,7 +313,7 @@ class FittedTimeSensing:
         if gamma > 0:  # the edge condition of a tension: the surface leaves the plate tangentially, dz/dr = 0
             n_act = act.size  # (fem.contact.edge_slope; on the moved meshes the held displacement moves with X)
             dphi = np.array([edge_slope_change(prob.plane, x, n_act, dX[:, j]) for j in range(dX.shape[1])])
-            dphi[P] += (edge_slope(hi.plane, xh, n_act) - edge_slope(lo.plane, xl, n_act)) / (2 * h)
+            dphi[P] += (edge_slope(plane_hi, xh, n_act) - edge_slope(plane_lo, xl, n_act)) / (2 * h)
         else:  # phi = N_edge / F
             dphi = (dN[-1] - N_edge / F * dN.sum(axis=0)) / F
         dF = dN.sum(axis=0)
@@ -304,18 +334,18 @@ class FittedTimeSensing:
         # the step's stress on its fixed mesh, and on the moved ones (the edge's motion of later histories)
         # (the held displacement's stress on the moved meshes to first order: S_e = dS(df_e), df_e the central
         # difference of its deformation gradient there, f being affine in the mesh's motion to O(h^2))
-        df_e = (hi.asm.f_at(xh) - lo.asm.f_at(xl)) / (2 * h)
+        df_e = (asm_hi.f_at(xh) - asm_lo.f_at(xl)) / (2 * h)
         dSall = lin.dS(np.concatenate([sens.point_increments(asm, dx), df_e[None]]))
         dSx, S_e = dSall[:P], dSall[P]
         dSx[1] += lin.d_alpha[..., None] * lin.S
-        self.entries.append(_Entry(prob.m, lo.m, hi.m, s.visco.S_iso, S_e, dSx, de, h))
+        self.entries.append(_Entry(prob.m, mo.V, s.visco.S_iso, S_e, dSx, de))
         # the total sensitivity of the history values after the step (their mesh's motion included)
         dEdge = de[:, None, None, None]
         dS_post = dSx + dEdge * S_e[None]
         if beta.size:
             assert coef is not None
-            dQ_pre = dQ + dEdge[:, None] * ((H_hi.Q - H_lo.Q) / (2 * h))[None]
-            dS_pre = dS + dEdge * ((H_hi.S_iso - H_lo.S_iso) / (2 * h))[None]
+            dQ_pre = dQ + dEdge[:, None] * dQe[None]
+            dS_pre = dS + dEdge * dSe[None]
             dQ_post = sens.history_update_tangent(
                 names, which, coef, H0.Q, H0.S_iso, s.visco.S_iso, dQ_pre, dS_pre, dS_post
             )
