@@ -333,6 +333,7 @@ class ElementJet:
         dPu = np.stack([i * u ** max(i - 1, 0) * v**j for i, j in powers], axis=1)
         dPv = np.stack([j * u**i * v ** max(j - 1, 0) for i, j in powers], axis=1)
         self.old, self.elem, self.shape = old, np.asarray(elem), shape
+        self._ops: dict[tuple[int, int], tuple] = {}  # (dp, dX, operator) of recent motions (:meth:`moved`)
         self.T = _gauss_rows(old, self.elem, P @ Vinv)
         self.dL = (dPu @ Vinv, dPv @ Vinv)  # (n, n_qp) each: d weights / d xi, d eta
         ref = np.asarray(b.elem.doflocs, float).T  # (2, 9)
@@ -352,13 +353,20 @@ class ElementJet:
 
     def moved(self, f: np.ndarray, dp: np.ndarray | None, dX: np.ndarray | None) -> np.ndarray:
         """The change of the transferred fields f (..., old n_el, n_qp, c) for the points moved by dp (2, n) and the
-        old mesh's nodes by dX (2, n_nodes) (either None: fixed)."""
-        dx = np.zeros((2, self.N.shape[1])) if dp is None else np.array(dp, float)
-        if dX is not None:
-            dx -= np.einsum("ikn,kn->in", np.asarray(dX)[:, self.dofs], self.N)
-        dxi = np.einsum("din,in->dn", self.Jinv, dx)  # (2, n)
-        W = self.dL[0] * dxi[0][:, None] + self.dL[1] * dxi[1][:, None]
-        return _apply_gauss(_gauss_rows(self.old, self.elem, W), f, self.shape)
+        old mesh's nodes by dX (2, n_nodes) (either None: fixed). The operator of the last few motions is kept
+        (by the motions' identity: a held run moves the same meshes the same way at every step)."""
+        key = (id(dp), id(dX))
+        hit = self._ops.get(key)
+        if hit is None or hit[0] is not dp or hit[1] is not dX:
+            dx = np.zeros((2, self.N.shape[1])) if dp is None else np.array(dp, float)
+            if dX is not None:
+                dx -= np.einsum("ikn,kn->in", np.asarray(dX)[:, self.dofs], self.N)
+            dxi = np.einsum("din,in->dn", self.Jinv, dx)  # (2, n)
+            W = self.dL[0] * dxi[0][:, None] + self.dL[1] * dxi[1][:, None]
+            if len(self._ops) > 3:
+                self._ops.pop(next(iter(self._ops)))
+            hit = self._ops[key] = (dp, dX, _gauss_rows(self.old, self.elem, W))
+        return _apply_gauss(hit[2], f, self.shape)
 
 
 def nodal_average(mesh: AxiMesh, f: np.ndarray) -> np.ndarray:
