@@ -11,24 +11,29 @@ so the tangent-linear step is, per parameter theta (the active set held, the pla
 
     K dx + r_e de = -dr/dtheta|_(x, e),     dphi/dx dx + dphi/de de = -dphi/dtheta,
 
-with dr/dtheta|_(x, e) holding the history's sensitivity to every past state and edge. The mesh's motion enters as
-central differences of the residual ASSEMBLY (and of the history's interpolation) on the meshes at e (1 -+ h),
-``fem.spheroid.EDGE_STEP``, the state held (its plate dofs re-imposed there): no nonlinear solve is differenced.
-The history's sensitivity on a fixed mesh is linear in the past steps' sensitivities:
+with dr/dtheta|_(x, e) holding the history's sensitivity to every past state and edge. The mesh moves with its edge
+by V = dX / d ln e at its nodes (from the fitted meshes' nodes at e (1 -+ h), ``fem.mesh.fitted_nodes``, h =
+``fem.spheroid.EDGE_STEP``; no mesh or basis is built): r_e is the central difference of the residual ASSEMBLY on
+the meshes X -+ h V (``fem.forms.Assembler.moved``: the isoparametric map's Jacobian (I + eps grad V) dX/dxi, exact;
+the plate dofs re-imposed on the moved plate, the history moved with the points), the state held: no nonlinear
+solve is differenced. The history's sensitivity on a fixed mesh is linear in the past steps' sensitivities:
 
 * "replay": the Maxwell recursion run on the transferred stress fields of every past step k and on their
-  sensitivities, T_{m_k -> m}(dS_k) + de_k (T_{m_k^+ -> m}(S_k^+) - T_{m_k^- -> m}(S_k^-)) / (2 h): the second
-  term is the motion of the past step's own mesh (its Gauss points and the stress of its held displacement);
-* "transfer" (the plate held): T_{H -> m}(dH) + de_H (T_{H^+ -> m}(H) - T_{H^- -> m}(H)) / (2 h), dH the total
-  sensitivity of the previous step's history values (their mesh's motion included).
+  sensitivities, T_{m_k -> m}(dS_k) + de_k d/d ln e_k T_{m_k -> m}(S_k): the second term is the motion of the past
+  step's own mesh (its nodes by V_k, and the stress of its held displacement there), the exact derivative of the
+  continuous interpolation (``fem.transfer.ContinuousJet``);
+* "transfer" (the plate held): T_{H -> m}(dH) + de_H d/d ln e_H T_{H -> m}(H), dH the total sensitivity of the
+  previous step's history values (their mesh's motion included), the element-wise interpolation's exact
+  derivative in its source's motion (``fem.transfer.ElementJet``).
 
-The motion of m itself (the target of the interpolation) is carried by r_e, whose moved meshes take their history
-from the same ``history_before``. Each step's tangent is refined from Newton's kept factorisation, all parameters
-and the edge column as one block (``fem.sensitivity.solve_block``).
+The motion of m itself (the target of the interpolation: its Gauss points by V) is carried by r_e through the
+same jets. Each step's tangent is refined from Newton's kept factorisation, all parameters and the edge column as
+one block (``fem.sensitivity.solve_block``).
 
 Under force control the plate's motion dd/dtheta is a third unknown of the step, with dF = df_target/dtheta.
 With a surface tension gamma (a parameter too) the edge condition is the slope dz/dr = 0 at the edge node
-(``fem.contact.edge_slope``), linearised exactly in the state and by the moved meshes in the edge. Scope:
+(``fem.contact.edge_slope``), linearised exactly in the state and by the moved plate in the edge (the surface
+energy moved with the mesh, ``fem.surface.SurfaceTension.moved``). Scope:
 history="replay" (the default), every step with fitted contact (no node-by-node steps beyond the fitted range, no
 lost contact), a non-wetting plate (contact angle pi); other runs raise ValueError naming the step.
 Verified against central differences of whole runs with a tight edge tolerance
@@ -57,6 +62,7 @@ def _both(t: Callable[[np.ndarray], np.ndarray], Q: np.ndarray, S: np.ndarray, a
     QS = t(np.concatenate([Q, np.expand_dims(S, axis)], axis=axis))
     n = Q.shape[axis]
     return QS[(slice(None),) * axis + (slice(0, n),)], QS[(slice(None),) * axis + (n,)]
+
 
 SENSITIVITY_TOL = 1e-10  # relative residual of the block solves (the edge's share is a small difference of them)
 REFACTOR_AFTER = 4  # refinement iterations after which the next step's tangent is factored afresh

@@ -309,9 +309,7 @@ def _apply_gauss(T: sp.csr_matrix, f: np.ndarray, shape: tuple[int, int]) -> np.
     lead, c = f.shape[:-3], f.shape[-1]
     g = f.reshape((-1,) + f.shape[-3:])  # (m, old n_el, n_qp, c)
     out = T @ np.ascontiguousarray(g.transpose(1, 2, 0, 3)).reshape(-1, g.shape[0] * c)
-    return np.ascontiguousarray(out.reshape(shape + (g.shape[0], c)).transpose(2, 0, 1, 3)).reshape(
-        lead + shape + (c,)
-    )
+    return np.ascontiguousarray(out.reshape(shape + (g.shape[0], c)).transpose(2, 0, 1, 3)).reshape(lead + shape + (c,))
 
 
 class ElementJet:

@@ -79,11 +79,15 @@ force, moves with it; on a coarse 0.2 s ramp case beta and tau move it too (3.7e
 gradient on fitted meshes therefore needs the edge's motion (as the static runs carry it) and the replayed
 history's sensitivity across the meshes: both are carried since 2026-12-05 (``fem.fitted_sensitivity``).
 
-Time runs on fitted meshes (``--only-fitted``, :func:`fitted`, 2026-12-05 06:55-06:58 UTC, load 0.6-1.0, 2.7 min):
-against whole-run differences with the edge found to 1e-10, Fig. 10 <= 6.6e-8 (alpha; C 6.6e-11; the default run,
-edge to 1e-6, <= 1.1e-7), 4 gradients 1.74x the plain default run (0.65 / 1.13 s); alpha = 1.4 with two branches
-<= 9.9e-8, 6 gradients 2.14x; a creep under force control on the coarse level <= 1.5e-7 (nominal stress; approach
-4.0e-8), 1.14x; surface tension 1 mN/m (coarse) <= 4.1e-8; a measured history with an unload (coarse) <= 9.8e-9. The FE-in-the-loop fit on
+Time runs on fitted meshes (``--only-fitted --repeats 7``, :func:`fitted`, 2026-12-05 09:19-09:22 UTC, load 0.9-1.0,
+3.3 min): against whole-run differences with the edge found to 1e-10, Fig. 10 <= 4.7e-8 (alpha; C 8.3e-11; the
+default run, edge to 1e-6, <= 5.6e-8), 4 gradients **1.42x** the plain default run (0.65 / 0.92 s; 1.74x at 06:55
+UTC, before the edge's motion was carried without moved meshes, ``fem.forms.Assembler.moved`` and
+``fem.transfer.ElementJet``, and the transfers became sparse operators); alpha = 1.4 with two branches <= 9.1e-8, 6
+gradients 1.56x; a creep under force control on the coarse level <= 1.3e-7 (nominal stress; approach 5.6e-8),
+1.12x; surface tension 1 mN/m (coarse) <= 4.1e-8; a measured history with an unload (coarse) <= 1.0e-8. The same
+run with ``--repeats 3`` (09:12 UTC) printed 1.50x for Fig. 10: the fastest of 3 moves by ~5 % here. Node by node
+(``--only-time --repeats 5``, 09:16-09:18 UTC): Fig. 10 1.85x, two branches 1.53x, creep 1.07x. The FE-in-the-loop fit on
 fitted meshes (``--only-fit --fit-contact fitted``, 06:23 UTC): 10 FE evaluations, 37.9 s on the default mesh, every
 interval holding the truth (node-by-node: 13.8 s).
 """
