@@ -57,7 +57,7 @@ from tissuemech.fem.linalg import Symmetric
 from tissuemech.fem.mesh import AxiMesh, full_ball_section, surface_layers, zone_points
 from tissuemech.fem.newton import NewtonError
 from tissuemech.fem.problem import SPHEROID_MARGIN, SceneProblem, mesh_spec, roundoff_floor, secant
-from tissuemech.fem.protocols import Record, force_controlled, record_schedule
+from tissuemech.fem.protocols import FORCE_TOL, Record, force_controlled, record_schedule
 from tissuemech.fem.stepping import TimedState
 from tissuemech.fem.timestepping import march, ramp_hold_schedule
 from tissuemech.reduced.material import probe_share, validate_branches, validate_material, validate_positive
@@ -317,19 +317,23 @@ class IndentProblem(SceneProblem):
 
 
 class _IndentSensing:
-    """Forward sensitivities of a node-by-node indentation run (displacement control; scaled: probe force, centre
-    drop) to ln C (at fixed SI kappa), alpha and each branch's beta_m and tau_m, taken as the march accepts each
-    state, with the active sets and the probe held.
+    """Forward sensitivities of a node-by-node indentation run (scaled: probe force, centre drop and, under force
+    control, the approach) to ln C (at fixed SI kappa), alpha and each branch's beta_m and tau_m, taken as the march
+    accepts each state, with the active sets held and the probe held (displacement control) or moved so that the
+    probe force stays the prescribed one (force control: the probe's motion is one more column, its active nodes'
+    u_z moving by -1 with the approach, and d delta = (d F_target - dF) / dF_delta).
 
     The active nodes lie on their obstacles, u_z = z_s(R + u_r) - Z (``fem.contact.solve_obstacles``): with x =
     Phi(y) and T = dPhi/dy the equations are T^T r(Phi(y); theta) = 0, so (T^T K T + D) dy = -T^T dr/dtheta, D =
     diag(r_z z_s'') on the active nodes' u_r (Newton's exact reduced tangent), and dx = T dy. The probe force is
     -sum of the active probe nodes' r_z: dF = -sum (K dx + dr/dtheta)_z there. The explicit dr/dtheta and the Maxwell
     history's sensitivity are those of the plates' node-by-node runs (``fem.sensitivity.explicit_residuals``,
-    ``history_update_tangent``). ``out``: per accepted state {name: (dF, d centre_drop)} (scaled)."""
+    ``history_update_tangent``). ``out``: per accepted state {name: (dF, d centre_drop, d delta)} (scaled; d delta
+    = 0 under displacement control)."""
 
-    def __init__(self, prob: IndentProblem) -> None:
+    def __init__(self, prob: IndentProblem, target: Callable[[float], float] | None = None) -> None:
         self.prob = prob
+        self.target = target  # force control: the scaled probe force prescribed at t (s); None: the approach
         self.names, self.which = sens.sensing_names(prob.beta.size, False)
         P = len(self.names)
         visco0 = prob.maxwell_initial()
@@ -342,12 +346,16 @@ class _IndentSensing:
     def wrap(self, step: Callable, static: bool) -> Callable:
         def sensed(t0, old, t1, prev):
             new, its = step(t0, old, t1, prev)
-            self.add(new, None if static else float(t1) - float(t0), f"t = {float(t1):.6g}")
+            f1 = None if self.target is None else float(self.target(float(t1)))
+            self.add(new, None if static else float(t1) - float(t0), f"t = {float(t1):.6g} s", f1)
             return new, its
 
         return sensed
 
-    def add(self, s: IndentState, dt: float | None, what: str) -> None:
+    def add(self, s: IndentState, dt: float | None, what: str, target: float | None = None) -> None:
+        """The sensitivities of the accepted state s (a step of dt seconds; None: static). ``target``: the scaled
+        probe force prescribed there (force control: the probe's approach is then solved for, one more column: the
+        active probe nodes moved with the probe)."""
         prob, names, which = self.prob, self.names, self.which
         asm, mat, x, prev = prob.asm, prob.mat, s.x, self.prev
         n, P = asm.ndof, len(names)
@@ -376,18 +384,40 @@ class _IndentSensing:
         M = (M + D).tocsr()
         RT = R.copy()
         RT[cc] += vv[:, None] * R[rr]  # T^T dr/dtheta
+        probe_dofs = prob.probe.dofs[s.active[0]]
+        if target is not None:  # the probe moved (its centre at 1 + r_p - delta): its active nodes' u_z by -1
+            if not s.active[0].any():
+                raise ValueError(
+                    f"gradient=True under force control: the probe does not touch the ball at {what} (a prescribed "
+                    "force <= 0 N): no approach to solve for"
+                )
+            v = np.zeros(n)
+            v[probe_dofs] = -1.0
+            Kv = K @ v
+            R = np.column_stack([R, np.zeros(n)])
+            RT = np.column_stack([RT, Kv])
+            RT[cc, -1] += vv * Kv[rr]  # T^T K v
         fr = np.setdiff1d(prob.free, rr)
         key = fr.tobytes()  # the last factorisation is kept for the same unknowns (active sets) only
         approx = self.kept[1] if self.kept is not None and self.kept[0] == key else None
         dY, solve, _ = sens.solve_block(M[fr][:, fr], approx, -RT[fr], what, tol=1e-10, max_iter=6)
         self.kept = (key, solve)
-        dx = np.zeros((n, P))
+        dx = np.zeros((n, RT.shape[1]))
         dx[fr] = dY
         dx[rr] += vv[:, None] * dx[cc]  # T dy: the active u_z follow their u_r on the obstacle
+        if target is not None:
+            dx[:, -1] += v
         dr = K @ dx + R
-        dF = -np.sum(dr[prob.probe.dofs[s.active[0]]], axis=0)
+        dF = -np.sum(dr[probe_dofs], axis=0)
+        dd = np.zeros(P)
+        if target is not None:  # F(theta, delta) = target(theta): d delta = (d target - dF) / dF_delta
+            dtarget = np.zeros(P)
+            dtarget[0] = -target  # the scaled target F / (C a0^2): d / d ln C = -itself
+            dd = (dtarget - dF[:P]) / dF[P]
+            dx = dx[:, :P] + dx[:, P:] * dd[None, :]
+            dF = dtarget
         dc_drop = -dx[2 * prob.centre + 1]
-        self.out.append({nm: (float(dF[j]), float(dc_drop[j])) for j, nm in enumerate(names)})
+        self.out.append({nm: (float(dF[j]), float(dc_drop[j]), float(dd[j])) for j, nm in enumerate(names)})
         dS_new = lin.dS(sens.point_increments(asm, dx))
         dS_new[1] += lin.d_alpha[..., None] * lin.S
         if coef is not None:
@@ -397,17 +427,23 @@ class _IndentSensing:
         self.dS, self.prev = dS_new, s.visco
 
 
-def _indent_gradients(out: list[dict], F: np.ndarray, a0: float, C: float, names: list[str]) -> dict:
-    """SI gradients of the probe force (N per unit parameter) and the centre drop (m per unit parameter) from the
-    scaled ones: F = C a0^2 F~ (dF/dC = F / C + a0^2 dF~/dln C), centre drop = a0 c~."""
+def _indent_gradients(
+    out: list[dict], F: np.ndarray, a0: float, C: float, names: list[str], force_control: bool = False
+) -> dict:
+    """SI gradients of the probe force (N per unit parameter), the centre drop and (``force_control``) the approach
+    (m per unit parameter) from the scaled ones: F = C a0^2 F~ (dF/dC = F / C + a0^2 dF~/dln C), centre drop = a0 c~,
+    approach = a0 delta~."""
     g = {}
     for nm in ["C"] + names[1:]:
         key = "lnC" if nm == "C" else nm
         dF = np.array([o[key][0] for o in out]) * C * a0**2
         dc = np.array([o[key][1] for o in out]) * a0
+        dd = np.array([o[key][2] for o in out]) * a0
         if nm == "C":
-            dF, dc = dF / C + F / C, dc / C
-        g[nm] = {"force": dF, "centre_drop": dc}
+            dF, dc, dd = dF / C + F / C, dc / C, dd / C
+        if force_control:
+            dF = np.zeros_like(F)  # the force is prescribed
+        g[nm] = {"force": dF, "centre_drop": dc} | ({"approach": dd} if force_control else {})
     return g
 
 
@@ -793,10 +829,11 @@ def indent(
             the finite-strain part of F / F_Hertz - 1 from the ball's finite size.
         gradient: also return the exact sensitivities of the probe force and the centre drop at every step,
             ``result.gradient = {"C": {"force": N/Pa, "centre_drop": m/Pa}, "alpha": ..., "beta" / "tau" (or
-            "beta_1", "tau_1", ...)}`` (node-by-node contact, displacement control, finite kinematics: static or
-            time runs; the Maxwell history's sensitivity carried through the steps; the active nodes held on their
-            obstacles, ``_IndentSensing``). Accuracy and cost: ``python -m tissuemech.compare.bench.fem_gradient
-            --only-indent``.
+            "beta_1", "tau_1", ...)}`` (node-by-node contact, finite kinematics: static or time runs; the Maxwell
+            history's sensitivity carried through the steps; the active nodes held on their obstacles,
+            ``_IndentSensing``). Under force control (``force=``) the probe force's gradient is 0 (it is
+            prescribed) and the approach's ("approach", m per unit parameter) is solved for with the state's. Accuracy and cost: ``python -m
+            tissuemech.compare.bench.fem_gradient --only-indent``.
 
     Returns:
         ``IndentationResult``.
@@ -881,10 +918,10 @@ def indent(
         raise ValueError(f"contact must be 'nodal' or 'fitted', got {contact!r}")
     if contact == "fitted" and not static:
         raise ValueError("contact='fitted' (a mesh per state, its edges on nodes) needs static=True")
-    if gradient and (contact != "nodal" or force is not None or kinematics != "finite"):
+    if gradient and (contact != "nodal" or kinematics != "finite"):
         raise ValueError(
-            "gradient=True is carried for node-by-node contact (contact='nodal') under displacement control with "
-            "finite kinematics: not for contact='fitted', force= or kinematics='small'"
+            "gradient=True is carried for node-by-node contact (contact='nodal') with finite kinematics: not for "
+            "contact='fitted' or kinematics='small'"
         )
     m = make_mesh(mesh, a0, rp, d_max if sizing_approach is None else float(sizing_approach))
     mat = Material(1.0, float(alpha), float(kappa) / C)
@@ -957,9 +994,10 @@ def indent(
                 lambda t: ftarget(t) / (C * a0**2) * 32.0 / (3.0 * k_s),
                 load_of,
                 stiffness=1.0 + float(np.sum(beta)),
+                tol=min(FORCE_TOL, 1e3 * rtol),  # as the plates': a tight rtol tightens the force too
             )
         if gradient:
-            sensing = _IndentSensing(prob)
+            sensing = _IndentSensing(prob, None if target is None else lambda t: ftarget(t) / (C * a0**2))
         if sensing is not None:
             stepper = sensing.wrap(stepper, static)
         for st in march(stepper, prob.initial(), times, too_large=too_large):
@@ -989,7 +1027,7 @@ def indent(
     grad = None
     if gradient:
         assert sensing is not None
-        grad = _indent_gradients(sensing.out, arrays["force"], a0, C, sensing.names)
+        grad = _indent_gradients(sensing.out, arrays["force"], a0, C, sensing.names, target is not None)
     return IndentationResult(
         **arrays,
         gradient=grad,

@@ -65,3 +65,28 @@ def test_indentation_gradient_names_what_it_does_not_carry(kw):
     base = dict(radius=100e-6, probe_radius=25e-6, displacement=5e-6, C=150.0, alpha=1.0, mesh="coarse")
     with pytest.raises(ValueError, match="contact='nodal'"):
         fi.indent(**base, gradient=True, **kw)
+
+
+@pytest.mark.slow
+def test_creep_under_probe_force_control_gradient_equals_central_differences():
+    """Force control (a creep at 1.2e-7 N, one mesh for all runs): the approach's and the centre drop's gradients
+    within 1e-6 of whole-run differences at every step (on the default level <= 1.3e-8: ``python -m
+    tissuemech.compare.bench.fem_gradient --only-indent``), the probe force's gradient 0 (it is prescribed)."""
+    kw = dict(KW, force=1.2e-7, sizing_approach=12e-6)
+    del kw["displacement"]
+
+    def creep(p: dict, **k):
+        return fi.indent(C=p["C"], alpha=p["alpha"], branches=[(p["beta"], p["tau"])], **kw, **k)
+
+    g = creep(VALUES, gradient=True)
+    assert set(g.gradient["alpha"]) == {"force", "centre_drop", "approach"}
+    for name, v in VALUES.items():
+        np.testing.assert_array_equal(g.gradient[name]["force"], 0.0)
+        h = 1e-4 * v
+        a, b = creep({**VALUES, name: v + h}, rtol=1e-13), creep({**VALUES, name: v - h}, rtol=1e-13)
+        np.testing.assert_allclose(a.time, g.time)  # the same steps (a whole-run difference needs them)
+        np.testing.assert_allclose(b.time, g.time)
+        for obs in ("approach", "centre_drop"):
+            fd = (getattr(a, obs) - getattr(b, obs)) / (2 * h)
+            err = np.max(np.abs(g.gradient[name][obs] - fd)) / np.max(np.abs(fd))
+            assert err <= 1e-6, (name, obs, err)

@@ -268,6 +268,9 @@ def _fd_table(title: str, run, values: dict, observables: tuple[str, ...], also=
     for name, v in values.items():
         h = 1e-4 * v
         rp, rm = run(name, v + h, rtol=1e-13), run(name, v - h, rtol=1e-13)
+        if not (np.array_equal(rp.time, res.time) and np.array_equal(rm.time, res.time)):
+            raise RuntimeError(f"{title}: the runs at {name} -+ h took different steps (a step cut): no whole-run "
+                               "difference; choose another case")  # fmt: skip
         cells = []
         for o in observables:
             if (name, o) in skip:
@@ -404,7 +407,8 @@ def fitted(repeats: int) -> None:
 def indentation(repeats: int) -> None:
     """The AFM scene (``fem.indentation.indent``, node-by-node contact, default level): a 25 um probe pressed 10 um
     into a 100 um ball in 1 s and held to 20 s (alpha = 1.4, one branch), the probe force's and the centre drop's
-    gradients against whole-run central differences, then the cost with and without them."""
+    gradients against whole-run central differences, then the cost with and without them; the same under a
+    prescribed probe force (a creep: the approach's and the centre drop's gradients)."""
     from tissuemech.fem import indentation as fi
 
     kw = dict(radius=100e-6, probe_radius=25e-6, displacement=10e-6, ramp_time=1.0, end_time=20.0, mesh="default",
@@ -421,6 +425,12 @@ def indentation(repeats: int) -> None:
               "steps; C moves the centre drop only through kappa / C: n/a)", run, base, ("force", "centre_drop"),
               skip={("C", "centre_drop")})  # fmt: skip
     _cost(run, repeats, 4)
+    # the creep under a prescribed probe force (one mesh for all runs: sized for 12 um)
+    kw = dict(kw, force=1.2e-7, sizing_approach=12e-6)
+    del kw["displacement"]
+    _fd_table("indentation creep under 0.12 uN (default level, node by node, 6 + 12 steps, mesh sized for 12 um)", run,
+              base, ("approach", "centre_drop"))  # fmt: skip
+    _cost(run, max(1, repeats // 2), 4)
 
 
 def cost_levels(levels: list[int], repeats: int) -> None:
