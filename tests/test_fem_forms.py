@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 import scipy.sparse as sp
+import skfem
 
 from tissuemech.fem import constitutive as cm
 from tissuemech.fem.forms import Assembler, Material
@@ -237,3 +238,36 @@ def test_meshes_with_one_connectivity_share_the_pattern():
     K0.sum_duplicates()
     assert abs(K - K0).max() <= 1e-14 * abs(K0).max()
     assert Assembler(shell_section(50e-6, 75e-6, 4, 6)).pattern is not a1.pattern
+
+
+def test_moved_assembler_is_the_assembler_of_the_moved_mesh():
+    """``Assembler.moved(V, eps)``: the geometry of the mesh whose nodes are X + eps V is exact for the isoparametric
+    map (weights, points, B against the assembler of the moved mesh itself, to round-off), and the central difference
+    of the residual on X -+ h V, V the fitted mesh's nodal motion with its contact edge (``fitted_nodes``), equals
+    that on the fitted meshes at e (1 -+ h) to O(h^2) (measured 7e-12 of its largest)."""
+    from tissuemech.fem.mesh import AxiMesh, fitted_mesh, fitted_nodes
+
+    e, h = 0.3, 1e-4
+    m = fitted_mesh(1.0, 1, e)
+    A = Assembler(m)
+    V = (fitted_nodes(1.0, 1, e * (1 + h)) - fitted_nodes(1.0, 1, e * (1 - h))) / (2 * h)
+    np.testing.assert_array_equal(fitted_nodes(1.0, 1, e), m.X)
+    # the moved mesh itself: the same connectivity, nodes X + eps V
+    eps = 0.05
+    mm = skfem.MeshQuad2(m.X + eps * V, m.mesh.t)
+    moved_mesh = AxiMesh(mm, skfem.CellBasis(mm, skfem.ElementQuad2(), intorder=4), m.order, m.length_scale)
+    B, Am = Assembler(moved_mesh), A.moved(V, eps)
+    for name in ("w", "B", "M"):
+        np.testing.assert_allclose(
+            getattr(Am, name), getattr(B, name), rtol=1e-10, atol=1e-12 * np.abs(getattr(B, name)).max()
+        )
+    np.testing.assert_allclose(Am.xq, moved_mesh.quadrature_points, atol=1e-13)
+    # the residual's derivative in the edge
+    mat = Material(1.0, 0.8, 1e3)
+    x = 2e-3 * np.random.default_rng(1).standard_normal(A.ndof)
+    lo, hi = Assembler(fitted_mesh(1.0, 1, e * (1 - h))), Assembler(fitted_mesh(1.0, 1, e * (1 + h)))
+    fd = (hi.internal(x, mat, tangent=False)[0] - lo.internal(x, mat, tangent=False)[0]) / (2 * h)
+    mv = (A.moved(V, h).internal(x, mat, tangent=False)[0] - A.moved(V, -h).internal(x, mat, tangent=False)[0]) / (
+        2 * h
+    )
+    assert np.max(np.abs(mv - fd)) <= 1e-9 * np.max(np.abs(fd))

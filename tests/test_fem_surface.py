@@ -280,3 +280,33 @@ def test_liquid_on_a_wetting_plate_default_level(angle, approach, f_tol):
     d = drop.compress(approach * A0, radius=A0, surface_tension=GAMMA, contact_angle=th)
     eF, eR3, eR2 = _errors(r, d)
     assert abs(eF) < f_tol and abs(eR3) < 1e-5 and abs(eR2) < 1e-6
+
+
+def test_moved_surface_and_plate_are_those_of_the_moved_mesh():
+    """``SurfaceTension.moved`` and ``RigidPlane.moved`` on ``Assembler.moved`` (a fitted mesh's nodes moved by eps V):
+    the balanced reference's vector, the unit residual at a state and the plate's candidates equal those of the
+    problem built on the moved mesh itself, to round-off."""
+    import skfem
+
+    from tissuemech.fem.mesh import AxiMesh, fitted_mesh, fitted_nodes
+
+    e, h, eps = 0.3, 1e-4, 0.05
+    m = fitted_mesh(1.0, 1, e)
+    V = (fitted_nodes(1.0, 1, e * (1 + h)) - fitted_nodes(1.0, 1, e * (1 - h))) / (2 * h)
+    mm = skfem.MeshQuad2(m.X + eps * V, m.mesh.t)
+    moved = AxiMesh(
+        mm, skfem.CellBasis(mm, skfem.ElementQuad2(), intorder=4), m.order, m.length_scale, m.nodes, m.edges
+    )
+    mat = Material(1.0, 0.2, KAPPA / C)
+    p, q = sph.BallProblem(m, mat, (), (), 1e-10, 0.2), sph.BallProblem(moved, mat, (), (), 1e-10, 0.2)
+    asm = p.asm.moved(V, eps)
+    surf = p.asm.surface.moved(eps * V, asm)
+    assert asm.surface is surf and surf is not p.asm.surface
+    b = q.asm.surface.balance
+    np.testing.assert_allclose(surf.balance, b, rtol=0, atol=1e-12 * np.abs(b).max())
+    x = 1e-3 * np.random.default_rng(3).standard_normal(asm.ndof)
+    r, rq = asm.internal(x, mat, tangent=False)[0], q.asm.internal(x, mat, tangent=False)[0]
+    np.testing.assert_allclose(r, rq, rtol=0, atol=1e-10 * np.abs(rq).max())
+    plane = p.plane.moved(eps * V)
+    np.testing.assert_allclose(plane.R, q.plane.R, atol=1e-15)
+    np.testing.assert_allclose(plane.Z, q.plane.Z, atol=1e-15)
