@@ -244,7 +244,7 @@ def test_moved_assembler_is_the_assembler_of_the_moved_mesh():
     """``Assembler.moved(V, eps)``: the geometry of the mesh whose nodes are X + eps V is exact for the isoparametric
     map (weights, points, B against the assembler of the moved mesh itself, to round-off), and the central difference
     of the residual on X -+ h V, V the fitted mesh's nodal motion with its contact edge (``fitted_nodes``), equals
-    that on the fitted meshes at e (1 -+ h) to O(h^2) (measured 7e-12 of its largest)."""
+    that on the fitted meshes at e (1 -+ h) to O(h^2) (asserted here: 1e-9 of its largest)."""
     from tissuemech.fem.mesh import AxiMesh, fitted_mesh, fitted_nodes
 
     e, h = 0.3, 1e-4
